@@ -1,0 +1,197 @@
+//! The step loop: runs a node's step function under the realtime or the lockstep clock.
+
+use crate::lockstep::{Client, GrantOutcome};
+use crate::stats::{StatsSummary, StepStats};
+use crate::transport::{self, Shared};
+use crate::{Error, Publisher, Trigger};
+use caravan_schemas::{FixedString, NodeStatus};
+use iceoryx2::prelude::*;
+use iceoryx2::waitset::WaitSetRunResult;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+const STATUS_PERIOD_NS: u64 = 1_000_000_000;
+
+/// What a step function sees of the current step.
+pub struct Step {
+    now_ns: u64,
+    index: u64,
+    stop: bool,
+}
+
+impl Step {
+    /// Simulated time of this step since the group started.
+    pub fn now(&self) -> Duration {
+        Duration::from_nanos(self.now_ns)
+    }
+
+    pub fn now_ns(&self) -> u64 {
+        self.now_ns
+    }
+
+    /// 0 for the first step.
+    pub fn index(&self) -> u64 {
+        self.index
+    }
+
+    /// Ends the run after this step.
+    pub fn stop(&mut self) {
+        self.stop = true;
+    }
+}
+
+/// Everything the loops need besides the clock.
+pub(crate) struct Executor<'a> {
+    pub shared: Rc<Shared>,
+    pub name: &'a str,
+    pub host: &'a str,
+    pub status: &'a Publisher<NodeStatus>,
+    pub epoch: Instant,
+    pub epoch_offset_ns: u64,
+}
+
+fn interrupted(result: WaitSetRunResult) -> bool {
+    matches!(result, WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt)
+}
+
+fn waitset() -> Result<WaitSet<ipc::Service>, Error> {
+    WaitSetBuilder::new()
+        .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
+        .create::<ipc::Service>()
+        .map_err(|e| Error::transport("waitset", e))
+}
+
+impl Executor<'_> {
+    fn publish_status(&self, stats: &StepStats, running: bool) -> Result<(), Error> {
+        let s: StatsSummary = stats.summary();
+        self.status.publish(&NodeStatus {
+            node: FixedString::new(self.name),
+            host: FixedString::new(self.host),
+            period_ns: s.period_ns,
+            steps: s.steps,
+            deadline_misses: s.deadline_misses,
+            jitter_p50_ns: s.jitter_p50_ns,
+            jitter_p99_ns: s.jitter_p99_ns,
+            jitter_max_ns: s.jitter_max_ns,
+            compute_mean_ns: s.compute_mean_ns,
+            compute_p99_ns: s.compute_p99_ns,
+            compute_max_ns: s.compute_max_ns,
+            messages_missed: self.shared.missed.get(),
+            sim_time_ns: self.shared.now_ns.get(),
+            running: running as u32,
+            _reserved: 0,
+        })
+    }
+
+    /// Runs `step` once at simulated time `now_ns`, timing it.
+    fn run_step<F>(&self, step: &mut F, stats: &mut StepStats, state: &mut Step, due_ns: u64, start_ns: u64) -> Result<(), Error>
+    where
+        F: FnMut(&mut Step) -> Result<(), Error>,
+    {
+        let started = Instant::now();
+        step(state)?;
+        stats.record(start_ns, due_ns, started.elapsed().as_nanos() as u64);
+        state.index += 1;
+        Ok(())
+    }
+
+    fn since_epoch_ns(&self) -> u64 {
+        self.epoch_offset_ns + self.epoch.elapsed().as_nanos() as u64
+    }
+
+    /// Wall-clock execution: the WaitSet sleeps until the period elapses or a message arrives.
+    pub fn run_realtime<F>(&self, trigger: &Trigger, mut step: F) -> Result<StatsSummary, Error>
+    where
+        F: FnMut(&mut Step) -> Result<(), Error>,
+    {
+        let listener = match trigger {
+            Trigger::OnMessage(topic) => Some(transport::listener(&self.shared.iox, topic)?),
+            Trigger::Every(_) => None,
+        };
+        let ws = waitset()?;
+        let mut stats = StepStats::new(trigger.period());
+        let mut state = Step { now_ns: 0, index: 0, stop: false };
+        let attach_err = |e| Error::transport("waitset attach", e);
+        let period_guard = trigger.period().map(|p| ws.attach_interval(p)).transpose().map_err(attach_err)?;
+        let message_guard = listener.as_ref().map(|l| ws.attach_notification(l)).transpose().map_err(attach_err)?;
+        let status_guard = ws
+            .attach_interval(Duration::from_nanos(STATUS_PERIOD_NS))
+            .map_err(|e| Error::transport("waitset attach", e))?;
+        let period_ns = trigger.period().map_or(0, |p| p.as_nanos() as u64);
+        let mut next_due_ns = self.since_epoch_ns() + period_ns;
+        let outcome = loop {
+            let (mut fired, mut status_due) = (false, false);
+            let result = ws
+                .wait_and_process_once(|id| {
+                    fired |= period_guard.as_ref().is_some_and(|g| id.has_event_from(g))
+                        || message_guard.as_ref().is_some_and(|g| id.has_event_from(g));
+                    status_due |= id.has_event_from(&status_guard);
+                    CallbackProgression::Continue
+                })
+                .map_err(|e| Error::transport("waitset wait", e))?;
+            if interrupted(result) {
+                break Ok(());
+            }
+            if let Some(listener) = &listener {
+                listener.try_wait(|_| {}).map_err(|e| Error::transport("listener", e))?;
+            }
+            if fired {
+                let start_ns = self.since_epoch_ns();
+                let due_ns = if period_ns > 0 { next_due_ns } else { start_ns };
+                state.now_ns = start_ns;
+                self.shared.now_ns.set(start_ns);
+                if let Err(e) = self.run_step(&mut step, &mut stats, &mut state, due_ns, start_ns) {
+                    break Err(e);
+                }
+                // After a long stall, resume the period from now instead of bursting.
+                next_due_ns = (next_due_ns + period_ns).max(start_ns);
+            }
+            if status_due {
+                self.publish_status(&stats, true)?;
+            }
+            if state.stop {
+                break Ok(());
+            }
+        };
+        self.publish_status(&stats, false)?;
+        outcome.map(|_| stats.summary())
+    }
+
+    /// Lockstep execution: step exactly at the simulated times the scheduler grants.
+    pub fn run_lockstep<F>(&self, trigger: &Trigger, mut step: F) -> Result<StatsSummary, Error>
+    where
+        F: FnMut(&mut Step) -> Result<(), Error>,
+    {
+        let ws = waitset()?;
+        let triggers: Vec<&str> = match trigger {
+            Trigger::OnMessage(topic) => vec![topic.as_str()],
+            Trigger::Every(_) => vec![],
+        };
+        let client = Client::connect(self.shared.clone(), self.name, trigger.period(), &triggers)?;
+        let mut stats = StepStats::new(trigger.period());
+        let mut state = Step { now_ns: 0, index: 0, stop: false };
+        let mut next_status_ns = 0;
+        let outcome = loop {
+            let grant = match client.wait_for_grant(&ws)? {
+                GrantOutcome::Step(grant) => grant,
+                GrantOutcome::Stop | GrantOutcome::Terminated => break Ok(()),
+            };
+            self.shared.now_ns.set(grant.now_ns);
+            self.shared.tick_ns.set(grant.tick_ns);
+            state.now_ns = grant.now_ns;
+            if let Err(e) = self.run_step(&mut step, &mut stats, &mut state, grant.now_ns, grant.now_ns) {
+                break Err(e);
+            }
+            if grant.now_ns >= next_status_ns {
+                self.publish_status(&stats, true)?;
+                next_status_ns = grant.now_ns + STATUS_PERIOD_NS;
+            }
+            client.report_done(grant.now_ns)?;
+            if state.stop {
+                break Ok(());
+            }
+        };
+        self.publish_status(&stats, false)?;
+        outcome.map(|_| stats.summary())
+    }
+}

@@ -1,0 +1,71 @@
+//! A group's own iceoryx2 namespace.
+//!
+//! Every group gets an iceoryx2 config whose file prefix is derived from the group name, so two
+//! groups using the same topic names never share a shared-memory segment. The launcher writes the
+//! config into the run directory and hands its path to each process; tests can build it directly.
+
+use crate::Error;
+use iceoryx2::config::Config;
+use iceoryx2::prelude::*;
+use std::path::Path as StdPath;
+
+/// Ports and nodes per service. iceoryx2's defaults (2 publishers, 8 subscribers, 20 nodes) are
+/// too small for a convoy of 64 followers that all publish status and lockstep reports.
+pub const MAX_PUBLISHERS: usize = 80;
+pub const MAX_SUBSCRIBERS: usize = 80;
+pub const MAX_NODES_PER_SERVICE: usize = 160;
+
+/// File-name prefix of every shared-memory and lock file of `group`; `caravan clean` and the
+/// launcher look for it under /dev/shm and iceoryx2's temp directory.
+pub fn prefix(group: &str) -> String {
+    // iceoryx2 file names allow [A-Za-z0-9._-]; keep the prefix short and unambiguous.
+    let clean: String = group
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '-' })
+        .take(40)
+        .collect();
+    format!("cvn_{clean}_")
+}
+
+/// Checks that a group name is usable: non-empty, at most 40 of [A-Za-z0-9-].
+pub fn validate_name(group: &str) -> Result<(), String> {
+    if group.is_empty() || group.len() > 40 {
+        return Err(format!("group name '{group}' must have 1 to 40 characters"));
+    }
+    if let Some(c) = group.chars().find(|c| !(c.is_ascii_alphanumeric() || *c == '-')) {
+        return Err(format!("group name '{group}' contains '{c}'; use letters, digits and '-'"));
+    }
+    Ok(())
+}
+
+/// The iceoryx2 config of `group`.
+pub fn config(group: &str) -> Result<Config, Error> {
+    let mut config = Config::default();
+    config.global.prefix = FileName::new(prefix(group).as_bytes())
+        .map_err(|e| Error::Config(format!("group name '{group}' unusable as a prefix: {e:?}")))?;
+    let ps = &mut config.defaults.publish_subscribe;
+    ps.max_publishers = MAX_PUBLISHERS;
+    ps.max_subscribers = MAX_SUBSCRIBERS;
+    ps.max_nodes = MAX_NODES_PER_SERVICE;
+    let ev = &mut config.defaults.event;
+    ev.max_notifiers = MAX_PUBLISHERS * 2;
+    ev.max_listeners = MAX_SUBSCRIBERS;
+    ev.max_nodes = MAX_NODES_PER_SERVICE;
+    Ok(config)
+}
+
+/// Writes `group`'s config as TOML to `path`.
+pub fn write_config(group: &str, path: &StdPath) -> Result<(), Error> {
+    let text = toml::to_string(&config(group)?)
+        .map_err(|e| Error::Config(format!("cannot serialise iceoryx2 config: {e}")))?;
+    std::fs::write(path, text)
+        .map_err(|e| Error::Config(format!("cannot write {}: {e}", path.display())))
+}
+
+/// Reads a config written by [`write_config`].
+pub fn load_config(path: &StdPath) -> Result<Config, Error> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Error::Config(format!("cannot read iceoryx2 config {}: {e}", path.display())))?;
+    toml::from_str(&text)
+        .map_err(|e| Error::Config(format!("bad iceoryx2 config {}: {e}", path.display())))
+}

@@ -1,0 +1,98 @@
+//! Who a node is, as handed over by the launcher through the environment.
+
+use crate::{ClockMode, Error};
+use std::path::PathBuf;
+
+/// Names of the environment variables the launcher sets for every process.
+pub mod env_vars {
+    pub const GROUP: &str = "CARAVAN_GROUP";
+    pub const NODE: &str = "CARAVAN_NODE";
+    pub const HOST: &str = "CARAVAN_HOST";
+    /// The node's params table, as JSON.
+    pub const PARAMS: &str = "CARAVAN_PARAMS";
+    /// Path of the group's iceoryx2 config file.
+    pub const ICEORYX_CONFIG: &str = "CARAVAN_ICEORYX_CONFIG";
+    /// `realtime` or `lockstep`.
+    pub const CLOCK: &str = "CARAVAN_CLOCK";
+    /// Overrides the node's default trigger with a rate, e.g. `50Hz` or `20ms`.
+    pub const RATE: &str = "CARAVAN_RATE";
+    /// Overrides the node's default trigger with a topic whose messages step the node.
+    pub const ON: &str = "CARAVAN_ON";
+    /// Wall-clock ns at the group's start; realtime simulated time counts from it.
+    pub const EPOCH_NS: &str = "CARAVAN_EPOCH_NS";
+}
+
+/// Identity and settings of one node.
+#[derive(Debug, Clone)]
+pub struct NodeIdentity {
+    pub group: String,
+    pub name: String,
+    pub host: String,
+    /// The params table as JSON (an object).
+    pub params: serde_json::Value,
+    /// The group's iceoryx2 config; `None` derives it from the group name.
+    pub iceoryx_config: Option<PathBuf>,
+    pub clock: ClockMode,
+    pub rate_override: Option<String>,
+    pub on_override: Option<String>,
+    /// Wall-clock ns at which the group's time started (realtime).
+    pub epoch_ns: Option<u64>,
+}
+
+impl NodeIdentity {
+    pub fn new(group: &str, name: &str) -> Self {
+        Self {
+            group: group.to_string(),
+            name: name.to_string(),
+            host: "localhost".to_string(),
+            params: serde_json::Value::Object(Default::default()),
+            iceoryx_config: None,
+            clock: ClockMode::Realtime,
+            rate_override: None,
+            on_override: None,
+            epoch_ns: None,
+        }
+    }
+
+    /// Reads the variables in [`env_vars`]. Group and node name are required.
+    pub fn from_env() -> Result<Self, Error> {
+        let required = |var: &'static str| {
+            std::env::var(var).map_err(|_| Error::Env {
+                var,
+                message: "not set; start this process with `caravan launch`, or set it by hand"
+                    .into(),
+            })
+        };
+        let optional = |var: &'static str| std::env::var(var).ok().filter(|v| !v.is_empty());
+        let mut id = Self::new(&required(env_vars::GROUP)?, &required(env_vars::NODE)?);
+        if let Some(host) = optional(env_vars::HOST) {
+            id.host = host;
+        }
+        if let Some(text) = optional(env_vars::PARAMS) {
+            id.params = serde_json::from_str(&text).map_err(|e| Error::Env {
+                var: env_vars::PARAMS,
+                message: format!("not a JSON object: {e}"),
+            })?;
+        }
+        id.iceoryx_config = optional(env_vars::ICEORYX_CONFIG).map(PathBuf::from);
+        if let Some(clock) = optional(env_vars::CLOCK) {
+            id.clock = clock
+                .parse()
+                .map_err(|message| Error::Env { var: env_vars::CLOCK, message })?;
+        }
+        id.rate_override = optional(env_vars::RATE);
+        id.on_override = optional(env_vars::ON);
+        if let Some(epoch) = optional(env_vars::EPOCH_NS) {
+            id.epoch_ns = Some(epoch.parse().map_err(|_| Error::Env {
+                var: env_vars::EPOCH_NS,
+                message: format!("'{epoch}' is not a number of nanoseconds"),
+            })?);
+        }
+        Ok(id)
+    }
+
+    /// Hash that identifies this node in message headers and the lockstep protocol.
+    pub fn node_hash(&self) -> u64 {
+        caravan_schemas::lockstep::name_hash(&self.name)
+    }
+}

@@ -1,0 +1,55 @@
+//! Caravan runtime: the library every Caravan process links.
+//!
+//! A [`Node`] is one process of a launched group. It opens typed [`Topic`]s as zero-copy
+//! iceoryx2 publishers and subscribers, reads its typed params, and runs a step function
+//! periodically or on message arrival under a real-time or lockstep clock:
+//!
+//! ```no_run
+//! use caravan::{Node, Topic, Trigger};
+//! use caravan_schemas::{topics, Pose2D};
+//!
+//! # fn main() -> Result<(), caravan::Error> {
+//! let mut node = Node::from_env()?;
+//! let pose = node.publisher(&Topic::<Pose2D>::new(&topics::pose(0)))?;
+//! node.run(Trigger::every_hz(10.0), |step| {
+//!     pose.publish(&Pose2D { x: step.now().as_secs_f64(), y: 0.0, theta: 0.0 })
+//! })
+//! # }
+//! ```
+
+mod clock;
+mod error;
+mod executor;
+pub mod group;
+mod identity;
+pub mod lockstep;
+mod node;
+mod params;
+mod publisher;
+mod rate;
+mod stats;
+mod subscriber;
+mod topic;
+mod transport;
+
+pub use caravan_schemas as schemas;
+pub use caravan_schemas::Header;
+pub use clock::ClockMode;
+pub use error::Error;
+pub use executor::Step;
+pub use identity::{NodeIdentity, env_vars};
+pub use node::{Node, NodeBuilder};
+pub use params::parse_params;
+pub use publisher::{Loan, Publisher};
+pub use rate::{Trigger, parse_duration, parse_rate};
+pub use stats::{StepStats, StatsSummary};
+pub use subscriber::{Received, Subscriber};
+pub use topic::{Delivery, Topic};
+
+/// Wall-clock time (CLOCK_REALTIME) in nanoseconds since the Unix epoch.
+pub fn wall_clock_ns() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos() as u64)
+        .unwrap_or(0)
+}

@@ -1,0 +1,332 @@
+//! The lockstep protocol: simulated time granted step by step.
+//!
+//! Each node announces itself ([`Hello`]: its period, the topics that wake it), then repeats:
+//! wait for a [`Grant`] of simulated time t, step at t, report [`Done`] with the topics it
+//! published. The [`Scheduler`] owns time: at each event time it grants every due node at once,
+//! waits until all reported done, and only then advances. A message published at t wakes its
+//! triggered subscribers at t + tick and is invisible to them before, so runs are deterministic
+//! whatever the machine's load.
+
+use crate::transport::{self, Shared};
+use crate::Error;
+use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
+use caravan_schemas::{FixedString, FixedVec, Header};
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::prelude::*;
+use std::collections::{BTreeMap, BTreeSet};
+use std::rc::Rc;
+use std::time::Duration;
+
+type Pub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>;
+type Sub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>;
+
+fn control_topic<T: caravan_schemas::Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, Header>, Error>
+{
+    // Control messages must never be lost; queues are deep enough that nobody waits in practice.
+    transport::open_pubsub::<T>(iox, name, crate::Delivery::Lossless { depth: 256 })
+}
+
+fn publisher<T: caravan_schemas::Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<Pub<T>, Error> {
+    control_topic::<T>(iox, name)?
+        .publisher_builder()
+        .backpressure_strategy(BackpressureStrategy::RetryUntilDelivered)
+        .create()
+        .map_err(|e| Error::transport(name, e))
+}
+
+fn subscriber<T: caravan_schemas::Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<Sub<T>, Error> {
+    control_topic::<T>(iox, name)?
+        .subscriber_builder()
+        .buffer_size(256)
+        .create()
+        .map_err(|e| Error::transport(name, e))
+}
+
+fn send<T: caravan_schemas::Message>(port: &Pub<T>, value: T, name: &str) -> Result<(), Error> {
+    let sample = port.loan_uninit().map_err(|e| Error::transport(name, e))?;
+    sample.write_payload(value).send().map_err(|e| Error::transport(name, e))?;
+    Ok(())
+}
+
+/// What a node waiting for a grant learns.
+pub(crate) enum GrantOutcome {
+    Step(Grant),
+    Stop,
+    /// SIGTERM or SIGINT arrived while waiting.
+    Terminated,
+}
+
+/// The node side of the protocol.
+pub(crate) struct Client {
+    node_hash: u64,
+    grants: Sub<Grant>,
+    grant_listener: Listener<ipc::Service>,
+    done: Pub<Done>,
+    done_notifier: Notifier<ipc::Service>,
+    shared: Rc<Shared>,
+}
+
+impl Client {
+    pub fn connect(
+        shared: Rc<Shared>,
+        node: &str,
+        period: Option<Duration>,
+        triggers: &[&str],
+    ) -> Result<Self, Error> {
+        let iox = &shared.iox;
+        let grant_name = proto::grant_service(node);
+        let client = Self {
+            node_hash: shared.node_hash,
+            grants: subscriber::<Grant>(iox, &grant_name)?,
+            grant_listener: transport::listener(iox, &grant_name)?,
+            done: publisher::<Done>(iox, proto::DONE)?,
+            done_notifier: transport::notifier(iox, proto::DONE)?,
+            shared: shared.clone(),
+        };
+        let mut hello = Hello {
+            node: FixedString::new(node),
+            period_ns: period.map_or(0, |p| p.as_nanos() as u64),
+            triggers: FixedVec::new(),
+        };
+        for topic in triggers {
+            hello
+                .triggers
+                .push(proto::name_hash(topic))
+                .map_err(|_| Error::Lockstep(format!("node '{node}' triggers on too many topics")))?;
+        }
+        let hello_port = publisher::<Hello>(iox, proto::HELLO)?;
+        send(&hello_port, hello, proto::HELLO)?;
+        transport::notifier(iox, proto::HELLO)?.notify().map_err(|e| Error::transport(proto::HELLO, e))?;
+        Ok(client)
+    }
+
+    /// Blocks (event-driven) until the scheduler grants a step or stops the run.
+    pub fn wait_for_grant(&self, waitset: &WaitSet<ipc::Service>) -> Result<GrantOutcome, Error> {
+        let _guard = waitset
+            .attach_notification(&self.grant_listener)
+            .map_err(|e| Error::transport("lockstep grant wait", e))?;
+        loop {
+            if let Some(sample) = self.grants.receive().map_err(|e| Error::transport("grant", e))? {
+                let grant = *sample.payload();
+                return Ok(if grant.stop != 0 { GrantOutcome::Stop } else { GrantOutcome::Step(grant) });
+            }
+            let result = waitset
+                .wait_and_process_once(|_| CallbackProgression::Continue)
+                .map_err(|e| Error::transport("lockstep grant wait", e))?;
+            self.grant_listener.try_wait(|_| {}).map_err(|e| Error::transport("grant", e))?;
+            if matches!(result, WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt) {
+                return Ok(GrantOutcome::Terminated);
+            }
+        }
+    }
+
+    /// Reports the step at `now_ns` finished, with the topics it published to.
+    pub fn report_done(&self, now_ns: u64) -> Result<(), Error> {
+        let mut done = Done { node_hash: self.node_hash, now_ns, published: FixedVec::new() };
+        for topic in self.shared.published.borrow_mut().drain(..) {
+            // More topics than fit cannot be scheduled precisely; the node is still woken by
+            // its period, so truncation only delays subscribers and is reported at hello time.
+            let _ = done.published.push(topic);
+        }
+        send(&self.done, done, proto::DONE)?;
+        self.done_notifier.notify().map_err(|e| Error::transport(proto::DONE, e))?;
+        Ok(())
+    }
+}
+
+use iceoryx2::waitset::WaitSetRunResult;
+
+struct Member {
+    name: String,
+    period_ns: u64,
+    grant: Pub<Grant>,
+    grant_notifier: Notifier<ipc::Service>,
+}
+
+/// One advance of simulated time.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Advance {
+    pub now_ns: u64,
+    /// Names of the nodes that stepped, sorted.
+    pub stepped: Vec<String>,
+}
+
+/// Owns simulated time for a group. The launcher runs one; tests can run one directly.
+pub struct Scheduler {
+    iox: iceoryx2::node::Node<ipc::Service>,
+    tick_ns: u64,
+    hello: Sub<Hello>,
+    hello_listener: Listener<ipc::Service>,
+    done: Sub<Done>,
+    done_listener: Listener<ipc::Service>,
+    members: Vec<Member>,
+    by_hash: BTreeMap<u64, usize>,
+    /// topic hash → members it wakes
+    subscribers: BTreeMap<u64, Vec<usize>>,
+    /// event time → members due then
+    queue: BTreeMap<u64, BTreeSet<usize>>,
+    /// How long one wait may last before `watchdog` is consulted.
+    poll: Duration,
+}
+
+impl Scheduler {
+    /// A scheduler on the group of `config`, with minimum message delay `tick`.
+    pub fn new(config: &iceoryx2::config::Config, tick: Duration) -> Result<Self, Error> {
+        let iox = NodeBuilder::new()
+            .config(config)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<ipc::Service>()
+            .map_err(|e| Error::transport("scheduler node", e))?;
+        Ok(Self {
+            hello: subscriber::<Hello>(&iox, proto::HELLO)?,
+            hello_listener: transport::listener(&iox, proto::HELLO)?,
+            done: subscriber::<Done>(&iox, proto::DONE)?,
+            done_listener: transport::listener(&iox, proto::DONE)?,
+            tick_ns: tick.as_nanos().max(1) as u64,
+            iox,
+            members: Vec::new(),
+            by_hash: BTreeMap::new(),
+            subscribers: BTreeMap::new(),
+            queue: BTreeMap::new(),
+            poll: Duration::from_millis(100),
+        })
+    }
+
+    pub fn tick_ns(&self) -> u64 {
+        self.tick_ns
+    }
+
+    /// Waits until every node in `expected` said hello. `watchdog` runs between waits; an `Err`
+    /// from it (a member died, a timeout) aborts the wait.
+    pub fn wait_for_nodes(
+        &mut self,
+        expected: &[String],
+        mut watchdog: impl FnMut() -> Result<(), String>,
+    ) -> Result<(), Error> {
+        let expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
+        loop {
+            while let Some(sample) = self.hello.receive().map_err(|e| Error::transport("hello", e))? {
+                self.admit(sample.payload())?;
+            }
+            let joined: BTreeSet<&str> = self.members.iter().map(|m| m.name.as_str()).collect();
+            if expected.is_subset(&joined) {
+                return Ok(());
+            }
+            watchdog().map_err(|why| {
+                let missing: Vec<_> = expected.difference(&joined).copied().collect();
+                Error::Lockstep(format!("waiting for {} to start: {why}", missing.join(", ")))
+            })?;
+            self.wait_on(true)?;
+        }
+    }
+
+    fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
+        let name = hello.node.as_str().to_string();
+        let hash = proto::name_hash(&name);
+        if self.by_hash.contains_key(&hash) {
+            return Ok(());
+        }
+        let index = self.members.len();
+        let grant_name = proto::grant_service(&name);
+        self.members.push(Member {
+            grant: publisher::<Grant>(&self.iox, &grant_name)?,
+            grant_notifier: transport::notifier(&self.iox, &grant_name)?,
+            period_ns: hello.period_ns,
+            name,
+        });
+        self.by_hash.insert(hash, index);
+        for topic in hello.triggers.as_slice() {
+            self.subscribers.entry(*topic).or_default().push(index);
+        }
+        if hello.period_ns > 0 {
+            self.queue.entry(0).or_default().insert(index);
+        }
+        Ok(())
+    }
+
+    /// Time of the next event, if any node is due at all.
+    pub fn next_time_ns(&self) -> Option<u64> {
+        self.queue.keys().next().copied()
+    }
+
+    /// Grants the next event time to every node due then and waits until all are done.
+    pub fn advance(
+        &mut self,
+        mut watchdog: impl FnMut() -> Result<(), String>,
+    ) -> Result<Option<Advance>, Error> {
+        let Some((now_ns, due)) = self.queue.pop_first() else { return Ok(None) };
+        for &i in &due {
+            self.grant(i, Grant { now_ns, tick_ns: self.tick_ns, stop: 0, _reserved: 0 })?;
+        }
+        let mut waiting = due.clone();
+        while !waiting.is_empty() {
+            while let Some(sample) = self.done.receive().map_err(|e| Error::transport("done", e))? {
+                let done = sample.payload();
+                let Some(&i) = self.by_hash.get(&done.node_hash) else { continue };
+                if done.now_ns != now_ns || !waiting.remove(&i) {
+                    return Err(Error::Lockstep(format!(
+                        "node '{}' reported a step at {} ns, expected {} ns",
+                        self.members[i].name, done.now_ns, now_ns
+                    )));
+                }
+                self.schedule_after(i, now_ns, done.published.as_slice());
+            }
+            if waiting.is_empty() {
+                break;
+            }
+            watchdog().map_err(|why| {
+                let names: Vec<_> = waiting.iter().map(|&i| self.members[i].name.as_str()).collect();
+                Error::Lockstep(format!("waiting for {} to finish step at {now_ns} ns: {why}", names.join(", ")))
+            })?;
+            self.wait_on(false)?;
+        }
+        let mut stepped: Vec<String> = due.iter().map(|&i| self.members[i].name.clone()).collect();
+        stepped.sort();
+        Ok(Some(Advance { now_ns, stepped }))
+    }
+
+    fn schedule_after(&mut self, i: usize, now_ns: u64, published: &[u64]) {
+        let period = self.members[i].period_ns;
+        if period > 0 {
+            self.queue.entry(now_ns + period).or_default().insert(i);
+        }
+        for topic in published {
+            for &j in self.subscribers.get(topic).map(Vec::as_slice).unwrap_or(&[]) {
+                self.queue.entry(now_ns + self.tick_ns).or_default().insert(j);
+            }
+        }
+    }
+
+    fn grant(&self, i: usize, grant: Grant) -> Result<(), Error> {
+        let member = &self.members[i];
+        send(&member.grant, grant, &member.name)?;
+        member.grant_notifier.notify().map_err(|e| Error::transport(&member.name, e))?;
+        Ok(())
+    }
+
+    /// Tells every node the run is over.
+    pub fn stop_all(&mut self) -> Result<(), Error> {
+        for i in 0..self.members.len() {
+            self.grant(i, Grant { now_ns: 0, tick_ns: self.tick_ns, stop: 1, _reserved: 0 })?;
+        }
+        Ok(())
+    }
+
+    fn wait_on(&self, hello: bool) -> Result<(), Error> {
+        let listener = if hello { &self.hello_listener } else { &self.done_listener };
+        listener
+            .timed_wait(|_| {}, self.poll)
+            .map_err(|e| Error::transport("scheduler wait", e))?;
+        Ok(())
+    }
+}

@@ -1,0 +1,162 @@
+//! A node: one process of a group, with its identity, params, ports and step loop.
+
+use crate::executor::Executor;
+use crate::transport::Shared;
+use crate::{ClockMode, Error, NodeIdentity, Publisher, StatsSummary, Step, Subscriber, Topic, Trigger};
+use caravan_schemas::{Message, NodeStatus};
+use iceoryx2::prelude::*;
+use serde::de::DeserializeOwned;
+use std::cell::{Cell, RefCell};
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+/// One process of a group. See the crate documentation for an example.
+pub struct Node {
+    identity: NodeIdentity,
+    shared: Rc<Shared>,
+    status: Publisher<NodeStatus>,
+    started: Instant,
+    epoch_offset_ns: u64,
+}
+
+/// Builds a [`Node`] directly, without a launcher (tests, tools).
+pub struct NodeBuilder {
+    identity: NodeIdentity,
+}
+
+impl NodeBuilder {
+    pub fn clock(mut self, clock: ClockMode) -> Self {
+        self.identity.clock = clock;
+        self
+    }
+
+    pub fn host(mut self, host: &str) -> Self {
+        self.identity.host = host.to_string();
+        self
+    }
+
+    pub fn params(mut self, params: serde_json::Value) -> Self {
+        self.identity.params = params;
+        self
+    }
+
+    pub fn build(self) -> Result<Node, Error> {
+        Node::new(self.identity)
+    }
+}
+
+impl Node {
+    /// The node the launcher described in the environment (see [`crate::env_vars`]).
+    pub fn from_env() -> Result<Self, Error> {
+        Self::new(NodeIdentity::from_env()?)
+    }
+
+    pub fn builder(group: &str, name: &str) -> NodeBuilder {
+        NodeBuilder { identity: NodeIdentity::new(group, name) }
+    }
+
+    pub fn new(identity: NodeIdentity) -> Result<Self, Error> {
+        iceoryx2::prelude::set_log_level_from_env_or(LogLevel::Warn);
+        crate::group::validate_name(&identity.group).map_err(Error::Config)?;
+        let config = match &identity.iceoryx_config {
+            Some(path) => crate::group::load_config(path)?,
+            None => crate::group::config(&identity.group)?,
+        };
+        let node_name = NodeName::new(&identity.name)
+            .map_err(|e| Error::Config(format!("node name '{}' is not usable: {e:?}", identity.name)))?;
+        let iox = iceoryx2::node::NodeBuilder::new()
+            .name(&node_name)
+            .config(&config)
+            // The step loop handles SIGTERM/SIGINT through its WaitSet and exits cleanly, so
+            // that iceoryx2 removes this node's shared memory.
+            .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
+            .create::<ipc::Service>()
+            .map_err(|e| Error::transport("cannot create iceoryx2 node", e))?;
+        let shared = Rc::new(Shared {
+            iox,
+            node_hash: identity.node_hash(),
+            now_ns: Cell::new(0),
+            tick_ns: Cell::new(0),
+            lockstep: identity.clock == ClockMode::Lockstep,
+            published: RefCell::new(Vec::with_capacity(caravan_schemas::lockstep::MAX_TOPICS)),
+            missed: Cell::new(0),
+        });
+        let status = Publisher::new(
+            shared.clone(),
+            &Topic::<NodeStatus>::new(caravan_schemas::topics::STATUS),
+        )?;
+        let epoch_offset_ns = identity
+            .epoch_ns
+            .map_or(0, |epoch| crate::wall_clock_ns().saturating_sub(epoch));
+        Ok(Self { identity, shared, status, started: Instant::now(), epoch_offset_ns })
+    }
+
+    pub fn identity(&self) -> &NodeIdentity {
+        &self.identity
+    }
+
+    pub fn name(&self) -> &str {
+        &self.identity.name
+    }
+
+    pub fn group(&self) -> &str {
+        &self.identity.group
+    }
+
+    pub fn clock(&self) -> ClockMode {
+        self.identity.clock
+    }
+
+    /// The node's params, deserialised from the launch file's table. Unknown or mistyped keys
+    /// are errors naming the key.
+    pub fn params<P: DeserializeOwned>(&self) -> Result<P, Error> {
+        crate::parse_params(&self.identity.name, &self.identity.params)
+    }
+
+    pub fn publisher<T: Message>(&self, topic: &Topic<T>) -> Result<Publisher<T>, Error> {
+        Publisher::new(self.shared.clone(), topic)
+    }
+
+    pub fn subscriber<T: Message>(&self, topic: &Topic<T>) -> Result<Subscriber<T>, Error> {
+        Subscriber::new(self.shared.clone(), topic)
+    }
+
+    /// Simulated time of the current (or last) step.
+    pub fn now(&self) -> Duration {
+        Duration::from_nanos(self.shared.now_ns.get())
+    }
+
+    /// The trigger this node runs with: the launch file's `rate` or `on` if given, else
+    /// `default`.
+    pub fn trigger(&self, default: Trigger) -> Result<Trigger, Error> {
+        if let Some(rate) = &self.identity.rate_override {
+            return Ok(Trigger::Every(crate::parse_rate(rate)?));
+        }
+        if let Some(topic) = &self.identity.on_override {
+            return Ok(Trigger::OnMessage(topic.clone()));
+        }
+        Ok(default)
+    }
+
+    /// Runs `step` on `default_trigger` (or the launch file's) until the run ends: SIGTERM or
+    /// SIGINT, the lockstep scheduler's stop, or [`Step::stop`]. A final status is published
+    /// on exit. Returns the node's statistics.
+    pub fn run<F>(&mut self, default_trigger: Trigger, step: F) -> Result<StatsSummary, Error>
+    where
+        F: FnMut(&mut Step) -> Result<(), Error>,
+    {
+        let trigger = self.trigger(default_trigger)?;
+        let executor = Executor {
+            shared: self.shared.clone(),
+            name: &self.identity.name,
+            host: &self.identity.host,
+            status: &self.status,
+            epoch: self.started,
+            epoch_offset_ns: self.epoch_offset_ns,
+        };
+        match self.identity.clock {
+            ClockMode::Realtime => executor.run_realtime(&trigger, step),
+            ClockMode::Lockstep => executor.run_lockstep(&trigger, step),
+        }
+    }
+}

@@ -1,0 +1,128 @@
+//! Stamping, zero-copy publisher of a typed topic.
+
+use crate::transport::{self, Shared};
+use crate::{Error, Topic};
+use caravan_schemas::{Header, Message};
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::prelude::*;
+use iceoryx2::sample_mut::SampleMut;
+use std::cell::Cell;
+use std::ops::{Deref, DerefMut};
+use std::rc::Rc;
+
+type IoxPublisher<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>;
+
+/// Publishes `T` on one topic. Each message gets a [`Header`] with the next sequence number,
+/// the node's simulated time, the wall-clock send time and the node's id, and wakes
+/// event-driven subscribers.
+pub struct Publisher<T: Message> {
+    topic: String,
+    topic_hash: u64,
+    port: IoxPublisher<T>,
+    notifier: Notifier<ipc::Service>,
+    seq: Cell<u64>,
+    shared: Rc<Shared>,
+}
+
+/// A message being written in place in shared memory; [`Loan::send`] publishes it.
+pub struct Loan<'p, T: Message> {
+    sample: SampleMut<ipc::Service, T, Header>,
+    publisher: &'p Publisher<T>,
+}
+
+impl<T: Message> Publisher<T> {
+    pub(crate) fn new(shared: Rc<Shared>, topic: &Topic<T>) -> Result<Self, Error> {
+        let service = transport::open_pubsub::<T>(&shared.iox, topic.name(), topic.delivery())?;
+        let backpressure = if topic.delivery().is_lossless() {
+            BackpressureStrategy::RetryUntilDelivered
+        } else {
+            BackpressureStrategy::DiscardData
+        };
+        let port = service
+            .publisher_builder()
+            .backpressure_strategy(backpressure)
+            .max_loaned_samples(2)
+            .create()
+            .map_err(|e| Error::topic(topic.name(), format!("cannot create publisher: {e:?}")))?;
+        let notifier = transport::notifier(&shared.iox, topic.name())?;
+        Ok(Self {
+            topic: topic.name().to_string(),
+            topic_hash: topic.hash(),
+            port,
+            notifier,
+            seq: Cell::new(0),
+            shared,
+        })
+    }
+
+    pub fn topic(&self) -> &str {
+        &self.topic
+    }
+
+    /// Messages published so far.
+    pub fn sequence(&self) -> u64 {
+        self.seq.get()
+    }
+
+    /// Loans a message in shared memory, initialised to its default, to be filled in place.
+    /// Use it for large messages (scans, maps) to avoid copies.
+    pub fn loan(&self) -> Result<Loan<'_, T>, Error> {
+        let mut uninit = self
+            .port
+            .loan_uninit()
+            .map_err(|e| Error::topic(&self.topic, format!("cannot loan a sample: {e:?}")))?;
+        // SAFETY: placement_default initialises every field of the payload in place.
+        let sample = unsafe {
+            T::placement_default(uninit.payload_mut().as_mut_ptr());
+            uninit.assume_init()
+        };
+        Ok(Loan { sample, publisher: self })
+    }
+
+    /// Publishes a copy of `value`.
+    pub fn publish(&self, value: &T) -> Result<(), Error> {
+        let uninit = self
+            .port
+            .loan_uninit()
+            .map_err(|e| Error::topic(&self.topic, format!("cannot loan a sample: {e:?}")))?;
+        self.send(uninit.write_payload(*value))
+    }
+
+    fn send(&self, mut sample: SampleMut<ipc::Service, T, Header>) -> Result<(), Error> {
+        let seq = self.seq.get() + 1;
+        self.seq.set(seq);
+        *sample.user_header_mut() = Header {
+            seq,
+            stamp_ns: self.shared.now_ns.get(),
+            send_wall_ns: crate::wall_clock_ns(),
+            source_id: self.shared.node_hash,
+        };
+        sample
+            .send()
+            .map_err(|e| Error::topic(&self.topic, format!("cannot send: {e:?}")))?;
+        self.shared.note_published(self.topic_hash);
+        // A failed wake-up only delays an event-driven subscriber to its next event; the message
+        // itself is delivered, so this is not an error of the publish.
+        let _ = self.notifier.notify();
+        Ok(())
+    }
+}
+
+impl<T: Message> Loan<'_, T> {
+    pub fn send(self) -> Result<(), Error> {
+        self.publisher.send(self.sample)
+    }
+}
+
+impl<T: Message> Deref for Loan<'_, T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        self.sample.payload()
+    }
+}
+
+impl<T: Message> DerefMut for Loan<'_, T> {
+    fn deref_mut(&mut self) -> &mut T {
+        self.sample.payload_mut()
+    }
+}

@@ -1,0 +1,98 @@
+//! Per-node step statistics: steps, deadline misses, period jitter and compute time.
+
+use hdrhistogram::Histogram;
+use std::time::Duration;
+
+/// Accumulates what the run report shows about a node's execution.
+pub struct StepStats {
+    period_ns: u64,
+    steps: u64,
+    deadline_misses: u64,
+    jitter: Histogram<u64>,
+    compute: Histogram<u64>,
+    compute_sum_ns: u128,
+    last_start_ns: Option<u64>,
+}
+
+/// A snapshot of [`StepStats`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StatsSummary {
+    pub period_ns: u64,
+    pub steps: u64,
+    pub deadline_misses: u64,
+    pub jitter_p50_ns: u64,
+    pub jitter_p99_ns: u64,
+    pub jitter_max_ns: u64,
+    pub compute_mean_ns: u64,
+    pub compute_p99_ns: u64,
+    pub compute_max_ns: u64,
+}
+
+impl StepStats {
+    /// `period` is `None` for a node stepped by messages: it has no jitter or deadline.
+    pub fn new(period: Option<Duration>) -> Self {
+        let histogram = || Histogram::new_with_bounds(1, 3_600_000_000_000, 3).expect("valid bounds");
+        Self {
+            period_ns: period.map_or(0, |p| p.as_nanos() as u64),
+            steps: 0,
+            deadline_misses: 0,
+            jitter: histogram(),
+            compute: histogram(),
+            compute_sum_ns: 0,
+            last_start_ns: None,
+        }
+    }
+
+    /// Records one step that started at `start_ns` (on a monotonic clock), was due at `due_ns`
+    /// and computed for `compute_ns`.
+    pub fn record(&mut self, start_ns: u64, due_ns: u64, compute_ns: u64) {
+        self.steps += 1;
+        self.compute.saturating_record(compute_ns.max(1));
+        self.compute_sum_ns += compute_ns as u128;
+        if self.period_ns > 0 {
+            if let Some(last) = self.last_start_ns {
+                let actual = start_ns.saturating_sub(last);
+                self.jitter.saturating_record(actual.abs_diff(self.period_ns).max(1));
+            }
+            let late = start_ns.saturating_sub(due_ns);
+            if late > self.period_ns || compute_ns > self.period_ns {
+                self.deadline_misses += 1;
+            }
+        }
+        self.last_start_ns = Some(start_ns);
+    }
+
+    pub fn summary(&self) -> StatsSummary {
+        let pick = |h: &Histogram<u64>, f: fn(&Histogram<u64>) -> u64| if h.is_empty() { 0 } else { f(h) };
+        StatsSummary {
+            period_ns: self.period_ns,
+            steps: self.steps,
+            deadline_misses: self.deadline_misses,
+            jitter_p50_ns: pick(&self.jitter, |h| h.value_at_quantile(0.5)),
+            jitter_p99_ns: pick(&self.jitter, |h| h.value_at_quantile(0.99)),
+            jitter_max_ns: pick(&self.jitter, |h| h.max()),
+            compute_mean_ns: (self.compute_sum_ns / u128::from(self.steps.max(1))) as u64,
+            compute_p99_ns: pick(&self.compute, |h| h.value_at_quantile(0.99)),
+            compute_max_ns: pick(&self.compute, |h| h.max()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn late_and_long_steps_are_deadline_misses() {
+        let mut s = StepStats::new(Some(Duration::from_millis(10)));
+        s.record(0, 0, 1_000_000); // on time
+        s.record(10_500_000, 10_000_000, 1_000_000); // 0.5 ms late: jitter, no miss
+        s.record(35_000_000, 20_000_000, 1_000_000); // 15 ms late: miss
+        s.record(40_000_000, 40_000_000, 12_000_000); // too long: miss
+        let sum = s.summary();
+        assert_eq!(sum.steps, 4);
+        assert_eq!(sum.deadline_misses, 2);
+        assert!(sum.jitter_max_ns >= 14_000_000);
+        assert_eq!(sum.compute_mean_ns, 3_750_000);
+    }
+}

@@ -1,0 +1,103 @@
+//! State a node shares with its ports, and the iceoryx2 plumbing they have in common.
+
+use crate::Error;
+use caravan_schemas::{Header, Message};
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
+use std::cell::{Cell, RefCell};
+
+/// Node-wide state, shared (single-threaded) by the node and its publishers and subscribers.
+pub(crate) struct Shared {
+    pub iox: iceoryx2::node::Node<ipc::Service>,
+    pub node_hash: u64,
+    /// Simulated time of the current step, ns.
+    pub now_ns: Cell<u64>,
+    /// In lockstep, a message stamped t is visible from t + tick_ns on; 0 in realtime.
+    pub tick_ns: Cell<u64>,
+    pub lockstep: bool,
+    /// Topic hashes published to in the current step, for the lockstep scheduler.
+    pub published: RefCell<Vec<u64>>,
+    /// Messages lost by all subscribers (sequence gaps).
+    pub missed: Cell<u64>,
+}
+
+impl Shared {
+    pub fn note_published(&self, topic_hash: u64) {
+        if self.lockstep {
+            let mut list = self.published.borrow_mut();
+            if !list.contains(&topic_hash) {
+                list.push(topic_hash);
+            }
+        }
+    }
+
+    pub fn is_visible(&self, header: &Header) -> bool {
+        !self.lockstep || header.stamp_ns + self.tick_ns.get() <= self.now_ns.get()
+    }
+}
+
+pub(crate) fn service_name(topic: &str) -> Result<ServiceName, Error> {
+    ServiceName::new(topic).map_err(|e| Error::topic(topic, format!("not a valid name: {e:?}")))
+}
+
+/// Opens (or creates) the publish-subscribe service of a topic with its delivery contract.
+pub(crate) fn open_pubsub<T: Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    delivery: crate::Delivery,
+) -> Result<PubSubFactory<ipc::Service, T, Header>, Error> {
+    let depth = delivery.depth();
+    iox.service_builder(&service_name(topic)?)
+        .publish_subscribe::<T>()
+        .user_header::<Header>()
+        .enable_safe_overflow(!delivery.is_lossless())
+        .subscriber_max_buffer_size(depth)
+        .subscriber_max_borrowed_samples(depth.max(8))
+        .history_size(0)
+        .open_or_create()
+        .map_err(|e| {
+            Error::topic(
+                topic,
+                format!(
+                    "cannot open as {} ({:?}); another process uses this topic with a different \
+                     message type or delivery contract",
+                    caravan_schemas::type_name::<T>(),
+                    e
+                ),
+            )
+        })
+}
+
+fn open_event(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
+    iox.service_builder(&service_name(topic)?)
+        .event()
+        .open_or_create()
+        .map_err(|e| Error::topic(topic, format!("cannot open its event service: {e:?}")))
+}
+
+/// The notifier that wakes a topic's event-driven subscribers.
+pub(crate) fn notifier(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+) -> Result<Notifier<ipc::Service>, Error> {
+    open_event(iox, topic)?
+        .notifier_builder()
+        .create()
+        .map_err(|e| Error::topic(topic, format!("cannot create notifier: {e:?}")))
+}
+
+/// A listener woken whenever a message is published on `topic`.
+pub(crate) fn listener(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+) -> Result<Listener<ipc::Service>, Error> {
+    open_event(iox, topic)?
+        .listener_builder()
+        .create()
+        .map_err(|e| Error::topic(topic, format!("cannot create listener: {e:?}")))
+}

@@ -1,0 +1,48 @@
+//! Layouts are part of the cross-language contract: Python and C read these offsets. A change
+//! here must be deliberate.
+use super::*;
+use core::mem::{align_of, offset_of, size_of};
+
+const _: () = {
+    assert!(size_of::<Header>() == 32 && align_of::<Header>() == 8);
+    assert!(size_of::<Pose2D>() == 24);
+    assert!(size_of::<Pose3D>() == 56);
+    assert!(size_of::<Twist>() == 48);
+    assert!(size_of::<WheelSetpoint>() == 16);
+    assert!(size_of::<WheelState>() == 48);
+    assert!(size_of::<EncoderTicks>() == 24);
+    assert!(size_of::<Odometry>() == 56 + 288 + 48 + 288);
+    assert!(size_of::<LaserScan>() == 32 + 2 * 4 * SCAN_MAX_BEAMS);
+    assert!(align_of::<LaserScan>() == 4);
+    assert!(size_of::<Imu>() == 32 + 72 + 24 + 72 + 24 + 72);
+    assert!(size_of::<OccupancyGrid>() == 8 + 24 + 8 + MAP_MAX_CELLS);
+    assert!(size_of::<Path2D>() == 8 + 24 * PATH_MAX_POSES);
+    assert!(size_of::<Goal>() == 40);
+    assert!(offset_of!(LaserScan, ranges) == 32);
+    assert!(offset_of!(OccupancyGrid, data) == 40);
+};
+
+#[test]
+fn type_names_are_stable() {
+    assert_eq!(type_name::<LaserScan>(), "caravan::LaserScan");
+    assert_eq!(type_name::<OccupancyGrid>(), "caravan::OccupancyGrid");
+    assert_eq!(type_name::<Header>(), "caravan::Header");
+}
+
+#[test]
+fn yaw_round_trips_through_quaternion() {
+    for yaw in [-3.0, -1.0, 0.0, 0.5, 3.1] {
+        assert!((Quaternion::from_yaw(yaw).yaw() - yaw).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn fixed_containers_truncate_at_capacity() {
+    let s = FixedString::<4>::new("héllo");
+    assert_eq!(s.as_str(), "hél");
+    let mut v = FixedVec::<u64, 2>::new();
+    assert!(v.push(1).is_ok() && v.push(2).is_ok());
+    assert_eq!(v.push(3), Err(3));
+    assert_eq!(v.as_slice(), &[1, 2]);
+}
+

@@ -1,0 +1,78 @@
+//! Caravan message types and topic names.
+//!
+//! Every type is `#[repr(C)]`, fixed-capacity and pointer-free so that it can live in iceoryx2
+//! shared memory and be read from C, C++ or Python with the same layout. Each carries a stable
+//! type name (`caravan::<Name>`) that iceoryx2 uses to reject mismatched publishers and
+//! subscribers. The stamped [`Header`] travels as iceoryx2's user header, beside the payload.
+
+mod fixed;
+mod geometry;
+mod header;
+pub mod lockstep;
+mod map;
+mod robot;
+mod sensors;
+mod status;
+pub mod topics;
+
+pub use fixed::{FixedString, FixedVec};
+pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3};
+pub use header::Header;
+pub use map::{Goal, OccupancyGrid, Path2D, MAP_MAX_CELLS, MAP_MAX_SIDE, PATH_MAX_POSES};
+pub use robot::{EncoderTicks, Odometry, WheelSetpoint, WheelState};
+pub use sensors::{Imu, LaserScan, SCAN_MAX_BEAMS};
+pub use status::NodeStatus;
+
+/// A type that can travel on a Caravan topic.
+///
+/// Implemented for every schema type. `Copy` keeps them plain data; `PlacementDefault` lets a
+/// publisher initialise a megabyte-sized message in shared memory without a stack copy.
+pub trait Message:
+    iceoryx2::prelude::ZeroCopySend
+    + iceoryx2::prelude::PlacementDefault
+    + core::fmt::Debug
+    + Copy
+    + Send
+    + 'static
+{
+}
+
+impl<T> Message for T where
+    T: iceoryx2::prelude::ZeroCopySend
+        + iceoryx2::prelude::PlacementDefault
+        + core::fmt::Debug
+        + Copy
+        + Send
+        + 'static
+{
+}
+
+/// The stable cross-language type name of a message type.
+pub fn type_name<T: Message>() -> &'static str {
+    // SAFETY: `type_name` is `unsafe` only because implementors promise uniqueness; reading it
+    // has no preconditions.
+    unsafe { <T as iceoryx2::prelude::ZeroCopySend>::type_name() }
+}
+
+/// A value initialised field by field with `PlacementDefault` (zeros, identity quaternions…).
+pub fn placement_new<T: iceoryx2::prelude::PlacementDefault>() -> T {
+    let mut value = core::mem::MaybeUninit::<T>::uninit();
+    // SAFETY: `placement_default` initialises every field of the value it points to.
+    unsafe {
+        T::placement_default(value.as_mut_ptr());
+        value.assume_init()
+    }
+}
+
+/// Like [`placement_new`] but on the heap, for megabyte-sized messages such as a map.
+pub fn boxed_placement_new<T: iceoryx2::prelude::PlacementDefault>() -> Box<T> {
+    let mut value = Box::<T>::new_uninit();
+    // SAFETY: as in `placement_new`.
+    unsafe {
+        T::placement_default(value.as_mut_ptr());
+        value.assume_init()
+    }
+}
+
+#[cfg(test)]
+mod layout_tests;

@@ -1,0 +1,68 @@
+//! Messages of the lockstep protocol between the scheduler and each node.
+//!
+//! A node announces itself with [`Hello`], then waits for a [`Grant`] on its own grant service,
+//! steps at the granted simulated time and answers with [`Done`]. See `caravan::lockstep`.
+
+use crate::{FixedString, FixedVec};
+use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+
+/// Most topics a node may trigger on or publish to in one step, as seen by the scheduler.
+pub const MAX_TOPICS: usize = 32;
+
+/// Service where nodes announce themselves.
+pub const HELLO: &str = "caravan/lockstep/hello";
+/// Service where nodes report a finished step.
+pub const DONE: &str = "caravan/lockstep/done";
+
+/// Service on which the scheduler grants steps to `node`.
+pub fn grant_service(node: &str) -> String {
+    format!("caravan/lockstep/grant/{node}")
+}
+
+/// Stable 64-bit FNV-1a hash used to name nodes and topics in protocol messages.
+pub const fn name_hash(name: &str) -> u64 {
+    let bytes = name.as_bytes();
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut i = 0;
+    while i < bytes.len() {
+        hash ^= bytes[i] as u64;
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+        i += 1;
+    }
+    hash
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault)]
+#[type_name("caravan::lockstep::Hello")]
+pub struct Hello {
+    pub node: FixedString<64>,
+    /// Period of a periodic node, ns; 0 for a node stepped only by messages.
+    pub period_ns: u64,
+    /// Hashes of the topics whose messages wake this node.
+    pub triggers: FixedVec<u64, MAX_TOPICS>,
+}
+
+/// Permission to step once at simulated time `now_ns`.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault)]
+#[type_name("caravan::lockstep::Grant")]
+pub struct Grant {
+    pub now_ns: u64,
+    /// Minimum delivery delay: a message stamped t is visible from t + tick_ns on.
+    pub tick_ns: u64,
+    /// 1: the run is over; the node finishes instead of stepping.
+    pub stop: u32,
+    pub _reserved: u32,
+}
+
+/// A finished step.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault)]
+#[type_name("caravan::lockstep::Done")]
+pub struct Done {
+    pub node_hash: u64,
+    pub now_ns: u64,
+    /// Hashes of the topics this step published to.
+    pub published: FixedVec<u64, MAX_TOPICS>,
+}

@@ -1,0 +1,58 @@
+use crate::{Pose3D, Twist};
+use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+
+/// Wheel-speed set-points for the motor controller, in rad/s.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("caravan::WheelSetpoint")]
+pub struct WheelSetpoint {
+    pub left_rad_s: f64,
+    pub right_rad_s: f64,
+}
+
+/// Measured state of the two driven wheels.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("caravan::WheelState")]
+pub struct WheelState {
+    /// Accumulated wheel angle, rad.
+    pub left_angle_rad: f64,
+    pub right_angle_rad: f64,
+    /// Wheel speed, rad/s.
+    pub left_rad_s: f64,
+    pub right_rad_s: f64,
+    /// Motor voltage applied by the firmware, V.
+    pub left_voltage: f64,
+    pub right_voltage: f64,
+}
+
+/// Accumulated encoder counts of the two driven wheels.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault)]
+#[type_name("caravan::EncoderTicks")]
+pub struct EncoderTicks {
+    pub left: i64,
+    pub right: i64,
+    /// Encoder resolution, ticks per wheel revolution.
+    pub ticks_per_rev: u32,
+    pub _reserved: u32,
+}
+
+/// Pose and twist estimate with covariances, as nav_msgs/Odometry.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("caravan::Odometry")]
+pub struct Odometry {
+    pub pose: Pose3D,
+    /// Row-major 6×6 covariance of (x, y, z, roll, pitch, yaw).
+    pub pose_covariance: [f64; 36],
+    /// Twist in the robot frame.
+    pub twist: Twist,
+    pub twist_covariance: [f64; 36],
+}
+
+impl Default for Odometry {
+    fn default() -> Self {
+        crate::placement_new()
+    }
+}

@@ -1,0 +1,31 @@
+use crate::FixedString;
+use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+
+/// Execution statistics of one node, published on `status` at 1 Hz and on exit.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("caravan::NodeStatus")]
+pub struct NodeStatus {
+    pub node: FixedString<64>,
+    pub host: FixedString<32>,
+    /// Nominal period of a periodic node, ns; 0 for a node stepped by messages.
+    pub period_ns: u64,
+    pub steps: u64,
+    /// Steps that started more than one period late, or ran longer than one period.
+    pub deadline_misses: u64,
+    /// Deviation of the actual step period from the nominal one, ns.
+    pub jitter_p50_ns: u64,
+    pub jitter_p99_ns: u64,
+    pub jitter_max_ns: u64,
+    /// Time spent inside the step function, ns.
+    pub compute_mean_ns: u64,
+    pub compute_p99_ns: u64,
+    pub compute_max_ns: u64,
+    /// Messages reported lost by this node's subscribers (sequence gaps).
+    pub messages_missed: u64,
+    /// Simulated time of the last step, ns.
+    pub sim_time_ns: u64,
+    /// 1 while running, 0 in the final report sent on exit.
+    pub running: u32,
+    pub _reserved: u32,
+}
