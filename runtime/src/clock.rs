@@ -14,7 +14,9 @@ impl std::str::FromStr for ClockMode {
         match s {
             "realtime" => Ok(ClockMode::Realtime),
             "lockstep" => Ok(ClockMode::Lockstep),
-            other => Err(format!("unknown clock '{other}', expected 'realtime' or 'lockstep'")),
+            other => Err(format!(
+                "unknown clock '{other}', expected 'realtime' or 'lockstep'"
+            )),
         }
     }
 }

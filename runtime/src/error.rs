@@ -20,7 +20,10 @@ pub enum Error {
 
 impl Error {
     pub(crate) fn topic(topic: &str, what: impl core::fmt::Display) -> Self {
-        Error::Topic { topic: topic.to_string(), message: what.to_string() }
+        Error::Topic {
+            topic: topic.to_string(),
+            message: what.to_string(),
+        }
     }
 
     pub(crate) fn transport(context: &str, what: impl core::fmt::Debug) -> Self {

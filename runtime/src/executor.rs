@@ -2,7 +2,7 @@
 
 use crate::lockstep::{Client, GrantOutcome};
 use crate::stats::{StatsSummary, StepStats};
-use crate::transport::{self, Shared};
+use crate::transport::Shared;
 use crate::{Error, Publisher, Trigger};
 use caravan_schemas::{FixedString, NodeStatus};
 use iceoryx2::prelude::*;
@@ -51,7 +51,10 @@ pub(crate) struct Executor<'a> {
 }
 
 fn interrupted(result: WaitSetRunResult) -> bool {
-    matches!(result, WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt)
+    matches!(
+        result,
+        WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
+    )
 }
 
 fn waitset() -> Result<WaitSet<ipc::Service>, Error> {
@@ -84,7 +87,14 @@ impl Executor<'_> {
     }
 
     /// Runs `step` once at simulated time `now_ns`, timing it.
-    fn run_step<F>(&self, step: &mut F, stats: &mut StepStats, state: &mut Step, due_ns: u64, start_ns: u64) -> Result<(), Error>
+    fn run_step<F>(
+        &self,
+        step: &mut F,
+        stats: &mut StepStats,
+        state: &mut Step,
+        due_ns: u64,
+        start_ns: u64,
+    ) -> Result<(), Error>
     where
         F: FnMut(&mut Step) -> Result<(), Error>,
     {
@@ -105,15 +115,27 @@ impl Executor<'_> {
         F: FnMut(&mut Step) -> Result<(), Error>,
     {
         let listener = match trigger {
-            Trigger::OnMessage(topic) => Some(transport::listener(&self.shared.iox, topic)?),
+            Trigger::OnMessage(topic) => Some(self.shared.listener(topic)?),
             Trigger::Every(_) => None,
         };
         let ws = waitset()?;
         let mut stats = StepStats::new(trigger.period());
-        let mut state = Step { now_ns: 0, index: 0, stop: false };
+        let mut state = Step {
+            now_ns: 0,
+            index: 0,
+            stop: false,
+        };
         let attach_err = |e| Error::transport("waitset attach", e);
-        let period_guard = trigger.period().map(|p| ws.attach_interval(p)).transpose().map_err(attach_err)?;
-        let message_guard = listener.as_ref().map(|l| ws.attach_notification(l)).transpose().map_err(attach_err)?;
+        let period_guard = trigger
+            .period()
+            .map(|p| ws.attach_interval(p))
+            .transpose()
+            .map_err(attach_err)?;
+        let message_guard = listener
+            .as_ref()
+            .map(|l| ws.attach_notification(l.as_ref()))
+            .transpose()
+            .map_err(attach_err)?;
         let status_guard = ws
             .attach_interval(Duration::from_nanos(STATUS_PERIOD_NS))
             .map_err(|e| Error::transport("waitset attach", e))?;
@@ -133,7 +155,9 @@ impl Executor<'_> {
                 break Ok(());
             }
             if let Some(listener) = &listener {
-                listener.try_wait(|_| {}).map_err(|e| Error::transport("listener", e))?;
+                listener
+                    .try_wait(|_| {})
+                    .map_err(|e| Error::transport("listener", e))?;
             }
             if fired {
                 let start_ns = self.since_epoch_ns();
@@ -169,7 +193,11 @@ impl Executor<'_> {
         };
         let client = Client::connect(self.shared.clone(), self.name, trigger.period(), &triggers)?;
         let mut stats = StepStats::new(trigger.period());
-        let mut state = Step { now_ns: 0, index: 0, stop: false };
+        let mut state = Step {
+            now_ns: 0,
+            index: 0,
+            stop: false,
+        };
         let mut next_status_ns = 0;
         let outcome = loop {
             let grant = match client.wait_for_grant(&ws)? {
@@ -179,7 +207,13 @@ impl Executor<'_> {
             self.shared.now_ns.set(grant.now_ns);
             self.shared.tick_ns.set(grant.tick_ns);
             state.now_ns = grant.now_ns;
-            if let Err(e) = self.run_step(&mut step, &mut stats, &mut state, grant.now_ns, grant.now_ns) {
+            if let Err(e) = self.run_step(
+                &mut step,
+                &mut stats,
+                &mut state,
+                grant.now_ns,
+                grant.now_ns,
+            ) {
                 break Err(e);
             }
             if grant.now_ns >= next_status_ns {

@@ -21,7 +21,13 @@ pub fn prefix(group: &str) -> String {
     // iceoryx2 file names allow [A-Za-z0-9._-]; keep the prefix short and unambiguous.
     let clean: String = group
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '-' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '-'
+            }
+        })
         .take(40)
         .collect();
     format!("cvn_{clean}_")
@@ -32,8 +38,13 @@ pub fn validate_name(group: &str) -> Result<(), String> {
     if group.is_empty() || group.len() > 40 {
         return Err(format!("group name '{group}' must have 1 to 40 characters"));
     }
-    if let Some(c) = group.chars().find(|c| !(c.is_ascii_alphanumeric() || *c == '-')) {
-        return Err(format!("group name '{group}' contains '{c}'; use letters, digits and '-'"));
+    if let Some(c) = group
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || *c == '-'))
+    {
+        return Err(format!(
+            "group name '{group}' contains '{c}'; use letters, digits and '-'"
+        ));
     }
     Ok(())
 }
@@ -64,8 +75,71 @@ pub fn write_config(group: &str, path: &StdPath) -> Result<(), Error> {
 
 /// Reads a config written by [`write_config`].
 pub fn load_config(path: &StdPath) -> Result<Config, Error> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::Config(format!("cannot read iceoryx2 config {}: {e}", path.display())))?;
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        Error::Config(format!(
+            "cannot read iceoryx2 config {}: {e}",
+            path.display()
+        ))
+    })?;
     toml::from_str(&text)
         .map_err(|e| Error::Config(format!("bad iceoryx2 config {}: {e}", path.display())))
+}
+
+/// Removes every shared-memory segment and iceoryx2 file of `group`. Call it only when no
+/// process of the group is alive (the launcher after its children exited; `caravan clean` after
+/// checking). Returns how many entries were removed.
+pub fn remove_resources(group: &str) -> Result<usize, Error> {
+    let prefix = prefix(group);
+    let root = config(group)?.global.root_path().to_string();
+    let mut removed = 0;
+    for dir in [
+        std::path::PathBuf::from("/dev/shm"),
+        std::path::PathBuf::from(root),
+    ] {
+        removed += remove_prefixed(&dir, &prefix);
+    }
+    Ok(removed)
+}
+
+/// Deletes files under `dir` (recursively) whose name starts with `prefix`, and directories
+/// left empty by that.
+fn remove_prefixed(dir: &StdPath, prefix: &str) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let is_ours = entry.file_name().to_string_lossy().starts_with(prefix);
+        match entry.file_type() {
+            Ok(t) if t.is_dir() => {
+                let n = remove_prefixed(&path, prefix);
+                removed += n;
+                // Node directories hold only one node's files; drop them once emptied.
+                if n > 0 && std::fs::remove_dir(&path).is_ok() {
+                    removed += 1;
+                }
+            }
+            Ok(_) if is_ours && std::fs::remove_file(&path).is_ok() => removed += 1,
+            _ => {}
+        }
+    }
+    removed
+}
+
+/// Names of groups that have resources in /dev/shm, from their file prefixes.
+pub fn groups_with_resources() -> Vec<String> {
+    let mut groups: Vec<String> = std::fs::read_dir("/dev/shm")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().to_string();
+            let rest = name.strip_prefix("cvn_")?;
+            Some(rest[..rest.find('_')?].to_string())
+        })
+        .collect();
+    groups.sort();
+    groups.dedup();
+    groups
 }

@@ -76,9 +76,10 @@ impl NodeIdentity {
         }
         id.iceoryx_config = optional(env_vars::ICEORYX_CONFIG).map(PathBuf::from);
         if let Some(clock) = optional(env_vars::CLOCK) {
-            id.clock = clock
-                .parse()
-                .map_err(|message| Error::Env { var: env_vars::CLOCK, message })?;
+            id.clock = clock.parse().map_err(|message| Error::Env {
+                var: env_vars::CLOCK,
+                message,
+            })?;
         }
         id.rate_override = optional(env_vars::RATE);
         id.on_override = optional(env_vars::ON);

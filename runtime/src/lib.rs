@@ -42,7 +42,7 @@ pub use node::{Node, NodeBuilder};
 pub use params::parse_params;
 pub use publisher::{Loan, Publisher};
 pub use rate::{Trigger, parse_duration, parse_rate};
-pub use stats::{StepStats, StatsSummary};
+pub use stats::{StatsSummary, StepStats};
 pub use subscriber::{Received, Subscriber};
 pub use topic::{Delivery, Topic};
 

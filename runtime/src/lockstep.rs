@@ -7,8 +7,8 @@
 //! triggered subscribers at t + tick and is invisible to them before, so runs are deterministic
 //! whatever the machine's load.
 
-use crate::transport::{self, Shared};
 use crate::Error;
+use crate::transport::{self, Shared};
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
 use caravan_schemas::{FixedString, FixedVec, Header};
 use iceoryx2::port::listener::Listener;
@@ -24,8 +24,10 @@ type Sub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>;
 fn control_topic<T: caravan_schemas::Message>(
     iox: &iceoryx2::node::Node<ipc::Service>,
     name: &str,
-) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, Header>, Error>
-{
+) -> Result<
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, Header>,
+    Error,
+> {
     // Control messages must never be lost; queues are deep enough that nobody waits in practice.
     transport::open_pubsub::<T>(iox, name, crate::Delivery::Lossless { depth: 256 })
 }
@@ -54,7 +56,10 @@ fn subscriber<T: caravan_schemas::Message>(
 
 fn send<T: caravan_schemas::Message>(port: &Pub<T>, value: T, name: &str) -> Result<(), Error> {
     let sample = port.loan_uninit().map_err(|e| Error::transport(name, e))?;
-    sample.write_payload(value).send().map_err(|e| Error::transport(name, e))?;
+    sample
+        .write_payload(value)
+        .send()
+        .map_err(|e| Error::transport(name, e))?;
     Ok(())
 }
 
@@ -73,6 +78,8 @@ pub(crate) struct Client {
     grant_listener: Listener<ipc::Service>,
     done: Pub<Done>,
     done_notifier: Notifier<ipc::Service>,
+    /// Kept open: a sample whose publisher is gone before the subscriber attached is lost.
+    _hello: Pub<Hello>,
     shared: Rc<Shared>,
 }
 
@@ -85,6 +92,7 @@ impl Client {
     ) -> Result<Self, Error> {
         let iox = &shared.iox;
         let grant_name = proto::grant_service(node);
+        let hello_port = publisher::<Hello>(iox, proto::HELLO)?;
         let client = Self {
             node_hash: shared.node_hash,
             grants: subscriber::<Grant>(iox, &grant_name)?,
@@ -92,6 +100,7 @@ impl Client {
             done: publisher::<Done>(iox, proto::DONE)?,
             done_notifier: transport::notifier(iox, proto::DONE)?,
             shared: shared.clone(),
+            _hello: hello_port,
         };
         let mut hello = Hello {
             node: FixedString::new(node),
@@ -99,14 +108,14 @@ impl Client {
             triggers: FixedVec::new(),
         };
         for topic in triggers {
-            hello
-                .triggers
-                .push(proto::name_hash(topic))
-                .map_err(|_| Error::Lockstep(format!("node '{node}' triggers on too many topics")))?;
+            hello.triggers.push(proto::name_hash(topic)).map_err(|_| {
+                Error::Lockstep(format!("node '{node}' triggers on too many topics"))
+            })?;
         }
-        let hello_port = publisher::<Hello>(iox, proto::HELLO)?;
-        send(&hello_port, hello, proto::HELLO)?;
-        transport::notifier(iox, proto::HELLO)?.notify().map_err(|e| Error::transport(proto::HELLO, e))?;
+        send(&client._hello, hello, proto::HELLO)?;
+        transport::notifier(iox, proto::HELLO)?
+            .notify()
+            .map_err(|e| Error::transport(proto::HELLO, e))?;
         Ok(client)
     }
 
@@ -116,15 +125,28 @@ impl Client {
             .attach_notification(&self.grant_listener)
             .map_err(|e| Error::transport("lockstep grant wait", e))?;
         loop {
-            if let Some(sample) = self.grants.receive().map_err(|e| Error::transport("grant", e))? {
+            if let Some(sample) = self
+                .grants
+                .receive()
+                .map_err(|e| Error::transport("grant", e))?
+            {
                 let grant = *sample.payload();
-                return Ok(if grant.stop != 0 { GrantOutcome::Stop } else { GrantOutcome::Step(grant) });
+                return Ok(if grant.stop != 0 {
+                    GrantOutcome::Stop
+                } else {
+                    GrantOutcome::Step(grant)
+                });
             }
             let result = waitset
                 .wait_and_process_once(|_| CallbackProgression::Continue)
                 .map_err(|e| Error::transport("lockstep grant wait", e))?;
-            self.grant_listener.try_wait(|_| {}).map_err(|e| Error::transport("grant", e))?;
-            if matches!(result, WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt) {
+            self.grant_listener
+                .try_wait(|_| {})
+                .map_err(|e| Error::transport("grant", e))?;
+            if matches!(
+                result,
+                WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
+            ) {
                 return Ok(GrantOutcome::Terminated);
             }
         }
@@ -132,14 +154,20 @@ impl Client {
 
     /// Reports the step at `now_ns` finished, with the topics it published to.
     pub fn report_done(&self, now_ns: u64) -> Result<(), Error> {
-        let mut done = Done { node_hash: self.node_hash, now_ns, published: FixedVec::new() };
+        let mut done = Done {
+            node_hash: self.node_hash,
+            now_ns,
+            published: FixedVec::new(),
+        };
         for topic in self.shared.published.borrow_mut().drain(..) {
             // More topics than fit cannot be scheduled precisely; the node is still woken by
             // its period, so truncation only delays subscribers and is reported at hello time.
             let _ = done.published.push(topic);
         }
         send(&self.done, done, proto::DONE)?;
-        self.done_notifier.notify().map_err(|e| Error::transport(proto::DONE, e))?;
+        self.done_notifier
+            .notify()
+            .map_err(|e| Error::transport(proto::DONE, e))?;
         Ok(())
     }
 }
@@ -182,6 +210,7 @@ pub struct Scheduler {
 impl Scheduler {
     /// A scheduler on the group of `config`, with minimum message delay `tick`.
     pub fn new(config: &iceoryx2::config::Config, tick: Duration) -> Result<Self, Error> {
+        iceoryx2::prelude::set_log_level_from_env_or(LogLevel::Warn);
         let iox = NodeBuilder::new()
             .config(config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
@@ -215,7 +244,11 @@ impl Scheduler {
     ) -> Result<(), Error> {
         let expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
         loop {
-            while let Some(sample) = self.hello.receive().map_err(|e| Error::transport("hello", e))? {
+            while let Some(sample) = self
+                .hello
+                .receive()
+                .map_err(|e| Error::transport("hello", e))?
+            {
                 self.admit(sample.payload())?;
             }
             let joined: BTreeSet<&str> = self.members.iter().map(|m| m.name.as_str()).collect();
@@ -224,7 +257,10 @@ impl Scheduler {
             }
             watchdog().map_err(|why| {
                 let missing: Vec<_> = expected.difference(&joined).copied().collect();
-                Error::Lockstep(format!("waiting for {} to start: {why}", missing.join(", ")))
+                Error::Lockstep(format!(
+                    "waiting for {} to start: {why}",
+                    missing.join(", ")
+                ))
             })?;
             self.wait_on(true)?;
         }
@@ -264,15 +300,31 @@ impl Scheduler {
         &mut self,
         mut watchdog: impl FnMut() -> Result<(), String>,
     ) -> Result<Option<Advance>, Error> {
-        let Some((now_ns, due)) = self.queue.pop_first() else { return Ok(None) };
+        let Some((now_ns, due)) = self.queue.pop_first() else {
+            return Ok(None);
+        };
         for &i in &due {
-            self.grant(i, Grant { now_ns, tick_ns: self.tick_ns, stop: 0, _reserved: 0 })?;
+            self.grant(
+                i,
+                Grant {
+                    now_ns,
+                    tick_ns: self.tick_ns,
+                    stop: 0,
+                    _reserved: 0,
+                },
+            )?;
         }
         let mut waiting = due.clone();
         while !waiting.is_empty() {
-            while let Some(sample) = self.done.receive().map_err(|e| Error::transport("done", e))? {
+            while let Some(sample) = self
+                .done
+                .receive()
+                .map_err(|e| Error::transport("done", e))?
+            {
                 let done = sample.payload();
-                let Some(&i) = self.by_hash.get(&done.node_hash) else { continue };
+                let Some(&i) = self.by_hash.get(&done.node_hash) else {
+                    continue;
+                };
                 if done.now_ns != now_ns || !waiting.remove(&i) {
                     return Err(Error::Lockstep(format!(
                         "node '{}' reported a step at {} ns, expected {} ns",
@@ -285,8 +337,14 @@ impl Scheduler {
                 break;
             }
             watchdog().map_err(|why| {
-                let names: Vec<_> = waiting.iter().map(|&i| self.members[i].name.as_str()).collect();
-                Error::Lockstep(format!("waiting for {} to finish step at {now_ns} ns: {why}", names.join(", ")))
+                let names: Vec<_> = waiting
+                    .iter()
+                    .map(|&i| self.members[i].name.as_str())
+                    .collect();
+                Error::Lockstep(format!(
+                    "waiting for {} to finish step at {now_ns} ns: {why}",
+                    names.join(", ")
+                ))
             })?;
             self.wait_on(false)?;
         }
@@ -301,8 +359,16 @@ impl Scheduler {
             self.queue.entry(now_ns + period).or_default().insert(i);
         }
         for topic in published {
-            for &j in self.subscribers.get(topic).map(Vec::as_slice).unwrap_or(&[]) {
-                self.queue.entry(now_ns + self.tick_ns).or_default().insert(j);
+            for &j in self
+                .subscribers
+                .get(topic)
+                .map(Vec::as_slice)
+                .unwrap_or(&[])
+            {
+                self.queue
+                    .entry(now_ns + self.tick_ns)
+                    .or_default()
+                    .insert(j);
             }
         }
     }
@@ -310,20 +376,35 @@ impl Scheduler {
     fn grant(&self, i: usize, grant: Grant) -> Result<(), Error> {
         let member = &self.members[i];
         send(&member.grant, grant, &member.name)?;
-        member.grant_notifier.notify().map_err(|e| Error::transport(&member.name, e))?;
+        member
+            .grant_notifier
+            .notify()
+            .map_err(|e| Error::transport(&member.name, e))?;
         Ok(())
     }
 
     /// Tells every node the run is over.
     pub fn stop_all(&mut self) -> Result<(), Error> {
         for i in 0..self.members.len() {
-            self.grant(i, Grant { now_ns: 0, tick_ns: self.tick_ns, stop: 1, _reserved: 0 })?;
+            self.grant(
+                i,
+                Grant {
+                    now_ns: 0,
+                    tick_ns: self.tick_ns,
+                    stop: 1,
+                    _reserved: 0,
+                },
+            )?;
         }
         Ok(())
     }
 
     fn wait_on(&self, hello: bool) -> Result<(), Error> {
-        let listener = if hello { &self.hello_listener } else { &self.done_listener };
+        let listener = if hello {
+            &self.hello_listener
+        } else {
+            &self.done_listener
+        };
         listener
             .timed_wait(|_| {}, self.poll)
             .map_err(|e| Error::transport("scheduler wait", e))?;

@@ -2,7 +2,9 @@
 
 use crate::executor::Executor;
 use crate::transport::Shared;
-use crate::{ClockMode, Error, NodeIdentity, Publisher, StatsSummary, Step, Subscriber, Topic, Trigger};
+use crate::{
+    ClockMode, Error, NodeIdentity, Publisher, StatsSummary, Step, Subscriber, Topic, Trigger,
+};
 use caravan_schemas::{Message, NodeStatus};
 use iceoryx2::prelude::*;
 use serde::de::DeserializeOwned;
@@ -52,7 +54,9 @@ impl Node {
     }
 
     pub fn builder(group: &str, name: &str) -> NodeBuilder {
-        NodeBuilder { identity: NodeIdentity::new(group, name) }
+        NodeBuilder {
+            identity: NodeIdentity::new(group, name),
+        }
     }
 
     pub fn new(identity: NodeIdentity) -> Result<Self, Error> {
@@ -62,8 +66,12 @@ impl Node {
             Some(path) => crate::group::load_config(path)?,
             None => crate::group::config(&identity.group)?,
         };
-        let node_name = NodeName::new(&identity.name)
-            .map_err(|e| Error::Config(format!("node name '{}' is not usable: {e:?}", identity.name)))?;
+        let node_name = NodeName::new(&identity.name).map_err(|e| {
+            Error::Config(format!(
+                "node name '{}' is not usable: {e:?}",
+                identity.name
+            ))
+        })?;
         let iox = iceoryx2::node::NodeBuilder::new()
             .name(&node_name)
             .config(&config)
@@ -80,6 +88,7 @@ impl Node {
             lockstep: identity.clock == ClockMode::Lockstep,
             published: RefCell::new(Vec::with_capacity(caravan_schemas::lockstep::MAX_TOPICS)),
             missed: Cell::new(0),
+            listeners: RefCell::new(Vec::new()),
         });
         let status = Publisher::new(
             shared.clone(),
@@ -88,7 +97,13 @@ impl Node {
         let epoch_offset_ns = identity
             .epoch_ns
             .map_or(0, |epoch| crate::wall_clock_ns().saturating_sub(epoch));
-        Ok(Self { identity, shared, status, started: Instant::now(), epoch_offset_ns })
+        Ok(Self {
+            identity,
+            shared,
+            status,
+            started: Instant::now(),
+            epoch_offset_ns,
+        })
     }
 
     pub fn identity(&self) -> &NodeIdentity {

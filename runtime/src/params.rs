@@ -5,7 +5,10 @@ use serde::de::DeserializeOwned;
 
 /// Deserialises `value` into `P`. Unknown keys and mistyped values are errors naming the key
 /// (as a dotted path) and, for a wrong type, the expected type.
-pub fn parse_params<P: DeserializeOwned>(node: &str, value: &serde_json::Value) -> Result<P, Error> {
+pub fn parse_params<P: DeserializeOwned>(
+    node: &str,
+    value: &serde_json::Value,
+) -> Result<P, Error> {
     let mut unknown = Vec::new();
     let mut note_unknown = |path: serde_ignored::Path<'_>| unknown.push(path.to_string());
     let tracked = serde_ignored::Deserializer::new(value, &mut note_unknown);
@@ -18,10 +21,17 @@ pub fn parse_params<P: DeserializeOwned>(node: &str, value: &serde_json::Value) 
         } else {
             format!("key '{path}': {inner}")
         };
-        Error::Params { node: node.to_string(), message }
+        Error::Params {
+            node: node.to_string(),
+            message,
+        }
     })?;
     if !unknown.is_empty() {
-        let keys = unknown.iter().map(|k| format!("'{k}'")).collect::<Vec<_>>().join(", ");
+        let keys = unknown
+            .iter()
+            .map(|k| format!("'{k}'"))
+            .collect::<Vec<_>>()
+            .join(", ");
         return Err(Error::Params {
             node: node.to_string(),
             message: format!("unknown key {keys}; this node does not take it"),
@@ -51,7 +61,13 @@ mod tests {
     #[test]
     fn reads_nested_params() {
         let p: Gains = parse_params("n", &json!({"k1": 1.5, "limits": {"v_max": 0.2}})).unwrap();
-        assert_eq!(p, Gains { k1: 1.5, limits: Limits { v_max: 0.2 } });
+        assert_eq!(
+            p,
+            Gains {
+                k1: 1.5,
+                limits: Limits { v_max: 0.2 }
+            }
+        );
     }
 
     #[test]
@@ -63,7 +79,12 @@ mod tests {
 
     #[test]
     fn wrong_type_names_key_and_expected_type() {
-        let text = parse_params::<Gains>("n", &json!({"k1": "fast"})).unwrap_err().to_string();
-        assert!(text.contains("key 'k1'") && text.contains("expected f64"), "{text}");
+        let text = parse_params::<Gains>("n", &json!({"k1": "fast"}))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            text.contains("key 'k1'") && text.contains("expected f64"),
+            "{text}"
+        );
     }
 }

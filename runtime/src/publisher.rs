@@ -76,7 +76,10 @@ impl<T: Message> Publisher<T> {
             T::placement_default(uninit.payload_mut().as_mut_ptr());
             uninit.assume_init()
         };
-        Ok(Loan { sample, publisher: self })
+        Ok(Loan {
+            sample,
+            publisher: self,
+        })
     }
 
     /// Publishes a copy of `value`.

@@ -64,7 +64,9 @@ fn bad_rate(text: &str) -> Error {
 /// Parses a duration such as `"180s"`, `"2min"`, `"20ms"` or `"1.5s"`.
 pub fn parse_duration(text: &str) -> Result<Duration, Error> {
     let t = text.trim();
-    let split = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
     let (number, unit) = t.split_at(split);
     let value: f64 = number.parse().map_err(|_| bad_duration(text))?;
     let scale = match unit.trim() {

@@ -31,7 +31,8 @@ pub struct StatsSummary {
 impl StepStats {
     /// `period` is `None` for a node stepped by messages: it has no jitter or deadline.
     pub fn new(period: Option<Duration>) -> Self {
-        let histogram = || Histogram::new_with_bounds(1, 3_600_000_000_000, 3).expect("valid bounds");
+        let histogram =
+            || Histogram::new_with_bounds(1, 3_600_000_000_000, 3).expect("valid bounds");
         Self {
             period_ns: period.map_or(0, |p| p.as_nanos() as u64),
             steps: 0,
@@ -52,7 +53,8 @@ impl StepStats {
         if self.period_ns > 0 {
             if let Some(last) = self.last_start_ns {
                 let actual = start_ns.saturating_sub(last);
-                self.jitter.saturating_record(actual.abs_diff(self.period_ns).max(1));
+                self.jitter
+                    .saturating_record(actual.abs_diff(self.period_ns).max(1));
             }
             let late = start_ns.saturating_sub(due_ns);
             if late > self.period_ns || compute_ns > self.period_ns {
@@ -63,7 +65,8 @@ impl StepStats {
     }
 
     pub fn summary(&self) -> StatsSummary {
-        let pick = |h: &Histogram<u64>, f: fn(&Histogram<u64>) -> u64| if h.is_empty() { 0 } else { f(h) };
+        let pick =
+            |h: &Histogram<u64>, f: fn(&Histogram<u64>) -> u64| if h.is_empty() { 0 } else { f(h) };
         StatsSummary {
             period_ns: self.period_ns,
             steps: self.steps,

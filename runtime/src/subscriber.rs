@@ -56,6 +56,7 @@ impl<T: Message> Subscriber<T> {
             .buffer_size(topic.delivery().depth())
             .create()
             .map_err(|e| Error::topic(topic.name(), format!("cannot create subscriber: {e:?}")))?;
+        shared.listener(topic.name())?;
         Ok(Self {
             topic: topic.name().to_string(),
             port,
@@ -120,14 +121,19 @@ impl<T: Message> Subscriber<T> {
         }
         // Stamps of one publisher only grow, so taking the first visible one keeps each
         // publisher's order.
-        let index = pending.iter().position(|s| self.shared.is_visible(s.user_header()));
+        let index = pending
+            .iter()
+            .position(|s| self.shared.is_visible(s.user_header()));
         Ok(index.and_then(|i| pending.remove(i)))
     }
 
     fn account(&self, header: &Header) {
         self.received.set(self.received.get() + 1);
         let mut last = self.last_seq.borrow_mut();
-        match last.iter_mut().find(|(source, _)| *source == header.source_id) {
+        match last
+            .iter_mut()
+            .find(|(source, _)| *source == header.source_id)
+        {
             Some((_, seq)) => {
                 if header.seq > *seq + 1 {
                     let gap = header.seq - *seq - 1;

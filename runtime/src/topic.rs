@@ -36,14 +36,22 @@ pub struct Topic<T> {
 
 impl<T> Clone for Topic<T> {
     fn clone(&self) -> Self {
-        Self { name: self.name.clone(), delivery: self.delivery, _type: PhantomData }
+        Self {
+            name: self.name.clone(),
+            delivery: self.delivery,
+            _type: PhantomData,
+        }
     }
 }
 
 impl<T: Message> Topic<T> {
     /// A topic with [`Delivery::Latest`] and a depth of 8.
     pub fn new(name: &str) -> Self {
-        Self { name: name.to_string(), delivery: Delivery::Latest { depth: 8 }, _type: PhantomData }
+        Self {
+            name: name.to_string(),
+            delivery: Delivery::Latest { depth: 8 },
+            _type: PhantomData,
+        }
     }
 
     /// A topic on which no message is ever dropped.

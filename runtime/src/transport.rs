@@ -7,6 +7,7 @@ use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 use std::cell::{Cell, RefCell};
+use std::rc::Rc;
 
 /// Node-wide state, shared (single-threaded) by the node and its publishers and subscribers.
 pub(crate) struct Shared {
@@ -21,6 +22,9 @@ pub(crate) struct Shared {
     pub published: RefCell<Vec<u64>>,
     /// Messages lost by all subscribers (sequence gaps).
     pub missed: Cell<u64>,
+    /// Wake-up listeners by topic, created with the first subscriber of each topic so that
+    /// messages published before the step loop starts still wake it.
+    pub listeners: RefCell<Vec<(String, Rc<Listener<ipc::Service>>)>>,
 }
 
 impl Shared {
@@ -31,6 +35,17 @@ impl Shared {
                 list.push(topic_hash);
             }
         }
+    }
+
+    /// The wake-up listener of `topic`, created on first use.
+    pub fn listener(&self, topic: &str) -> Result<Rc<Listener<ipc::Service>>, Error> {
+        let mut listeners = self.listeners.borrow_mut();
+        if let Some((_, l)) = listeners.iter().find(|(t, _)| t == topic) {
+            return Ok(l.clone());
+        }
+        let l = Rc::new(listener(&self.iox, topic)?);
+        listeners.push((topic.to_string(), l.clone()));
+        Ok(l)
     }
 
     pub fn is_visible(&self, header: &Header) -> bool {

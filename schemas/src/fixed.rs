@@ -12,7 +12,10 @@ pub struct FixedString<const N: usize> {
 
 impl<const N: usize> Default for FixedString<N> {
     fn default() -> Self {
-        Self { len: 0, bytes: [0; N] }
+        Self {
+            len: 0,
+            bytes: [0; N],
+        }
     }
 }
 

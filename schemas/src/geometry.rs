@@ -32,7 +32,12 @@ pub struct Quaternion {
 
 impl Default for Quaternion {
     fn default() -> Self {
-        Self { x: 0.0, y: 0.0, z: 0.0, w: 1.0 }
+        Self {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        }
     }
 }
 
@@ -40,7 +45,12 @@ impl Quaternion {
     /// Rotation by `yaw` about z.
     pub fn from_yaw(yaw: f64) -> Self {
         let (s, c) = (yaw / 2.0).sin_cos();
-        Self { x: 0.0, y: 0.0, z: s, w: c }
+        Self {
+            x: 0.0,
+            y: 0.0,
+            z: s,
+            w: c,
+        }
     }
 
     /// Yaw (rotation about z) of this orientation.

@@ -45,4 +45,3 @@ fn fixed_containers_truncate_at_capacity() {
     assert_eq!(v.push(3), Err(3));
     assert_eq!(v.as_slice(), &[1, 2]);
 }
-

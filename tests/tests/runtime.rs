@@ -1,0 +1,206 @@
+//! The runtime foundation across real processes and real shared memory.
+
+use caravan::lockstep::Scheduler;
+use caravan_tests::{TestGroup, terminate, test_node, wait_with_cpu};
+use serde_json::json;
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Stdio};
+use std::time::Duration;
+
+/// Starts a subscriber node and returns once it reports being subscribed.
+fn start_subscriber(group: &str, topic: &str, count: u64, value: f64) -> Child {
+    let mut child = test_node(
+        group,
+        "sub",
+        "subscribe",
+        json!({"topic": topic, "count": count, "value": value}),
+    )
+    .stdout(Stdio::piped())
+    .spawn()
+    .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.as_mut().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    assert_eq!(line.trim(), "ready", "subscriber did not start");
+    child
+}
+
+fn finish(child: Child) -> (bool, String) {
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr),
+    )
+}
+
+#[test]
+fn hundred_thousand_messages_arrive_gap_free() {
+    let group = TestGroup::new("lossless");
+    let group = &group.name;
+    let sub = start_subscriber(group, "bulk", 100_000, 7.0);
+    let status = test_node(
+        group,
+        "pub",
+        "publish",
+        json!({"topic": "bulk", "count": 100_000, "value": 7.0}),
+    )
+    .status()
+    .unwrap();
+    assert!(status.success());
+    let (ok, out) = finish(sub);
+    assert!(ok, "{out}");
+    assert!(out.contains("received 100000 missed 0"), "{out}");
+}
+
+#[test]
+fn groups_with_the_same_topic_names_do_not_cross_talk() {
+    let (ga, gb) = (TestGroup::new("iso-a"), TestGroup::new("iso-b"));
+    let (a, b) = (&ga.name, &gb.name);
+    let sub_a = start_subscriber(a, "shared/name", 1000, 1.0);
+    let sub_b = start_subscriber(b, "shared/name", 1000, 2.0);
+    let pub_a = test_node(
+        a,
+        "pub",
+        "publish",
+        json!({"topic": "shared/name", "count": 1000, "value": 1.0}),
+    )
+    .spawn()
+    .unwrap();
+    let pub_b = test_node(
+        b,
+        "pub",
+        "publish",
+        json!({"topic": "shared/name", "count": 1000, "value": 2.0}),
+    )
+    .spawn()
+    .unwrap();
+    for p in [pub_a, pub_b] {
+        assert!(p.wait_with_output().unwrap().status.success());
+    }
+    for sub in [sub_a, sub_b] {
+        let (ok, out) = finish(sub);
+        // A foreign message would fail the value check; a shared buffer would show gaps.
+        assert!(ok, "{out}");
+        assert!(out.contains("received 1000 missed 0"), "{out}");
+    }
+}
+
+#[test]
+fn idle_node_costs_almost_no_cpu() {
+    let group = TestGroup::new("idle");
+    let group = &group.name;
+    let mut child = test_node(group, "idle", "idle", json!({}))
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_secs(5));
+    terminate(&child);
+    let (code, cpu) = wait_with_cpu(&mut child);
+    assert_eq!(code, 0, "idle node should exit cleanly on SIGTERM");
+    // Generous: 2 % of one core over ≥ 5 s is 100 ms, start-up included.
+    assert!(
+        cpu < Duration::from_millis(100),
+        "idle node used {cpu:?} of CPU"
+    );
+}
+
+#[test]
+fn unknown_param_key_is_named_and_fails() {
+    let group = TestGroup::new("params");
+    let group = &group.name;
+    let out = test_node(group, "p", "params", json!({"gain": 1.0, "gian": 2.0}))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("'gian'") && err.contains("unknown key"),
+        "{err}"
+    );
+}
+
+#[test]
+fn mistyped_param_names_key_and_expected_type() {
+    let group = TestGroup::new("params");
+    let group = &group.name;
+    let out = test_node(group, "p", "params", json!({"gain": "high"}))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("key 'gain'") && err.contains("expected f64"),
+        "{err}"
+    );
+}
+
+#[test]
+fn lockstep_nodes_step_at_granted_times_and_never_see_the_future() {
+    let group = TestGroup::new("lockstep");
+    let group = &group.name;
+    let dir = std::env::temp_dir().join(group);
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = dir.join("sink.log");
+    let config = caravan::group::config(group).unwrap();
+    let tick = Duration::from_millis(1);
+    let mut scheduler = Scheduler::new(&config, tick).unwrap();
+    let spawn = |name: &str, mode: &str, params| {
+        test_node(group, name, mode, params)
+            .env("CARAVAN_CLOCK", "lockstep")
+            .spawn()
+            .unwrap()
+    };
+    let mut source = spawn("source", "lockstep-source", json!({"topic": "ls/pose"}));
+    let mut sink = spawn(
+        "sink",
+        "lockstep-sink",
+        json!({"topic": "ls/pose", "out": log.to_str().unwrap()}),
+    );
+    let alive = |c: &mut Child| c.try_wait().unwrap().is_none();
+    let names = vec!["source".to_string(), "sink".to_string()];
+    scheduler.wait_for_nodes(&names, || Ok(())).unwrap();
+    let mut advances = Vec::new();
+    while scheduler.next_time_ns().unwrap() <= 1_000_000_000 {
+        advances.push(scheduler.advance(|| Ok(())).unwrap().unwrap());
+    }
+    scheduler.stop_all().unwrap();
+    assert!(source.wait().unwrap().success() && sink.wait().unwrap().success());
+    assert!(!alive(&mut source));
+
+    // The 10 Hz source steps at exactly 0, 100, …, 1000 ms; the sink 1 tick after each.
+    let source_times: Vec<u64> = advances
+        .iter()
+        .filter(|a| a.stepped.contains(&"source".into()))
+        .map(|a| a.now_ns)
+        .collect();
+    assert_eq!(
+        source_times,
+        (0..=10).map(|k| k * 100_000_000).collect::<Vec<_>>()
+    );
+    let sink_times: Vec<u64> = advances
+        .iter()
+        .filter(|a| a.stepped.contains(&"sink".into()))
+        .map(|a| a.now_ns)
+        .collect();
+    assert_eq!(
+        sink_times,
+        (0..10)
+            .map(|k| k * 100_000_000 + 1_000_000)
+            .collect::<Vec<_>>()
+    );
+
+    // Every message was seen exactly one tick after its stamp: never earlier, never lost.
+    let seen: Vec<(u64, u64)> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut it = l.split(' ').map(|n| n.parse::<u64>().unwrap());
+            (it.next().unwrap(), it.next().unwrap())
+        })
+        .collect();
+    assert_eq!(seen.len(), 10);
+    for (now, stamp) in seen {
+        assert_eq!(now, stamp + 1_000_000);
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
