@@ -58,6 +58,8 @@ pub fn config(group: &str) -> Result<Config, Error> {
     ps.max_publishers = MAX_PUBLISHERS;
     ps.max_subscribers = MAX_SUBSCRIBERS;
     ps.max_nodes = MAX_NODES_PER_SERVICE;
+    // Must cover the deepest subscriber queue (lossless topics), or iceoryx2 warns.
+    ps.subscriber_expired_connection_buffer = 256;
     let ev = &mut config.defaults.event;
     ev.max_notifiers = MAX_PUBLISHERS * 2;
     ev.max_listeners = MAX_SUBSCRIBERS;

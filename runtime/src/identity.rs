@@ -20,6 +20,8 @@ pub mod env_vars {
     pub const ON: &str = "CARAVAN_ON";
     /// Wall-clock ns at the group's start; realtime simulated time counts from it.
     pub const EPOCH_NS: &str = "CARAVAN_EPOCH_NS";
+    /// The group's random seed; nodes derive their own streams from it.
+    pub const SEED: &str = "CARAVAN_SEED";
 }
 
 /// Identity and settings of one node.
@@ -37,6 +39,7 @@ pub struct NodeIdentity {
     pub on_override: Option<String>,
     /// Wall-clock ns at which the group's time started (realtime).
     pub epoch_ns: Option<u64>,
+    pub seed: u64,
 }
 
 impl NodeIdentity {
@@ -51,6 +54,7 @@ impl NodeIdentity {
             rate_override: None,
             on_override: None,
             epoch_ns: None,
+            seed: 0,
         }
     }
 
@@ -83,6 +87,12 @@ impl NodeIdentity {
         }
         id.rate_override = optional(env_vars::RATE);
         id.on_override = optional(env_vars::ON);
+        if let Some(seed) = optional(env_vars::SEED) {
+            id.seed = seed.parse().map_err(|_| Error::Env {
+                var: env_vars::SEED,
+                message: format!("'{seed}' is not an unsigned integer"),
+            })?;
+        }
         if let Some(epoch) = optional(env_vars::EPOCH_NS) {
             id.epoch_ns = Some(epoch.parse().map_err(|_| Error::Env {
                 var: env_vars::EPOCH_NS,
@@ -90,6 +100,12 @@ impl NodeIdentity {
             })?);
         }
         Ok(id)
+    }
+
+    /// A seed for this node's random streams: the group seed mixed with the node name, so
+    /// nodes draw independent but reproducible numbers.
+    pub fn node_seed(&self) -> u64 {
+        self.seed ^ self.node_hash().rotate_left(17)
     }
 
     /// Hash that identifies this node in message headers and the lockstep protocol.

@@ -30,6 +30,7 @@ mod rate;
 mod stats;
 mod subscriber;
 mod topic;
+pub mod tap;
 mod transport;
 
 pub use caravan_schemas as schemas;

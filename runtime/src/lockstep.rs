@@ -176,6 +176,8 @@ use iceoryx2::waitset::WaitSetRunResult;
 
 struct Member {
     name: String,
+    /// False after the process died, until it says hello again (a restart).
+    active: bool,
     period_ns: u64,
     grant: Pub<Grant>,
     grant_notifier: Notifier<ipc::Service>,
@@ -187,7 +189,14 @@ pub struct Advance {
     pub now_ns: u64,
     /// Names of the nodes that stepped, sorted.
     pub stepped: Vec<String>,
+    /// Hashes of the topics published in this step, sorted.
+    pub published: Vec<u64>,
 }
+
+/// Consulted while the scheduler waits: returns the names of nodes whose process died since
+/// the last call, or `Err` to abort the run.
+pub trait Watchdog: FnMut() -> Result<Vec<String>, String> {}
+impl<F: FnMut() -> Result<Vec<String>, String>> Watchdog for F {}
 
 /// Owns simulated time for a group. The launcher runs one; tests can run one directly.
 pub struct Scheduler {
@@ -205,6 +214,7 @@ pub struct Scheduler {
     queue: BTreeMap<u64, BTreeSet<usize>>,
     /// How long one wait may last before `watchdog` is consulted.
     poll: Duration,
+    now_ns: u64,
 }
 
 impl Scheduler {
@@ -228,6 +238,7 @@ impl Scheduler {
             subscribers: BTreeMap::new(),
             queue: BTreeMap::new(),
             poll: Duration::from_millis(100),
+            now_ns: 0,
         })
     }
 
@@ -237,11 +248,7 @@ impl Scheduler {
 
     /// Waits until every node in `expected` said hello. `watchdog` runs between waits; an `Err`
     /// from it (a member died, a timeout) aborts the wait.
-    pub fn wait_for_nodes(
-        &mut self,
-        expected: &[String],
-        mut watchdog: impl FnMut() -> Result<(), String>,
-    ) -> Result<(), Error> {
+    pub fn wait_for_nodes(&mut self, expected: &[String], mut watchdog: impl Watchdog) -> Result<(), Error> {
         let expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
         loop {
             while let Some(sample) = self
@@ -266,15 +273,31 @@ impl Scheduler {
         }
     }
 
+    fn admit_new(&mut self) -> Result<(), Error> {
+        while let Some(sample) = self.hello.receive().map_err(|e| Error::transport("hello", e))? {
+            self.admit(sample.payload())?;
+        }
+        Ok(())
+    }
+
     fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
         let name = hello.node.as_str().to_string();
         let hash = proto::name_hash(&name);
-        if self.by_hash.contains_key(&hash) {
+        if let Some(&i) = self.by_hash.get(&hash) {
+            // A restarted process rejoins at the next tick.
+            let member = &mut self.members[i];
+            if !member.active {
+                member.active = true;
+                if member.period_ns > 0 {
+                    self.queue.entry(self.now_ns + self.tick_ns).or_default().insert(i);
+                }
+            }
             return Ok(());
         }
         let index = self.members.len();
         let grant_name = proto::grant_service(&name);
         self.members.push(Member {
+            active: true,
             grant: publisher::<Grant>(&self.iox, &grant_name)?,
             grant_notifier: transport::notifier(&self.iox, &grant_name)?,
             period_ns: hello.period_ns,
@@ -285,7 +308,7 @@ impl Scheduler {
             self.subscribers.entry(*topic).or_default().push(index);
         }
         if hello.period_ns > 0 {
-            self.queue.entry(0).or_default().insert(index);
+            self.queue.entry(self.now_ns).or_default().insert(index);
         }
         Ok(())
     }
@@ -296,61 +319,60 @@ impl Scheduler {
     }
 
     /// Grants the next event time to every node due then and waits until all are done.
-    pub fn advance(
-        &mut self,
-        mut watchdog: impl FnMut() -> Result<(), String>,
-    ) -> Result<Option<Advance>, Error> {
-        let Some((now_ns, due)) = self.queue.pop_first() else {
-            return Ok(None);
-        };
+    /// Returns `None` when no node will ever be due again.
+    pub fn advance(&mut self, mut watchdog: impl Watchdog) -> Result<Option<Advance>, Error> {
+        let Some((now_ns, due)) = self.queue.pop_first() else { return Ok(None) };
+        self.now_ns = now_ns;
+        let due: BTreeSet<usize> = due.into_iter().filter(|&i| self.members[i].active).collect();
         for &i in &due {
-            self.grant(
-                i,
-                Grant {
-                    now_ns,
-                    tick_ns: self.tick_ns,
-                    stop: 0,
-                    _reserved: 0,
-                },
-            )?;
+            self.grant(i, Grant { now_ns, tick_ns: self.tick_ns, stop: 0, _reserved: 0 })?;
         }
         let mut waiting = due.clone();
+        let mut published = BTreeSet::new();
         while !waiting.is_empty() {
-            while let Some(sample) = self
-                .done
-                .receive()
-                .map_err(|e| Error::transport("done", e))?
-            {
+            while let Some(sample) = self.done.receive().map_err(|e| Error::transport("done", e))? {
                 let done = sample.payload();
-                let Some(&i) = self.by_hash.get(&done.node_hash) else {
-                    continue;
-                };
+                let Some(&i) = self.by_hash.get(&done.node_hash) else { continue };
                 if done.now_ns != now_ns || !waiting.remove(&i) {
                     return Err(Error::Lockstep(format!(
                         "node '{}' reported a step at {} ns, expected {} ns",
                         self.members[i].name, done.now_ns, now_ns
                     )));
                 }
+                published.extend(done.published.as_slice().iter().copied());
                 self.schedule_after(i, now_ns, done.published.as_slice());
             }
             if waiting.is_empty() {
                 break;
             }
-            watchdog().map_err(|why| {
-                let names: Vec<_> = waiting
-                    .iter()
-                    .map(|&i| self.members[i].name.as_str())
-                    .collect();
-                Error::Lockstep(format!(
-                    "waiting for {} to finish step at {now_ns} ns: {why}",
-                    names.join(", ")
-                ))
+            let dead = watchdog().map_err(|why| {
+                let names: Vec<_> = waiting.iter().map(|&i| self.members[i].name.as_str()).collect();
+                Error::Lockstep(format!("waiting for {} to finish step at {now_ns} ns: {why}", names.join(", ")))
             })?;
+            self.mark_dead(&dead, &mut waiting);
+            self.admit_new()?;
             self.wait_on(false)?;
         }
         let mut stepped: Vec<String> = due.iter().map(|&i| self.members[i].name.clone()).collect();
         stepped.sort();
-        Ok(Some(Advance { now_ns, stepped }))
+        Ok(Some(Advance { now_ns, stepped, published: published.into_iter().collect() }))
+    }
+
+    /// Stops waiting for nodes whose process died; they rejoin when they say hello again.
+    fn mark_dead(&mut self, dead: &[String], waiting: &mut BTreeSet<usize>) {
+        for name in dead {
+            if let Some(&i) = self.by_hash.get(&proto::name_hash(name)) {
+                self.members[i].active = false;
+                waiting.remove(&i);
+            }
+        }
+    }
+
+    /// Between advances: notes deaths and restarts reported by the watchdog.
+    pub fn poll_members(&mut self, mut watchdog: impl Watchdog) -> Result<(), Error> {
+        let dead = watchdog().map_err(Error::Lockstep)?;
+        self.mark_dead(&dead, &mut BTreeSet::new());
+        self.admit_new()
     }
 
     fn schedule_after(&mut self, i: usize, now_ns: u64, published: &[u64]) {

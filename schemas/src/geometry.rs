@@ -1,8 +1,9 @@
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+use serde::Serialize;
 
 /// A pose in the plane: metres and radians, REP 103 (x forward, y left, θ counter-clockwise).
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Pose2D")]
 pub struct Pose2D {
     pub x: f64,
@@ -11,7 +12,7 @@ pub struct Pose2D {
 }
 
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Vector3")]
 pub struct Vector3 {
     pub x: f64,
@@ -21,7 +22,7 @@ pub struct Vector3 {
 
 /// A unit quaternion (x, y, z, w) as in geometry_msgs/Quaternion.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Quaternion")]
 pub struct Quaternion {
     pub x: f64,
@@ -62,7 +63,7 @@ impl Quaternion {
 
 /// A pose in space, as geometry_msgs/Pose.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Pose3D")]
 pub struct Pose3D {
     pub position: Vector3,
@@ -71,7 +72,7 @@ pub struct Pose3D {
 
 /// Linear and angular velocity, as geometry_msgs/Twist (m/s, rad/s).
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Twist")]
 pub struct Twist {
     pub linear: Vector3,

@@ -1,8 +1,9 @@
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+use serde::Serialize;
 
 /// Stamped on every message by the publisher; travels as iceoryx2's user header.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Header")]
 pub struct Header {
     /// Per-publisher sequence number, starting at 1; a gap means lost messages.

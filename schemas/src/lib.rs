@@ -8,7 +8,10 @@
 mod fixed;
 mod geometry;
 mod header;
+mod json;
 pub mod lockstep;
+mod registry;
+pub use registry::message_type_names;
 mod map;
 mod robot;
 mod sensors;
@@ -25,10 +28,12 @@ pub use status::NodeStatus;
 
 /// A type that can travel on a Caravan topic.
 ///
-/// Implemented for every schema type. `Copy` keeps them plain data; `PlacementDefault` lets a
+/// Implemented for every schema type. `Copy` keeps them plain data; `Serialize` feeds
+/// recordings and `caravan topic echo`; `PlacementDefault` lets a
 /// publisher initialise a megabyte-sized message in shared memory without a stack copy.
 pub trait Message:
     iceoryx2::prelude::ZeroCopySend
+    + serde::Serialize
     + iceoryx2::prelude::PlacementDefault
     + core::fmt::Debug
     + Copy
@@ -39,6 +44,7 @@ pub trait Message:
 
 impl<T> Message for T where
     T: iceoryx2::prelude::ZeroCopySend
+        + serde::Serialize
         + iceoryx2::prelude::PlacementDefault
         + core::fmt::Debug
         + Copy

@@ -5,6 +5,7 @@
 
 use crate::{FixedString, FixedVec};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+use serde::Serialize;
 
 /// Most topics a node may trigger on or publish to in one step, as seen by the scheduler.
 pub const MAX_TOPICS: usize = 32;
@@ -33,7 +34,7 @@ pub const fn name_hash(name: &str) -> u64 {
 }
 
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::lockstep::Hello")]
 pub struct Hello {
     pub node: FixedString<64>,
@@ -45,7 +46,7 @@ pub struct Hello {
 
 /// Permission to step once at simulated time `now_ns`.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::lockstep::Grant")]
 pub struct Grant {
     pub now_ns: u64,
@@ -58,7 +59,7 @@ pub struct Grant {
 
 /// A finished step.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::lockstep::Done")]
 pub struct Done {
     pub node_hash: u64,

@@ -1,5 +1,6 @@
 use crate::{FixedVec, Pose2D};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+use serde::Serialize;
 
 /// Largest side of an [`OccupancyGrid`], in cells.
 pub const MAP_MAX_SIDE: usize = 1024;
@@ -38,7 +39,7 @@ impl OccupancyGrid {
 
 /// A planned path in the map frame.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Path2D")]
 pub struct Path2D {
     pub poses: FixedVec<Pose2D, PATH_MAX_POSES>,
@@ -46,7 +47,7 @@ pub struct Path2D {
 
 /// An operator goal: reach `pose` within `tolerance_m`.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Goal")]
 pub struct Goal {
     /// 0-based index in the goal sequence (A = 0, B = 1, …).

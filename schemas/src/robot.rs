@@ -1,9 +1,10 @@
 use crate::{Pose3D, Twist};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+use serde::Serialize;
 
 /// Wheel-speed set-points for the motor controller, in rad/s.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::WheelSetpoint")]
 pub struct WheelSetpoint {
     pub left_rad_s: f64,
@@ -12,7 +13,7 @@ pub struct WheelSetpoint {
 
 /// Measured state of the two driven wheels.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::WheelState")]
 pub struct WheelState {
     /// Accumulated wheel angle, rad.
@@ -28,7 +29,7 @@ pub struct WheelState {
 
 /// Accumulated encoder counts of the two driven wheels.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::EncoderTicks")]
 pub struct EncoderTicks {
     pub left: i64,
@@ -40,14 +41,16 @@ pub struct EncoderTicks {
 
 /// Pose and twist estimate with covariances, as nav_msgs/Odometry.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Odometry")]
 pub struct Odometry {
     pub pose: Pose3D,
     /// Row-major 6×6 covariance of (x, y, z, roll, pitch, yaw).
+    #[serde(serialize_with = "crate::json::slice")]
     pub pose_covariance: [f64; 36],
     /// Twist in the robot frame.
     pub twist: Twist,
+    #[serde(serialize_with = "crate::json::slice")]
     pub twist_covariance: [f64; 36],
 }
 

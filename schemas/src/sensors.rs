@@ -1,5 +1,6 @@
 use crate::{Quaternion, Vector3};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+use serde::Serialize;
 
 /// Largest number of beams a [`LaserScan`] holds (a 270° scanner at 0.25°).
 pub const SCAN_MAX_BEAMS: usize = 1081;
@@ -41,7 +42,7 @@ impl LaserScan {
 
 /// Inertial measurement, as sensor_msgs/Imu.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Imu")]
 pub struct Imu {
     pub orientation: Quaternion,

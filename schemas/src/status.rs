@@ -1,9 +1,10 @@
 use crate::FixedString;
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+use serde::Serialize;
 
 /// Execution statistics of one node, published on `status` at 1 Hz and on exit.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::NodeStatus")]
 pub struct NodeStatus {
     pub node: FixedString<64>,

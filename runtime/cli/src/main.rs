@@ -1,16 +1,18 @@
 //! The `caravan` command.
 
 mod bench;
+mod clean;
+mod inspect;
+mod launch;
+mod record;
+mod report;
+mod run;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(
-    name = "caravan",
-    version,
-    about = "Run, inspect and measure Caravan process groups"
-)]
+#[command(name = "caravan", version, about = "Run, inspect and measure Caravan process groups")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -18,6 +20,23 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Launch a process group from a launch file
+    Launch(run::LaunchArgs),
+    /// Topics of a running group
+    #[command(subcommand)]
+    Topic(inspect::TopicCommand),
+    /// Nodes of a running group
+    #[command(subcommand)]
+    Node(inspect::NodeCommand),
+    /// Record a running group's topics to an MCAP file
+    Record(inspect::RecordArgs),
+    /// Recompute report.json and report.md of a run directory
+    Report {
+        /// The run directory (runs/<group>-<time>)
+        run_dir: std::path::PathBuf,
+    },
+    /// Remove shared memory left behind by groups whose processes are all gone
+    Clean,
     /// Latency benchmarks
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -26,13 +45,29 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Bench(cmd) => bench::run(cmd),
+        Command::Launch(args) => run::launch(&args).map(ExitCode::from),
+        Command::Topic(cmd) => inspect::topic(cmd).map(|_| ExitCode::SUCCESS),
+        Command::Node(cmd) => inspect::node(cmd).map(|_| ExitCode::SUCCESS),
+        Command::Record(args) => inspect::record(args).map(|_| ExitCode::SUCCESS),
+        Command::Report { run_dir } => report::write(&run_dir).map(|r| {
+            println!("{}", report_summary(&r));
+            ExitCode::SUCCESS
+        }),
+        Command::Clean => clean::clean().map(|_| ExitCode::SUCCESS),
+        Command::Bench(cmd) => bench::run(cmd).map(|_| ExitCode::SUCCESS),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("caravan: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    result.unwrap_or_else(|e| {
+        eprintln!("caravan: {e:#}");
+        ExitCode::FAILURE
+    })
+}
+
+fn report_summary(r: &serde_json::Value) -> String {
+    format!(
+        "{}: {} nodes, {} topics, real-time factor {:.2}",
+        r["run"]["outcome"].as_str().unwrap_or("?"),
+        r["nodes"].as_array().map_or(0, Vec::len),
+        r["topics"].as_array().map_or(0, Vec::len),
+        r["run"]["real_time_factor"].as_f64().unwrap_or(0.0)
+    )
 }

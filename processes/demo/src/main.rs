@@ -1,0 +1,95 @@
+//! Demo nodes: `caravan-demo ROLE`, with ROLE one of
+//! - `ping`: counts up at its rate and publishes the count on `demo/ping`;
+//! - `pong`: on each `demo/ping`, publishes the value times `gain` on `demo/pong`;
+//! - `sum`: at its rate, adds the latest `demo/pong` to a running total on `demo/sum`;
+//! - `noise`: at its rate, publishes seeded random numbers on `demo/noise`;
+//! - `crash`: steps `steps` times, then exits with status 3 (for restart tests).
+
+use caravan::{Error, Node, Topic, Trigger};
+use caravan_schemas::Pose2D;
+use rand::{Rng, SeedableRng};
+use serde::Deserialize;
+
+#[derive(Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct Params {
+    gain: f64,
+    steps: u64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self { gain: 2.0, steps: 5 }
+    }
+}
+
+fn topic(name: &str) -> Topic<Pose2D> {
+    Topic::new(name)
+}
+
+fn main() -> std::process::ExitCode {
+    let role = std::env::args().nth(1).unwrap_or_default();
+    match run(&role) {
+        Ok(code) => std::process::ExitCode::from(code),
+        Err(e) => {
+            eprintln!("caravan-demo {role}: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(role: &str) -> Result<u8, Error> {
+    let mut node = Node::from_env()?;
+    let p: Params = node.params()?;
+    match role {
+        "ping" => {
+            let out = node.publisher(&topic("demo/ping"))?;
+            node.run(Trigger::every_hz(10.0), |step| {
+                out.publish(&Pose2D { x: step.index() as f64, y: 0.0, theta: 0.0 })
+            })?;
+        }
+        "pong" => {
+            let input = node.subscriber(&topic("demo/ping"))?;
+            let out = node.publisher(&topic("demo/pong"))?;
+            node.run(Trigger::on("demo/ping"), |_| {
+                while let Some(msg) = input.receive()? {
+                    out.publish(&Pose2D { x: msg.x * p.gain, ..*msg })?;
+                }
+                Ok(())
+            })?;
+        }
+        "sum" => {
+            let input = node.subscriber(&topic("demo/pong"))?;
+            let out = node.publisher(&topic("demo/sum"))?;
+            let mut total = 0.0;
+            node.run(Trigger::every_hz(20.0), |_| {
+                if let Some(msg) = input.latest()? {
+                    total += msg.x;
+                }
+                out.publish(&Pose2D { x: total, y: 0.0, theta: 0.0 })
+            })?;
+        }
+        "noise" => {
+            let out = node.publisher(&topic("demo/noise"))?;
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(node.identity().node_seed());
+            node.run(Trigger::every_hz(7.0), |_| {
+                out.publish(&Pose2D { x: rng.random(), y: rng.random(), theta: 0.0 })
+            })?;
+        }
+        "crash" => {
+            node.run(Trigger::every_hz(10.0), |step| {
+                if step.index() + 1 >= p.steps {
+                    step.stop();
+                }
+                Ok(())
+            })?;
+            return Ok(3);
+        }
+        other => {
+            return Err(Error::Config(format!(
+                "unknown role '{other}'; expected ping, pong, sum, noise or crash"
+            )));
+        }
+    }
+    Ok(0)
+}

@@ -1,0 +1,207 @@
+//! What a launch file says, once parsed and validated. Every field holds its default when the
+//! file left it out, so the launcher never needs to know the defaults.
+
+use caravan::ClockMode;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::str::FromStr;
+use std::time::Duration;
+
+/// A validated launch file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LaunchFile {
+    /// The file as named on the command line.
+    pub path: PathBuf,
+    pub group: GroupSpec,
+    pub hosts: BTreeMap<String, HostSpec>,
+    pub links: Vec<LinkSpec>,
+    pub processes: Vec<ProcessSpec>,
+    /// The file's text after `--set` overrides; the launcher saves it in the run directory so a
+    /// run can be repeated exactly.
+    pub resolved_toml: String,
+}
+
+/// The `[group]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupSpec {
+    pub name: String,
+    pub clock: ClockMode,
+    /// How long the group runs; `None` runs until stopped.
+    pub duration: Option<Duration>,
+    pub seed: u64,
+    /// The base tick of simulated time.
+    pub tick: Duration,
+    /// Topic patterns to record (see [`glob_match`]).
+    pub record: Vec<String>,
+    /// Time between SIGTERM and SIGKILL when stopping a process.
+    pub grace: Duration,
+}
+
+impl GroupSpec {
+    pub const DEFAULT_TICK: Duration = Duration::from_millis(1);
+    pub const DEFAULT_GRACE: Duration = Duration::from_secs(3);
+}
+
+/// One entry of `[hosts]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HostSpec {
+    /// How many times slower than this machine the host's CPU is; 1.0 means as fast.
+    pub cpu_slowdown: f64,
+}
+
+impl Default for HostSpec {
+    fn default() -> Self {
+        HostSpec { cpu_slowdown: 1.0 }
+    }
+}
+
+/// One `[[links]]` entry: the network between two sets of hosts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkSpec {
+    /// Two host patterns (see [`glob_match`]), each matching at least one declared host.
+    pub between: [String; 2],
+    pub latency: Duration,
+    pub jitter: Duration,
+    /// Probability of losing a message, 0.0 to 1.0.
+    pub loss: f64,
+    pub bandwidth_bps: Option<u64>,
+}
+
+/// What to do when a process exits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Restart {
+    #[default]
+    Never,
+    OnFailure,
+    Always,
+}
+
+impl Restart {
+    pub const NAMES: [&'static str; 3] = ["never", "on-failure", "always"];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Restart::Never => "never",
+            Restart::OnFailure => "on-failure",
+            Restart::Always => "always",
+        }
+    }
+}
+
+impl std::fmt::Display for Restart {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl FromStr for Restart {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "never" => Ok(Restart::Never),
+            "on-failure" => Ok(Restart::OnFailure),
+            "always" => Ok(Restart::Always),
+            other => Err(format!(
+                "'{other}' is not a restart policy; expected 'never', 'on-failure' or 'always'"
+            )),
+        }
+    }
+}
+
+/// How to start a process.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Exec {
+    /// A single bare program name that `resolve_exec` found: a workspace binary (checked
+    /// first by the caller) or a program on PATH. Resolve it again when starting.
+    Workspace(String),
+    /// A command line split with shell quoting: program and its arguments. A program containing
+    /// '/' is a path, relative to the launch file's directory unless absolute; a bare program
+    /// name is resolved like `Workspace`.
+    Command(Vec<String>),
+}
+
+/// One `[[process]]` entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProcessSpec {
+    pub name: String,
+    pub exec: Exec,
+    /// Extra arguments appended after those of `exec`.
+    pub args: Vec<String>,
+    /// Where the process runs; "localhost" unless the file says otherwise.
+    pub host: String,
+    /// The rate as written (validated with `caravan::parse_rate`).
+    pub rate: Option<String>,
+    /// The topic whose messages trigger a step.
+    pub on: Option<String>,
+    /// Free-form parameters; always a JSON object.
+    pub params: serde_json::Value,
+    pub restart: Restart,
+    pub restart_backoff: Duration,
+    pub max_restarts: u32,
+    /// Whether the group stops when this process fails for good.
+    pub required: bool,
+    pub env: BTreeMap<String, String>,
+}
+
+impl ProcessSpec {
+    pub const DEFAULT_HOST: &'static str = "localhost";
+    pub const DEFAULT_BACKOFF: Duration = Duration::from_millis(500);
+    pub const DEFAULT_MAX_RESTARTS: u32 = 3;
+}
+
+/// Matches topic or host names against a pattern: `*` matches within one `/`-separated
+/// segment, `**` matches anything (and `a/**/b` also matches `a/b`).
+pub fn glob_match(pattern: &str, text: &str) -> bool {
+    glob(pattern.as_bytes(), text.as_bytes())
+}
+
+// Plain backtracking: patterns and names are short, so the worst case does not matter.
+fn glob(p: &[u8], t: &[u8]) -> bool {
+    match p {
+        [] => t.is_empty(),
+        [b'*', b'*', rest @ ..] => {
+            if let [b'/', after @ ..] = rest
+                && glob(after, t)
+            {
+                return true;
+            }
+            (0..=t.len()).any(|i| glob(rest, &t[i..]))
+        }
+        [b'*', rest @ ..] => (0..=t.len())
+            .take_while(|&i| i == 0 || t[i - 1] != b'/')
+            .any(|i| glob(rest, &t[i..])),
+        [c, rest @ ..] => t.first() == Some(c) && glob(rest, &t[1..]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn launch_glob_star_stays_in_segment() {
+        assert!(glob_match("robot/*/pose_true", "robot/3/pose_true"));
+        assert!(!glob_match("robot/*/pose_true", "robot/3/x/pose_true"));
+        assert!(glob_match("map", "map"));
+        assert!(!glob_match("map", "maps"));
+        assert!(glob_match("rpi-*", "rpi-0"));
+        assert!(!glob_match("rpi-*", "remote-pc"));
+    }
+
+    #[test]
+    fn launch_glob_double_star_crosses_segments() {
+        assert!(glob_match("robot/**", "robot/3/x/pose"));
+        assert!(glob_match("robot/**/pose", "robot/pose"));
+        assert!(glob_match("robot/**/pose", "robot/1/2/pose"));
+        assert!(glob_match("**", "anything/at/all"));
+        assert!(!glob_match("robot/**/pose", "robot/1/posex"));
+    }
+
+    #[test]
+    fn launch_restart_names_round_trip() {
+        for name in Restart::NAMES {
+            assert_eq!(name.parse::<Restart>().unwrap().to_string(), name);
+        }
+        assert!("sometimes".parse::<Restart>().is_err());
+    }
+}

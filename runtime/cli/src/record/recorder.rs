@@ -1,0 +1,199 @@
+//! The group recorder: taps the topics matching the record patterns and writes them to MCAP.
+//!
+//! In lockstep the launcher drains it after every advance of simulated time and messages are
+//! written sorted by (stamp, topic, source, sequence) with log time = stamp and no wall-clock
+//! fields, so reruns give byte-identical files. Wall-clock latency (send → tap) goes to the
+//! topic statistics instead. Node statuses are tapped too but kept out of the MCAP: their
+//! compute-time fields are wall-clock measurements.
+
+use super::pattern::matches_any;
+use super::schema;
+use anyhow::{Context, Result};
+use caravan::tap::{DynTap, Tapped, list_topics, open_tap};
+use caravan_schemas::topics::STATUS;
+use hdrhistogram::Histogram;
+use iceoryx2::prelude::*;
+use serde_json::{Value, json};
+use std::collections::{BTreeMap, BTreeSet};
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+/// Per-topic statistics seen by the recorder.
+pub struct TopicStats {
+    pub type_name: String,
+    pub messages: u64,
+    pub missed: u64,
+    /// Wall-clock latency from send to the recorder's tap, ns.
+    pub latency: Histogram<u64>,
+}
+
+/// What a finished recording leaves for the report.
+pub struct Recording {
+    pub topics: BTreeMap<String, TopicStats>,
+    /// Last status of each node, as JSON, by node name.
+    pub node_status: BTreeMap<String, Value>,
+}
+
+pub struct Recorder {
+    iox: iceoryx2::node::Node<ipc::Service>,
+    config: iceoryx2::config::Config,
+    patterns: Vec<String>,
+    lockstep: bool,
+    taps: Vec<Box<dyn DynTap>>,
+    status_tap: Option<Box<dyn DynTap>>,
+    /// Topic hashes discovery already looked at, recorded or not.
+    seen: BTreeSet<u64>,
+    writer: mcap::Writer<BufWriter<File>>,
+    channels: BTreeMap<String, u16>,
+    sequences: BTreeMap<u16, u32>,
+    stats: BTreeMap<String, TopicStats>,
+    node_status: BTreeMap<String, Value>,
+    buffer: Vec<(usize, Tapped)>,
+}
+
+impl Recorder {
+    pub fn create(config: &iceoryx2::config::Config, path: &Path, patterns: &[String], lockstep: bool) -> Result<Self> {
+        let iox = NodeBuilder::new()
+            .config(config)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<ipc::Service>()
+            .map_err(|e| anyhow::anyhow!("recorder node: {e:?}"))?;
+        let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        let writer = mcap::WriteOptions::new()
+            .library("caravan")
+            // The crate writes summary channels and schemas in hash order; leave them out so
+            // that lockstep reruns are byte-identical (they are still in the data section).
+            .repeat_channels(false)
+            .repeat_schemas(false)
+            .create(BufWriter::new(file))
+            .context("cannot start the MCAP file")?;
+        Ok(Self {
+            iox,
+            config: config.clone(),
+            patterns: patterns.to_vec(),
+            lockstep,
+            taps: Vec::new(),
+            status_tap: None,
+            seen: BTreeSet::new(),
+            writer,
+            channels: BTreeMap::new(),
+            sequences: BTreeMap::new(),
+            stats: BTreeMap::new(),
+            node_status: BTreeMap::new(),
+            buffer: Vec::new(),
+        })
+    }
+
+    /// Whether any of `published` (topic hashes) was never looked at by discovery.
+    pub fn has_unseen(&self, published: &[u64]) -> bool {
+        published.iter().any(|h| !self.seen.contains(h))
+    }
+
+    /// Opens taps on new topics that match the patterns, and on `status`.
+    pub fn discover(&mut self) -> Result<()> {
+        for info in list_topics(&self.config, false)? {
+            let hash = caravan_schemas::lockstep::name_hash(&info.name);
+            if !self.seen.insert(hash) {
+                continue;
+            }
+            if info.name == STATUS {
+                self.status_tap = Some(open_tap(&self.iox, &info.name, &info.type_name)?);
+            } else if matches_any(&self.patterns, &info.name) {
+                match open_tap(&self.iox, &info.name, &info.type_name) {
+                    Ok(tap) => self.taps.push(tap),
+                    // A type outside the schemas (a user's own) cannot be decoded; say so once.
+                    Err(e) => eprintln!("caravan: not recording '{}': {e}", info.name),
+                }
+            }
+        }
+        self.taps.sort_by(|a, b| a.topic().cmp(b.topic()));
+        Ok(())
+    }
+
+    pub fn taps(&self) -> impl Iterator<Item = &dyn DynTap> {
+        self.taps.iter().map(|t| t.as_ref()).chain(self.status_tap.as_deref())
+    }
+
+    /// Reads every waiting message and writes it.
+    pub fn drain(&mut self) -> Result<()> {
+        let now_wall = caravan::wall_clock_ns();
+        for (i, tap) in self.taps.iter().enumerate() {
+            let mut batch = Vec::new();
+            tap.drain(&mut batch)?;
+            self.buffer.extend(batch.into_iter().map(|m| (i, m)));
+        }
+        if let Some(tap) = &self.status_tap {
+            let mut batch = Vec::new();
+            tap.drain(&mut batch)?;
+            for m in batch {
+                if let Some(node) = m.json.get("node").and_then(Value::as_str) {
+                    self.node_status.insert(node.to_string(), m.json.clone());
+                }
+            }
+        }
+        let mut buffer = std::mem::take(&mut self.buffer);
+        buffer.sort_by_key(|(i, m)| (m.header.stamp_ns, *i, m.header.source_id, m.header.seq));
+        for (i, msg) in &buffer {
+            self.write(*i, msg, now_wall)?;
+        }
+        buffer.clear();
+        self.buffer = buffer;
+        Ok(())
+    }
+
+    fn write(&mut self, tap_index: usize, msg: &Tapped, now_wall: u64) -> Result<()> {
+        let tap = &self.taps[tap_index];
+        let topic = tap.topic().to_string();
+        let type_name = tap.type_name();
+        let channel = match self.channels.get(&topic) {
+            Some(&id) => id,
+            None => {
+                let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
+                let schema_id = self.writer.add_schema(type_name, "jsonschema", schema.to_string().as_bytes())?;
+                let id = self.writer.add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
+                self.channels.insert(topic.clone(), id);
+                id
+            }
+        };
+        let mut header = json!({"seq": msg.header.seq, "stamp_ns": msg.header.stamp_ns, "source_id": msg.header.source_id});
+        if !self.lockstep {
+            header["send_wall_ns"] = json!(msg.header.send_wall_ns);
+        }
+        let mut record = msg.json.clone();
+        if let Value::Object(fields) = &mut record {
+            fields.insert("header".into(), header);
+        }
+        let sequence = self.sequences.entry(channel).or_insert(0);
+        *sequence += 1;
+        self.writer.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: *sequence,
+                log_time: msg.header.stamp_ns,
+                publish_time: msg.header.stamp_ns,
+            },
+            &serde_json::to_vec(&record)?,
+        )?;
+        let stats = self.stats.entry(topic).or_insert_with(|| TopicStats {
+            type_name: type_name.to_string(),
+            messages: 0,
+            missed: 0,
+            latency: Histogram::new_with_bounds(1, 3_600_000_000_000, 3).expect("valid bounds"),
+        });
+        stats.messages += 1;
+        stats.latency.saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));
+        Ok(())
+    }
+
+    pub fn finish(mut self) -> Result<Recording> {
+        self.drain()?;
+        for tap in &self.taps {
+            if let Some(s) = self.stats.get_mut(tap.topic()) {
+                s.missed = tap.missed();
+            }
+        }
+        self.writer.finish().context("cannot finish the MCAP file")?;
+        Ok(Recording { topics: self.stats, node_status: self.node_status })
+    }
+}

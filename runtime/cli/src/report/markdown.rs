@@ -1,0 +1,70 @@
+//! `report.md`: the report as tables for people.
+
+use serde_json::Value;
+use std::fmt::Write;
+
+fn num(v: &Value, digits: usize) -> String {
+    match v.as_f64() {
+        Some(x) => format!("{x:.digits$}"),
+        None => "–".into(),
+    }
+}
+
+pub fn render(r: &Value) -> String {
+    let mut md = String::new();
+    let run = &r["run"];
+    let _ = writeln!(md, "# Run report: {}\n", r["group"]["name"].as_str().unwrap_or("?"));
+    let _ = writeln!(
+        md,
+        "Clock {}, seed {}, outcome **{}**{}.\n",
+        r["group"]["clock"].as_str().unwrap_or("?"),
+        r["group"]["seed"],
+        run["outcome"].as_str().unwrap_or("?"),
+        run["failure"].as_str().map(|f| format!(" ({f})")).unwrap_or_default()
+    );
+    let _ = writeln!(
+        md,
+        "Simulated {} s in {} s of wall time: real-time factor {}.\n",
+        num(&run["sim_time_s"], 2),
+        num(&run["wall_time_s"], 2),
+        num(&run["real_time_factor"], 2)
+    );
+    md.push_str("## Nodes\n\n| node | host | steps | rate Hz | deadline misses | jitter p50/p99/max ms | compute mean/p99/max ms | missed msgs | restarts | exit |\n|---|---|---:|---:|---:|---|---|---:|---:|---|\n");
+    for n in r["nodes"].as_array().into_iter().flatten() {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {} | {} | {} | {} |",
+            n["name"].as_str().unwrap_or(""),
+            n["host"].as_str().unwrap_or(""),
+            n["steps"],
+            num(&n["rate_hz"], 1),
+            n["deadline_misses"],
+            num(&n["jitter_p50_ms"], 3),
+            num(&n["jitter_p99_ms"], 3),
+            num(&n["jitter_max_ms"], 3),
+            num(&n["compute_mean_ms"], 3),
+            num(&n["compute_p99_ms"], 3),
+            num(&n["compute_max_ms"], 3),
+            n["messages_missed"],
+            n["restarts"],
+            n["exit_status"].as_str().unwrap_or("")
+        );
+    }
+    md.push_str("\n## Topics\n\n| topic | type | messages | gaps | latency p50/p90/p99/max µs |\n|---|---|---:|---:|---|\n");
+    for t in r["topics"].as_array().into_iter().flatten() {
+        let l = &t["latency_us"];
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} / {} / {} / {} |",
+            t["name"].as_str().unwrap_or(""),
+            t["type"].as_str().unwrap_or(""),
+            t["messages"],
+            t["gaps"],
+            num(&l["p50"], 1),
+            num(&l["p90"], 1),
+            num(&l["p99"], 1),
+            num(&l["max"], 1)
+        );
+    }
+    md
+}

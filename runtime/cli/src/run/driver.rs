@@ -1,0 +1,153 @@
+//! The launcher's driver thread: in lockstep it owns simulated time (the scheduler) and drains
+//! the recorder after every advance; in realtime it records as messages arrive.
+
+use super::supervisor::Event;
+use crate::record::{Recorder, Recording};
+use anyhow::{Result, anyhow};
+use caravan::lockstep::Scheduler;
+use crossbeam::channel::{Receiver, Sender};
+use iceoryx2::prelude::*;
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// Shared between the launcher's main loop and the driver thread.
+#[derive(Default)]
+pub struct Control {
+    /// The group is stopping: stop scheduling.
+    pub stop: AtomicBool,
+    /// Processes that died since the driver last looked.
+    pub deaths: Mutex<Vec<String>>,
+}
+
+pub struct DriverConfig {
+    pub iceoryx: iceoryx2::config::Config,
+    pub record_path: PathBuf,
+    pub patterns: Vec<String>,
+    pub tick: Duration,
+    pub duration: Option<Duration>,
+    /// Processes that must join the lockstep schedule.
+    pub expected: Vec<String>,
+}
+
+/// What the driver reports when it ends.
+pub struct DriverOutcome {
+    pub recording: Recording,
+    pub sim_time_ns: u64,
+}
+
+/// Runs the driver on its own thread (iceoryx2 ports stay on the thread that made them).
+/// It sends `Event::DriverDone` when the schedule ends, then waits for `finish` (all
+/// processes exited) to drain the last messages and close the recording.
+pub fn spawn(cfg: DriverConfig, lockstep: bool, control: Arc<Control>, events: Sender<Event>, finish: Receiver<()>) -> std::thread::JoinHandle<Result<DriverOutcome>> {
+    std::thread::spawn(move || {
+        let mut recorder = Recorder::create(&cfg.iceoryx, &cfg.record_path, &cfg.patterns, lockstep)?;
+        let sim_time_ns = if lockstep {
+            run_lockstep(&cfg, &mut recorder, &control, &events, &finish)?
+        } else {
+            run_realtime(&cfg, &mut recorder, &control, &events, &finish)?
+        };
+        Ok(DriverOutcome { recording: recorder.finish()?, sim_time_ns })
+    })
+}
+
+fn run_lockstep(cfg: &DriverConfig, recorder: &mut Recorder, control: &Control, events: &Sender<Event>, finish: &Receiver<()>) -> Result<u64> {
+    let mut scheduler = Scheduler::new(&cfg.iceoryx, cfg.tick)?;
+    let mut watchdog = || {
+        if control.stop.load(Ordering::Relaxed) {
+            return Err("the group is stopping".to_string());
+        }
+        Ok(std::mem::take(&mut *control.deaths.lock().unwrap()))
+    };
+    let end_ns = cfg.duration.map(|d| d.as_nanos() as u64);
+    let mut now_ns = 0;
+    let result = (|| -> Result<()> {
+        scheduler.wait_for_nodes(&cfg.expected, &mut watchdog)?;
+        recorder.discover()?;
+        while let Some(next) = scheduler.next_time_ns() {
+            if end_ns.is_some_and(|end| next > end) {
+                break;
+            }
+            let Some(advance) = scheduler.advance(&mut watchdog)? else { break };
+            now_ns = advance.now_ns;
+            if recorder.has_unseen(&advance.published) {
+                recorder.discover()?;
+            }
+            recorder.drain()?;
+        }
+        Ok(())
+    })();
+    // Being stopped from outside (Ctrl-C, a failed process) is not the scheduler's failure.
+    let result = result.or_else(|e| if control.stop.load(Ordering::Relaxed) { Ok(()) } else { Err(e) });
+    let _ = events.send(Event::DriverDone(result.as_ref().map(|_| ()).map_err(|e| format!("{e:#}"))));
+    scheduler.stop_all()?;
+    let _ = finish.recv();
+    Ok(now_ns)
+}
+
+fn run_realtime(cfg: &DriverConfig, recorder: &mut Recorder, _control: &Control, _events: &Sender<Event>, finish: &Receiver<()>) -> Result<u64> {
+    let started = Instant::now();
+    record_until(&cfg.iceoryx, recorder, SignalHandlingMode::Disabled, || finish.try_recv().is_ok())?;
+    Ok(started.elapsed().as_nanos() as u64)
+}
+
+/// Records as messages arrive, woken by the topics' listeners, until `done()` or (with
+/// `signals` handling termination requests) Ctrl-C.
+pub fn record_until(
+    iceoryx: &iceoryx2::config::Config,
+    recorder: &mut Recorder,
+    signals: SignalHandlingMode,
+    mut done: impl FnMut() -> bool,
+) -> Result<()> {
+    let iox = NodeBuilder::new()
+        .config(iceoryx)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| anyhow!("recorder node: {e:?}"))?;
+    let mut listeners = Vec::new();
+    let mut listening = BTreeSet::new();
+    let started = Instant::now();
+    loop {
+        // Topics appear as processes start: look often at first, then every second.
+        recorder.discover()?;
+        for topic in recorder.taps().map(|t| t.topic().to_string()).collect::<Vec<_>>() {
+            if listening.insert(topic.clone()) {
+                listeners.push(caravan::tap::open_listener(&iox, &topic)?);
+            }
+        }
+        let interval = if started.elapsed() < Duration::from_secs(3) { 100 } else { 1000 };
+        let next_discovery = Instant::now() + Duration::from_millis(interval);
+        let waitset = WaitSetBuilder::new()
+            .signal_handling_mode(signals)
+            .create::<ipc::Service>()
+            .map_err(|e| anyhow!("{e:?}"))?;
+        let _guards = listeners
+            .iter()
+            .map(|l| waitset.attach_notification(l))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| anyhow!("{e:?}"))?;
+        while Instant::now() < next_discovery {
+            // The timeout bounds how late the end is noticed; idle cost is 4 wake-ups/s.
+            let wait = next_discovery.saturating_duration_since(Instant::now()).min(Duration::from_millis(250));
+            let result = if listeners.is_empty() {
+                // Nothing to listen to yet (a WaitSet refuses to wait on nothing).
+                std::thread::sleep(wait);
+                iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
+            } else {
+                waitset
+                    .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, wait)
+                    .map_err(|e| anyhow!("{e:?}"))?
+            };
+            for l in &listeners {
+                let _ = l.try_wait(|_| {});
+            }
+            recorder.drain()?;
+            let interrupted = !matches!(result, iceoryx2::waitset::WaitSetRunResult::AllEventsHandled);
+            if interrupted || done() {
+                return Ok(());
+            }
+        }
+    }
+}

@@ -1,0 +1,210 @@
+//! The supervisor: spawns the group's processes, reaps them promptly, applies restart
+//! policies and stops them (SIGTERM, then SIGKILL after the grace period).
+
+use super::output::Console;
+use crate::launch::model::{ProcessSpec, Restart};
+use crossbeam::channel::Sender;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::os::unix::process::{CommandExt, ExitStatusExt};
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitStatus, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// Something the launcher's main loop reacts to.
+pub enum Event {
+    Exited { index: usize, generation: u32, status: ExitStatus },
+    Signal(i32),
+    /// The lockstep schedule or the realtime recorder finished (or failed).
+    DriverDone(Result<(), String>),
+}
+
+/// How a process ended, for the report.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ProcessRecord {
+    pub name: String,
+    pub host: String,
+    pub required: bool,
+    pub restarts: u32,
+    /// "exited 0", "exited 3", "killed by signal 9", "running", "never started"
+    pub exit_status: String,
+    pub success: bool,
+}
+
+/// One process to run: its spec and the resolved program and arguments.
+pub struct Planned {
+    pub spec: ProcessSpec,
+    pub program: PathBuf,
+    pub args: Vec<String>,
+}
+
+struct Proc {
+    plan: Planned,
+    pid: Option<i32>,
+    generation: u32,
+    restarts: u32,
+    last_status: Option<ExitStatus>,
+    restart_at: Option<Instant>,
+    log: Arc<Mutex<File>>,
+}
+
+pub struct Supervisor {
+    procs: Vec<Proc>,
+    env: BTreeMap<String, String>,
+    events: Sender<Event>,
+    console: Console,
+}
+
+fn describe(status: &ExitStatus) -> String {
+    match (status.code(), status.signal()) {
+        (Some(code), _) => format!("exited {code}"),
+        (None, Some(sig)) => format!("killed by signal {sig}"),
+        _ => "ended".into(),
+    }
+}
+
+impl Supervisor {
+    /// `env` is what every process gets (group, config path, clock…); each adds its own.
+    pub fn new(plans: Vec<Planned>, env: BTreeMap<String, String>, logs: &Path, events: Sender<Event>, console: Console) -> std::io::Result<Self> {
+        let mut procs = Vec::new();
+        for plan in plans {
+            let log = File::create(logs.join(format!("{}.log", plan.spec.name)))?;
+            procs.push(Proc { plan, pid: None, generation: 0, restarts: 0, last_status: None, restart_at: None, log: Arc::new(Mutex::new(log)) });
+        }
+        Ok(Self { procs, env, events, console })
+    }
+
+    pub fn names(&self) -> Vec<String> {
+        self.procs.iter().map(|p| p.plan.spec.name.clone()).collect()
+    }
+
+    pub fn start_all(&mut self) -> std::io::Result<()> {
+        for i in 0..self.procs.len() {
+            self.spawn(i)?;
+        }
+        Ok(())
+    }
+
+    fn spawn(&mut self, index: usize) -> std::io::Result<()> {
+        let prefix = self.console.prefix(index, &self.procs[index].plan.spec.name);
+        let p = &mut self.procs[index];
+        let spec = &p.plan.spec;
+        let mut cmd = Command::new(&p.plan.program);
+        cmd.args(&p.plan.args)
+            .envs(&self.env)
+            .env(caravan::env_vars::NODE, &spec.name)
+            .env(caravan::env_vars::HOST, &spec.host)
+            .env(caravan::env_vars::PARAMS, spec.params.to_string())
+            .envs(&spec.env)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            // Own process group: Ctrl-C reaches the launcher only, which stops the group in
+            // order instead of every process racing to exit.
+            .process_group(0);
+        if let Some(rate) = &spec.rate {
+            cmd.env(caravan::env_vars::RATE, rate);
+        }
+        if let Some(on) = &spec.on {
+            cmd.env(caravan::env_vars::ON, on);
+        }
+        let mut child = cmd.spawn()?;
+        self.console.pump(child.stdout.take().expect("piped"), prefix.clone(), p.log.clone());
+        self.console.pump(child.stderr.take().expect("piped"), prefix, p.log.clone());
+        p.pid = Some(child.id() as i32);
+        p.generation += 1;
+        let (events, generation) = (self.events.clone(), p.generation);
+        // One reaper per child: it is reaped the moment it exits, so no zombie keeps
+        // iceoryx2's process locks alive.
+        std::thread::spawn(move || {
+            if let Ok(status) = child.wait() {
+                let _ = events.send(Event::Exited { index, generation, status });
+            }
+        });
+        Ok(())
+    }
+
+    /// Records an exit. Returns the restart time if the policy restarts it, or `Err(name)` if
+    /// a required process failed for good.
+    pub fn on_exit(&mut self, index: usize, generation: u32, status: ExitStatus, stopping: bool) -> Result<Option<Instant>, String> {
+        let p = &mut self.procs[index];
+        if generation != p.generation {
+            return Ok(None);
+        }
+        p.pid = None;
+        p.last_status = Some(status);
+        let spec = &p.plan.spec;
+        if stopping {
+            return Ok(None);
+        }
+        self.console.say(&format!("process '{}' {}", spec.name, describe(&status)));
+        let wants = match spec.restart {
+            Restart::Never => false,
+            Restart::OnFailure => !status.success(),
+            Restart::Always => true,
+        };
+        if wants && p.restarts < spec.max_restarts {
+            // Exponential back-off, capped, so a crash loop does not eat the machine.
+            let delay = spec.restart_backoff.saturating_mul(1 << p.restarts.min(6)).min(Duration::from_secs(30));
+            p.restarts += 1;
+            self.console.say(&format!("restarting '{}' in {:?} ({}/{})", spec.name, delay, p.restarts, spec.max_restarts));
+            let at = Instant::now() + delay;
+            p.restart_at = Some(at);
+            return Ok(Some(at));
+        }
+        if spec.required && !status.success() {
+            return Err(format!("required process '{}' {}", spec.name, describe(&status)));
+        }
+        Ok(None)
+    }
+
+    /// Restarts processes whose back-off elapsed; returns the next pending restart time.
+    pub fn restart_due(&mut self, now: Instant) -> std::io::Result<Option<Instant>> {
+        for i in 0..self.procs.len() {
+            if self.procs[i].restart_at.is_some_and(|t| t <= now) {
+                self.procs[i].restart_at = None;
+                self.spawn(i)?;
+            }
+        }
+        Ok(self.procs.iter().filter_map(|p| p.restart_at).min())
+    }
+
+    pub fn any_alive(&self) -> bool {
+        self.procs.iter().any(|p| p.pid.is_some())
+    }
+
+    /// True when every process ended and none waits for a restart.
+    pub fn all_done(&self) -> bool {
+        self.procs.iter().all(|p| p.pid.is_none() && p.restart_at.is_none())
+    }
+
+    pub fn signal_all(&mut self, signal: i32) {
+        for p in &mut self.procs {
+            p.restart_at = None;
+            if let Some(pid) = p.pid {
+                // SAFETY: signalling a child we spawned and have not reaped yet.
+                unsafe { libc::kill(pid, signal) };
+            }
+        }
+    }
+
+    pub fn records(&self) -> Vec<ProcessRecord> {
+        self.procs
+            .iter()
+            .map(|p| ProcessRecord {
+                name: p.plan.spec.name.clone(),
+                host: p.plan.spec.host.clone(),
+                required: p.plan.spec.required,
+                restarts: p.restarts,
+                exit_status: match (&p.last_status, p.pid) {
+                    (_, Some(_)) => "running".into(),
+                    (Some(s), None) => describe(s),
+                    (None, None) => "never started".into(),
+                },
+                success: p.last_status.is_some_and(|s| s.success()),
+            })
+            .collect()
+    }
+}

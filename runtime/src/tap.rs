@@ -1,0 +1,134 @@
+//! Taps: subscribers opened by type name at run time, yielding JSON. The recorder and the
+//! `caravan topic` commands use them to read topics whose types they learn from discovery.
+
+use crate::Error;
+use crate::transport;
+use caravan_schemas::{Header, Message};
+use iceoryx2::port::listener::Listener;
+use iceoryx2::prelude::*;
+
+/// What discovery tells about a publish-subscribe service.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TopicInfo {
+    pub name: String,
+    pub type_name: String,
+    pub payload_size: usize,
+    /// Nodes that have the topic open.
+    pub nodes: usize,
+}
+
+/// Topics of the group of `config`, sorted by name. Internal `caravan/` services are left out
+/// unless `internal`.
+pub fn list_topics(config: &iceoryx2::config::Config, internal: bool) -> Result<Vec<TopicInfo>, Error> {
+    let mut topics = Vec::new();
+    ipc::Service::list(config, |details| {
+        use iceoryx2::service::static_config::messaging_pattern::MessagingPattern as Pattern;
+        if let Pattern::PublishSubscribe(ps) = details.static_details.messaging_pattern() {
+            let name = details.static_details.name().to_string();
+            let nodes = details.dynamic_details.as_ref().map_or(0, |d| d.nodes.len());
+            if internal || !name.starts_with("caravan/") {
+                topics.push(TopicInfo {
+                    name,
+                    type_name: ps.message_type_details().payload.type_name().to_string(),
+                    payload_size: ps.message_type_details().payload.size(),
+                    nodes,
+                });
+            }
+        }
+        CallbackProgression::Continue
+    })
+    .map_err(|e| Error::transport("cannot list topics", e))?;
+    topics.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(topics)
+}
+
+/// One message read by a tap.
+pub struct Tapped {
+    pub header: Header,
+    pub json: serde_json::Value,
+}
+
+/// A subscriber of a topic whose type is known only by name.
+pub trait DynTap {
+    fn topic(&self) -> &str;
+    fn type_name(&self) -> &'static str;
+    /// Reads every waiting message, oldest first.
+    fn drain(&self, out: &mut Vec<Tapped>) -> Result<(), Error>;
+    /// Messages lost before reaching the tap (sequence gaps).
+    fn missed(&self) -> u64;
+}
+
+/// A listener woken whenever a message is published on `topic`.
+pub fn open_listener(iox: &iceoryx2::node::Node<ipc::Service>, topic: &str) -> Result<Listener<ipc::Service>, Error> {
+    transport::listener(iox, topic)
+}
+
+struct Tap<T: Message> {
+    topic: String,
+    port: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>,
+    last_seq: std::cell::RefCell<Vec<(u64, u64)>>,
+    missed: std::cell::Cell<u64>,
+}
+
+impl<T: Message> DynTap for Tap<T> {
+    fn topic(&self) -> &str {
+        &self.topic
+    }
+
+    fn type_name(&self) -> &'static str {
+        caravan_schemas::type_name::<T>()
+    }
+
+    fn drain(&self, out: &mut Vec<Tapped>) -> Result<(), Error> {
+        while let Some(sample) = self.port.receive().map_err(|e| Error::topic(&self.topic, format!("{e:?}")))? {
+            let header = *sample.user_header();
+            let mut last_seq = self.last_seq.borrow_mut();
+            match last_seq.iter_mut().find(|(s, _)| *s == header.source_id) {
+                Some((_, last)) => {
+                    self.missed.set(self.missed.get() + header.seq.saturating_sub(*last + 1));
+                    *last = header.seq.max(*last);
+                }
+                None => last_seq.push((header.source_id, header.seq)),
+            }
+            let json = serde_json::to_value(sample.payload())
+                .map_err(|e| Error::topic(&self.topic, format!("cannot convert to JSON: {e}")))?;
+            out.push(Tapped { header, json });
+        }
+        Ok(())
+    }
+
+    fn missed(&self) -> u64 {
+        self.missed.get()
+    }
+}
+
+/// Opens a tap on `topic`, whose payload type is named `type_name`. The subscriber takes the
+/// service's own buffer settings, so it fits whatever contract the publishers chose.
+pub fn open_tap(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    type_name: &str,
+) -> Result<Box<dyn DynTap>, Error> {
+    fn open<T: Message>(iox: &iceoryx2::node::Node<ipc::Service>, topic: &str) -> Result<Box<dyn DynTap>, Error> {
+        let service = iox
+            .service_builder(&transport::service_name(topic)?)
+            .publish_subscribe::<T>()
+            .user_header::<Header>()
+            .open()
+            .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))?;
+        let depth = service.static_config().subscriber_max_buffer_size();
+        let port = service
+            .subscriber_builder()
+            .buffer_size(depth)
+            .create()
+            .map_err(|e| Error::topic(topic, format!("cannot subscribe: {e:?}")))?;
+        Ok(Box::new(Tap::<T> {
+            topic: topic.to_string(),
+            port,
+            last_seq: Default::default(),
+            missed: Default::default(),
+        }))
+    }
+    caravan_schemas::with_message_type!(type_name, |T| open::<T>(iox, topic))
+        .unwrap_or_else(|| Err(Error::topic(topic, format!("unknown message type '{type_name}'"))))
+}

@@ -1,0 +1,36 @@
+//! Every message type by its stable name, for tools that meet types at run time (recorder,
+//! `caravan topic echo`, the Python generator).
+
+/// Runs `$body` with `$T` bound to the message type named `$name`; `None` for an unknown name.
+///
+/// ```
+/// let size = caravan_schemas::with_message_type!("caravan::Pose2D", |T| size_of::<T>());
+/// assert_eq!(size, Some(24));
+/// ```
+#[macro_export]
+macro_rules! with_message_type {
+    ($name:expr, |$T:ident| $body:expr) => {
+        $crate::with_message_type!(@arms $name, $T, $body;
+            Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
+            LaserScan Imu OccupancyGrid Path2D Goal NodeStatus)
+    };
+    (@arms $name:expr, $T:ident, $body:expr; $($ty:ident)*) => {{
+        let name: &str = $name;
+        $(
+            if name == $crate::type_name::<$crate::$ty>() {
+                #[allow(non_camel_case_types, dead_code)]
+                type $T = $crate::$ty;
+                Some($body)
+            } else
+        )* { None }
+    }};
+}
+
+/// Names of all message types in the registry.
+pub fn message_type_names() -> Vec<&'static str> {
+    macro_rules! names {
+        ($($ty:ident)*) => { vec![$(crate::type_name::<crate::$ty>()),*] };
+    }
+    names!(Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
+        LaserScan Imu OccupancyGrid Path2D Goal NodeStatus)
+}
