@@ -12,7 +12,9 @@ use std::time::Duration;
 use toml_edit::{Document, Item, TableLike, Value};
 
 const TOP_KEYS: &[&str] = &["group", "hosts", "links", "process"];
-const GROUP_KEYS: &[&str] = &["name", "clock", "duration", "seed", "tick", "record", "grace"];
+const GROUP_KEYS: &[&str] = &[
+    "name", "clock", "duration", "seed", "tick", "record", "grace",
+];
 const HOST_KEYS: &[&str] = &["cpu_slowdown"];
 const LINK_KEYS: &[&str] = &["between", "latency", "jitter", "loss", "bandwidth"];
 const PROCESS_KEYS: &[&str] = &[
@@ -174,7 +176,11 @@ impl Checker<'_> {
     /// Records a problem at `path`: blamed on the override that set it, else on its line in
     /// the file as written (looked up there, so added override lines never shift numbers).
     fn problem(&mut self, path: &[Seg], message: String) {
-        let blamed = self.applied.iter().rev().find(|a| path.starts_with(&a.path));
+        let blamed = self
+            .applied
+            .iter()
+            .rev()
+            .find(|a| path.starts_with(&a.path));
         let (location, line) = match blamed {
             Some(a) => (format!("--set {}", a.text), None),
             None => match self.line_of(path) {
@@ -212,7 +218,11 @@ impl Checker<'_> {
             let Some((key, item)) = table.get_key_value(k) else {
                 break;
             };
-            offset = key.span().or_else(|| item.span()).map(|s| s.start).or(offset);
+            offset = key
+                .span()
+                .or_else(|| item.span())
+                .map(|s| s.start)
+                .or(offset);
             let next: Option<&dyn TableLike> = match (segs.peek(), item) {
                 (Some(Seg::Index(i)), Item::ArrayOfTables(a)) => {
                     segs.next();
@@ -287,7 +297,11 @@ impl Checker<'_> {
     ) -> Option<Scope<'d>> {
         let item = parent.get(key)?;
         let Some(table) = item.as_table_like() else {
-            self.key_problem(parent, key, format!("expected a table, found {}", found(item)));
+            self.key_problem(
+                parent,
+                key,
+                format!("expected a table, found {}", found(item)),
+            );
             return None;
         };
         let scope = Scope {
@@ -379,7 +393,10 @@ impl Checker<'_> {
             let Some(h) = self.table(&s, name, label, Some(HOST_KEYS)) else {
                 continue;
             };
-            if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+            if name.is_empty()
+                || !name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
             {
                 self.scope_problem(&h, "host names use letters, digits, '-', '_' and '.'");
             }
@@ -389,7 +406,9 @@ impl Checker<'_> {
                     if f.is_finite() && f >= 1.0 {
                         Ok(f)
                     } else {
-                        Err(format!("must be at least 1.0 (1.0 = as fast as this machine), found {f}"))
+                        Err(format!(
+                            "must be at least 1.0 (1.0 = as fast as this machine), found {f}"
+                        ))
                     }
                 })
                 .unwrap_or(1.0);
@@ -401,12 +420,17 @@ impl Checker<'_> {
     fn links(&mut self, root: &Scope, hosts: &BTreeMap<String, HostSpec>) -> Vec<LinkSpec> {
         let mut links = Vec::new();
         for (i, table) in self.list(root, "links") {
-            let s = self.open(table, root.at("links"), i, format!("link #{}", i + 1), LINK_KEYS);
+            let s = self.open(
+                table,
+                root.at("links"),
+                i,
+                format!("link #{}", i + 1),
+                LINK_KEYS,
+            );
             let between = self.required(&s, "between", |item| {
                 let list = strings(item)?;
-                <[String; 2]>::try_from(list).map_err(|l| {
-                    format!("expected exactly two host patterns, found {}", l.len())
-                })
+                <[String; 2]>::try_from(list)
+                    .map_err(|l| format!("expected exactly two host patterns, found {}", l.len()))
             });
             for pattern in between.iter().flatten() {
                 if !hosts.keys().any(|h| glob_match(pattern, h)) {
@@ -440,7 +464,7 @@ impl Checker<'_> {
         links
     }
 
-    /// A scope for entry `index` of the list at `list_path`.
+    /// A scope for entry `index` of the list at `path`, checking its keys against `allowed`.
     fn open<'d>(
         &mut self,
         table: &'d dyn TableLike,
@@ -471,20 +495,36 @@ impl Checker<'_> {
             let name = self.required(&s, "name", string).unwrap_or_default();
             let named = table.get("name").is_some_and(Item::is_str);
             if let Some(first) = first_use.get(&name) {
-                let at = self.line_of(first).map(|l| format!(" (line {l})")).unwrap_or_default();
-                self.key_problem(&s, "name", format!("'{name}' is already the name of an earlier process{at}"));
+                let at = self
+                    .line_of(first)
+                    .map(|l| format!(" (line {l})"))
+                    .unwrap_or_default();
+                self.key_problem(
+                    &s,
+                    "name",
+                    format!("'{name}' is already the name of an earlier process{at}"),
+                );
             } else if named {
                 first_use.insert(name.clone(), s.at("name"));
             }
             if named && !is_process_name(&name) {
-                self.key_problem(&s, "name", format!("'{name}' must be made of letters, digits, '_' and '-'"));
+                self.key_problem(
+                    &s,
+                    "name",
+                    format!("'{name}' must be made of letters, digits, '_' and '-'"),
+                );
             }
             processes.push(self.process(&s, name, hosts));
         }
         processes
     }
 
-    fn process(&mut self, s: &Scope, name: String, hosts: &BTreeMap<String, HostSpec>) -> ProcessSpec {
+    fn process(
+        &mut self,
+        s: &Scope,
+        name: String,
+        hosts: &BTreeMap<String, HostSpec>,
+    ) -> ProcessSpec {
         let exec = self.exec(s);
         let host = self.get(s, "host", string);
         if let Some(h) = &host
@@ -492,7 +532,11 @@ impl Checker<'_> {
             && !hosts.contains_key(h)
         {
             let hint = suggest::hint(h, &hosts.keys().map(String::as_str).collect::<Vec<_>>());
-            self.key_problem(s, "host", format!("host '{h}' is not declared under [hosts]{hint}"));
+            self.key_problem(
+                s,
+                "host",
+                format!("host '{h}' is not declared under [hosts]{hint}"),
+            );
         }
         let rate = self.get(s, "rate", |i| {
             let text = string(i)?;
@@ -508,7 +552,11 @@ impl Checker<'_> {
         });
         if s.get("rate").is_some() && s.get("on").is_some() {
             // Point at whichever an override set, since that is the one the user just typed.
-            let key = if self.applied.iter().any(|a| a.path == s.at("on")) { "on" } else { "rate" };
+            let key = if self.applied.iter().any(|a| a.path == s.at("on")) {
+                "on"
+            } else {
+                "rate"
+            };
             self.key_problem(s, key, "set either 'rate' or 'on', not both");
         }
         ProcessSpec {
@@ -527,7 +575,8 @@ impl Checker<'_> {
                 .unwrap_or(ProcessSpec::DEFAULT_BACKOFF),
             max_restarts: self
                 .get(s, "max_restarts", |i| {
-                    u32::try_from(unsigned(i)?).map_err(|_| "expected at most 4294967295".to_string())
+                    u32::try_from(unsigned(i)?)
+                        .map_err(|_| "expected at most 4294967295".to_string())
                 })
                 .unwrap_or(ProcessSpec::DEFAULT_MAX_RESTARTS),
             required: self.get(s, "required", boolean).unwrap_or(true),
@@ -549,8 +598,15 @@ impl Checker<'_> {
             if program.contains('/') {
                 let full = dir.join(&program);
                 if !is_executable(&full) {
-                    let why = if full.exists() { "is not an executable file" } else { "does not exist" };
-                    return Err(format!("unknown executable '{program}': {} {why}", full.display()));
+                    let why = if full.exists() {
+                        "is not an executable file"
+                    } else {
+                        "does not exist"
+                    };
+                    return Err(format!(
+                        "unknown executable '{program}': {} {why}",
+                        full.display()
+                    ));
                 }
                 return Ok(Exec::Command(words));
             }
@@ -559,7 +615,11 @@ impl Checker<'_> {
                     "unknown executable '{program}': not a workspace binary and not on PATH"
                 ));
             }
-            Ok(if words.len() == 1 { Exec::Workspace(program) } else { Exec::Command(words) })
+            Ok(if words.len() == 1 {
+                Exec::Workspace(program)
+            } else {
+                Exec::Command(words)
+            })
         })
     }
 }
@@ -584,7 +644,9 @@ fn expected(what: &str, item: &Item) -> String {
 }
 
 fn string(item: &Item) -> Result<String, String> {
-    item.as_str().map(str::to_string).ok_or_else(|| expected("a string", item))
+    item.as_str()
+        .map(str::to_string)
+        .ok_or_else(|| expected("a string", item))
 }
 
 fn unsigned(item: &Item) -> Result<u64, String> {
@@ -600,11 +662,14 @@ fn number(item: &Item) -> Result<f64, String> {
 }
 
 fn boolean(item: &Item) -> Result<bool, String> {
-    item.as_bool().ok_or_else(|| expected("true or false", item))
+    item.as_bool()
+        .ok_or_else(|| expected("true or false", item))
 }
 
 fn strings(item: &Item) -> Result<Vec<String>, String> {
-    let list = item.as_array().ok_or_else(|| expected("an array of strings", item))?;
+    let list = item
+        .as_array()
+        .ok_or_else(|| expected("an array of strings", item))?;
     list.iter()
         .map(|v| v.as_str().map(str::to_string))
         .collect::<Option<_>>()
@@ -613,7 +678,10 @@ fn strings(item: &Item) -> Result<Vec<String>, String> {
 
 fn patterns(item: &Item) -> Result<Vec<String>, String> {
     let list = strings(item)?;
-    match list.iter().find(|p| p.trim().is_empty() || p.contains("***")) {
+    match list
+        .iter()
+        .find(|p| p.trim().is_empty() || p.contains("***"))
+    {
         Some(bad) => Err(format!("'{bad}' is not a topic pattern")),
         None => Ok(list),
     }
@@ -633,14 +701,17 @@ fn positive_duration(item: &Item) -> Result<Duration, String> {
 
 fn restart(item: &Item) -> Result<Restart, String> {
     let text = string(item)?;
-    text.parse::<Restart>().map_err(|e| match suggest::nearest(&text, Restart::NAMES) {
-        Some(near) => format!("'{text}' is not a restart policy; did you mean '{near}'?"),
-        None => e,
-    })
+    text.parse::<Restart>()
+        .map_err(|e| match suggest::nearest(&text, Restart::NAMES) {
+            Some(near) => format!("'{text}' is not a restart policy; did you mean '{near}'?"),
+            None => e,
+        })
 }
 
 fn env(item: &Item) -> Result<BTreeMap<String, String>, String> {
-    let table = item.as_table_like().ok_or_else(|| expected("a table of strings", item))?;
+    let table = item
+        .as_table_like()
+        .ok_or_else(|| expected("a table of strings", item))?;
     let mut env = BTreeMap::new();
     for (key, value) in table.iter() {
         if key.is_empty() || key.contains(['=', '\0']) {
@@ -673,9 +744,7 @@ fn to_json(item: &Item, at: &str) -> Result<serde_json::Value, String> {
     Ok(match item {
         Item::None => J::Null,
         Item::Table(t) => table(t)?,
-        Item::ArrayOfTables(a) => J::Array(
-            a.iter().map(|t| table(t)).collect::<Result<_, _>>()?,
-        ),
+        Item::ArrayOfTables(a) => J::Array(a.iter().map(|t| table(t)).collect::<Result<_, _>>()?),
         Item::Value(v) => match v {
             Value::String(s) => J::String(s.value().clone()),
             Value::Integer(i) => J::from(*i.value()),
@@ -708,7 +777,10 @@ pub fn parse_bandwidth(text: &str) -> Result<u64, String> {
         "gbit" => 1e9,
         _ => f64::NAN,
     };
-    let bps = number.parse::<f64>().map(|n| (n * scale).round()).unwrap_or(f64::NAN);
+    let bps = number
+        .parse::<f64>()
+        .map(|n| (n * scale).round())
+        .unwrap_or(f64::NAN);
     if bps.is_finite() && bps >= 1.0 && bps < u64::MAX as f64 {
         Ok(bps as u64)
     } else {
@@ -719,11 +791,508 @@ pub fn parse_bandwidth(text: &str) -> Result<u64, String> {
 }
 
 fn is_process_name(name: &str) -> bool {
-    !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
 }
 
 fn is_executable(path: &Path) -> bool {
     use std::os::unix::fs::PermissionsExt;
     path.metadata()
         .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// Line numbers in the tests below refer to this file.
+    const BASE: &str = r#"[group]
+name = "convoy"
+seed = 7
+
+[hosts.sim]
+[hosts.rpi-0]
+cpu_slowdown = 12.0
+
+[[links]]
+between = ["rpi-*", "sim"]
+latency = "6ms"
+
+[[process]]
+name = "physics"
+exec = "caravan-physics"
+host = "sim"
+rate = "500Hz"
+
+[[process]]
+name = "planner"
+exec = "planner --fast"
+on = "robot/0/scan"
+"#;
+
+    /// A fresh directory per call, so tests can run in parallel.
+    fn temp_dir() -> PathBuf {
+        static NEXT: AtomicUsize = AtomicUsize::new(0);
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("caravan-launch-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn resolve(name: &str) -> Option<PathBuf> {
+        ["caravan-physics", "planner", "sleep"]
+            .contains(&name)
+            .then(|| PathBuf::from("/usr/bin").join(name))
+    }
+
+    fn load_text(text: &str, sets: &[&str]) -> Result<LaunchFile, LaunchError> {
+        let path = temp_dir().join("launch.toml");
+        std::fs::write(&path, text).unwrap();
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        load(&path, &sets, &resolve)
+    }
+
+    /// The error's lines, with the temp file's path replaced by FILE.
+    fn errors(text: &str, sets: &[&str]) -> Vec<String> {
+        let path = temp_dir().join("launch.toml");
+        std::fs::write(&path, text).unwrap();
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let err = load(&path, &sets, &resolve).expect_err("should be rejected");
+        assert_eq!(err.exit_code(), 2);
+        let shown = err.to_string().replace(&path.display().to_string(), "FILE");
+        shown.lines().map(str::to_string).collect()
+    }
+
+    fn edited(from: &str, to: &str) -> String {
+        assert!(BASE.contains(from), "{from}");
+        BASE.replacen(from, to, 1)
+    }
+
+    fn assert_error(lines: &[String], expected: &str) {
+        assert!(
+            lines.iter().any(|l| l == expected),
+            "expected {expected:?} among:\n{}",
+            lines.join("\n")
+        );
+    }
+
+    #[test]
+    fn launch_valid_file_with_defaults() {
+        let lf = load_text(BASE, &[]).unwrap();
+        assert_eq!(lf.group.name, "convoy");
+        assert_eq!(lf.group.clock, ClockMode::Lockstep);
+        assert_eq!(lf.group.duration, None);
+        assert_eq!(lf.group.seed, 7);
+        assert_eq!(lf.group.tick, Duration::from_millis(1));
+        assert_eq!(lf.group.grace, Duration::from_secs(3));
+        assert!(lf.group.record.is_empty());
+        assert_eq!(lf.hosts["sim"].cpu_slowdown, 1.0);
+        assert_eq!(lf.hosts["rpi-0"].cpu_slowdown, 12.0);
+        let link = &lf.links[0];
+        assert_eq!(link.between, ["rpi-*".to_string(), "sim".to_string()]);
+        assert_eq!(
+            (link.latency, link.jitter),
+            (Duration::from_millis(6), Duration::ZERO)
+        );
+        assert_eq!((link.loss, link.bandwidth_bps), (0.0, None));
+        let physics = &lf.processes[0];
+        assert_eq!(physics.exec, Exec::Workspace("caravan-physics".into()));
+        assert_eq!(physics.host, "sim");
+        assert_eq!(physics.rate.as_deref(), Some("500Hz"));
+        assert_eq!(physics.params, serde_json::json!({}));
+        assert_eq!(physics.restart, Restart::Never);
+        assert_eq!(physics.restart_backoff, Duration::from_millis(500));
+        assert_eq!((physics.max_restarts, physics.required), (3, true));
+        assert!(physics.env.is_empty() && physics.args.is_empty());
+        let planner = &lf.processes[1];
+        assert_eq!(
+            planner.exec,
+            Exec::Command(vec!["planner".into(), "--fast".into()])
+        );
+        assert_eq!(planner.host, "localhost");
+        assert_eq!(planner.on.as_deref(), Some("robot/0/scan"));
+        assert_eq!(lf.resolved_toml, BASE);
+    }
+
+    #[test]
+    fn launch_every_key_set() {
+        let text = r#"
+[group]
+name = "full"
+clock = "realtime"
+duration = "180s"
+seed = 1
+tick = "2ms"
+record = ["robot/*/pose_true", "map"]
+grace = "1s"
+
+[hosts.a]
+[hosts.b]
+cpu_slowdown = 2
+
+[[links]]
+between = ["a", "b"]
+jitter = "3ms"
+loss = 0.005
+bandwidth = "54Mbit"
+
+[[process]]
+name = "p"
+exec = "sleep 'a b'"
+args = ["-v"]
+host = "b"
+params = { world = "lab.toml", count = 5, nested = { x = [1.5, true] } }
+restart = "on-failure"
+restart_backoff = "1s"
+max_restarts = 9
+required = false
+env = { RUST_LOG = "info" }
+"#;
+        let lf = load_text(text, &[]).unwrap();
+        assert_eq!(lf.group.clock, ClockMode::Realtime);
+        assert_eq!(lf.group.duration, Some(Duration::from_secs(180)));
+        assert_eq!(lf.group.tick, Duration::from_millis(2));
+        assert_eq!(lf.group.record, ["robot/*/pose_true", "map"]);
+        assert_eq!(lf.group.grace, Duration::from_secs(1));
+        assert_eq!(lf.hosts["b"].cpu_slowdown, 2.0);
+        assert_eq!(lf.links[0].bandwidth_bps, Some(54_000_000));
+        assert_eq!(lf.links[0].loss, 0.005);
+        let p = &lf.processes[0];
+        assert_eq!(p.exec, Exec::Command(vec!["sleep".into(), "a b".into()]));
+        assert_eq!(p.args, ["-v"]);
+        assert_eq!(
+            p.params,
+            serde_json::json!({"world": "lab.toml", "count": 5, "nested": {"x": [1.5, true]}})
+        );
+        assert_eq!(p.restart, Restart::OnFailure);
+        assert_eq!((p.max_restarts, p.required), (9, false));
+        assert_eq!(p.env["RUST_LOG"], "info");
+    }
+
+    #[test]
+    fn launch_typo_key_suggests() {
+        let lines = errors(&edited("rate = \"500Hz\"", "rat = \"500Hz\""), &[]);
+        assert_eq!(
+            lines,
+            ["FILE:17: process 'physics', key 'rat': unknown key; did you mean 'rate'?"]
+        );
+        let lines = errors(&edited("seed = 7", "sed = 7"), &[]);
+        assert_error(
+            &lines,
+            "FILE:3: group, key 'sed': unknown key; did you mean 'seed'?",
+        );
+        let lines = errors(&edited("[[process]]", "[[proces]]"), &[]);
+        assert!(
+            lines[0].starts_with("FILE:13: key 'proces': unknown key; did you mean 'process'?")
+        );
+        let lines = errors(&edited("cpu_slowdown", "cpu_slowdwn"), &[]);
+        assert_error(
+            &lines,
+            "FILE:7: host 'rpi-0', key 'cpu_slowdwn': unknown key; did you mean 'cpu_slowdown'?",
+        );
+        let lines = errors(&edited("latency", "latncy"), &[]);
+        assert_error(
+            &lines,
+            "FILE:11: link #1, key 'latncy': unknown key; did you mean 'latency'?",
+        );
+    }
+
+    #[test]
+    fn launch_wrong_type() {
+        let lines = errors(&edited("seed = 7", "seed = \"seven\""), &[]);
+        assert_eq!(
+            lines,
+            ["FILE:3: group, key 'seed': expected a non-negative integer, found string \"seven\""]
+        );
+        let lines = errors(&edited("host = \"sim\"", "host = 3"), &[]);
+        assert_error(
+            &lines,
+            "FILE:16: process 'physics', key 'host': expected a string, found integer 3",
+        );
+    }
+
+    #[test]
+    fn launch_unknown_exec() {
+        let lines = errors(&edited("\"planner --fast\"", "\"plannr --fast\""), &[]);
+        assert_eq!(
+            lines,
+            [
+                "FILE:21: process 'planner', key 'exec': unknown executable 'plannr': not a workspace binary and not on PATH"
+            ]
+        );
+        let lines = errors(&edited("\"caravan-physics\"", "\"./bin/physics\""), &[]);
+        assert!(lines[0].starts_with(
+            "FILE:15: process 'physics', key 'exec': unknown executable './bin/physics'"
+        ));
+        assert!(lines[0].ends_with("does not exist"), "{}", lines[0]);
+    }
+
+    #[test]
+    fn launch_exec_path_relative_to_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = temp_dir();
+        std::fs::create_dir_all(dir.join("bin")).unwrap();
+        let program = dir.join("bin/sim");
+        std::fs::write(&program, "#!/bin/sh\n").unwrap();
+        std::fs::set_permissions(&program, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let path = dir.join("launch.toml");
+        std::fs::write(&path, edited("\"caravan-physics\"", "\"bin/sim --x\"")).unwrap();
+        let lf = load(&path, &[], &resolve).unwrap();
+        assert_eq!(
+            lf.processes[0].exec,
+            Exec::Command(vec!["bin/sim".into(), "--x".into()])
+        );
+    }
+
+    #[test]
+    fn launch_duplicate_names() {
+        let lines = errors(&edited("name = \"planner\"", "name = \"physics\""), &[]);
+        assert_eq!(
+            lines,
+            [
+                "FILE:20: process 'physics', key 'name': 'physics' is already the name of an earlier process (line 14)"
+            ]
+        );
+    }
+
+    #[test]
+    fn launch_bad_duration_and_rate() {
+        let lines = errors(&edited("latency = \"6ms\"", "latency = \"6 parsecs\""), &[]);
+        assert_eq!(lines.len(), 1);
+        assert!(
+            lines[0].starts_with("FILE:11: link #1, key 'latency': '6 parsecs' is not a duration")
+        );
+        let lines = errors(&edited("rate = \"500Hz\"", "rate = \"fast\""), &[]);
+        assert_eq!(
+            lines,
+            [
+                "FILE:17: process 'physics', key 'rate': 'fast' is not a rate; write a frequency like \"50Hz\" or a period like \"20ms\""
+            ]
+        );
+        let lines = errors(&edited("seed = 7", "tick = \"0s\""), &[]);
+        assert_error(
+            &lines,
+            "FILE:3: group, key 'tick': must be greater than zero",
+        );
+    }
+
+    #[test]
+    fn launch_missing_file() {
+        let path = temp_dir().join("nope.toml");
+        let err = load(&path, &[], &resolve).unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        let shown = err.to_string();
+        assert!(
+            shown.starts_with(&format!("cannot read launch file {}: ", path.display())),
+            "{shown}"
+        );
+    }
+
+    #[test]
+    fn launch_syntax_error_has_line_and_column() {
+        let lines = errors(&edited("seed = 7", "seed = = 7"), &[]);
+        assert_eq!(lines.len(), 1);
+        assert!(
+            lines[0].starts_with("FILE:3:8: TOML syntax error: "),
+            "{}",
+            lines[0]
+        );
+        let lines = errors(&edited("seed = 7", "name = \"again\""), &[]);
+        assert!(
+            lines[0].starts_with("FILE:3:1: TOML syntax error: duplicate key"),
+            "{}",
+            lines[0]
+        );
+    }
+
+    #[test]
+    fn launch_overrides_apply_and_keep_line_numbers() {
+        let text = edited("rate = \"500Hz\"", "rat = \"500Hz\"");
+        // group.duration adds a line inside [group]; the later error must keep its own line.
+        let lines = errors(&text, &["group.duration=10s", "group.seed=3"]);
+        assert_eq!(
+            lines,
+            ["FILE:17: process 'physics', key 'rat': unknown key; did you mean 'rate'?"]
+        );
+        let lf = load_text(
+            BASE,
+            &[
+                "group.seed=3",
+                "process.physics.rate=250Hz",
+                "process.planner.params.k=1",
+            ],
+        )
+        .unwrap();
+        assert_eq!(lf.group.seed, 3);
+        assert_eq!(lf.processes[0].rate.as_deref(), Some("250Hz"));
+        assert_eq!(lf.processes[1].params, serde_json::json!({"k": 1}));
+        assert!(
+            lf.resolved_toml.contains("seed = 3\n"),
+            "{}",
+            lf.resolved_toml
+        );
+        assert!(lf.resolved_toml.contains("rate = \"250Hz\""));
+    }
+
+    #[test]
+    fn launch_bad_override() {
+        let lines = errors(BASE, &["process.phyiscs.rate=1Hz", "group.seed=abc"]);
+        assert_eq!(
+            lines,
+            [
+                "--set process.phyiscs.rate=1Hz: no process 'phyiscs'; did you mean 'physics'?",
+                "--set group.seed=abc: group, key 'seed': expected a non-negative integer, found string \"abc\"",
+            ]
+        );
+        let lines = errors(BASE, &["process.physics.colour=red"]);
+        assert_eq!(
+            lines,
+            [
+                "--set process.physics.colour=red: process 'physics', key 'colour': unknown key; expected one of: name, exec, args, host, rate, on, params, restart, restart_backoff, max_restarts, required, env"
+            ]
+        );
+    }
+
+    #[test]
+    fn launch_unknown_host() {
+        let lines = errors(&edited("host = \"sim\"", "host = \"sym\""), &[]);
+        assert_eq!(
+            lines,
+            [
+                "FILE:16: process 'physics', key 'host': host 'sym' is not declared under [hosts]; did you mean 'sim'?"
+            ]
+        );
+        // Without [hosts], any host goes.
+        let text = BASE.replace("[hosts.sim]\n[hosts.rpi-0]\ncpu_slowdown = 12.0\n", "");
+        let text = text.replace(
+            "[[links]]\nbetween = [\"rpi-*\", \"sim\"]\nlatency = \"6ms\"\n",
+            "",
+        );
+        assert_eq!(load_text(&text, &[]).unwrap().processes[0].host, "sim");
+    }
+
+    #[test]
+    fn launch_rate_and_on() {
+        let lines = errors(
+            &edited("rate = \"500Hz\"", "rate = \"500Hz\"\non = \"tick\""),
+            &[],
+        );
+        assert_eq!(
+            lines,
+            ["FILE:17: process 'physics', key 'rate': set either 'rate' or 'on', not both"]
+        );
+        let lines = errors(BASE, &["process.planner.rate=1Hz"]);
+        assert_eq!(
+            lines,
+            [
+                "--set process.planner.rate=1Hz: process 'planner', key 'rate': set either 'rate' or 'on', not both"
+            ]
+        );
+    }
+
+    #[test]
+    fn launch_link_pattern_matching_nothing() {
+        let lines = errors(&edited("\"rpi-*\", \"sim\"", "\"rpi-*\", \"simm\""), &[]);
+        assert_eq!(
+            lines,
+            [
+                "FILE:10: link #1, key 'between': pattern 'simm' matches no declared host; did you mean 'sim'?"
+            ]
+        );
+        let lines = errors(&edited("[\"rpi-*\", \"sim\"]", "[\"rpi-*\"]"), &[]);
+        assert_error(
+            &lines,
+            "FILE:10: link #1, key 'between': expected exactly two host patterns, found 1",
+        );
+    }
+
+    #[test]
+    fn launch_range_checks() {
+        let text = edited("cpu_slowdown = 12.0", "cpu_slowdown = 0.5")
+            .replace("latency = \"6ms\"", "loss = 1.5\nbandwidth = \"54Mb\"");
+        let lines = errors(
+            &text,
+            &["process.physics.restart=on_failure", "group.name=bad_name"],
+        );
+        assert_error(
+            &lines,
+            "FILE:7: host 'rpi-0', key 'cpu_slowdown': must be at least 1.0 (1.0 = as fast as this machine), found 0.5",
+        );
+        assert_error(
+            &lines,
+            "FILE:11: link #1, key 'loss': must be between 0.0 and 1.0, found 1.5",
+        );
+        assert!(lines.iter().any(|l| {
+            l.starts_with("FILE:12: link #1, key 'bandwidth': '54Mb' is not a bandwidth")
+        }));
+        assert_error(
+            &lines,
+            "--set process.physics.restart=on_failure: process 'physics', key 'restart': 'on_failure' is not a restart policy; did you mean 'on-failure'?",
+        );
+        assert_error(
+            &lines,
+            "--set group.name=bad_name: group, key 'name': group name 'bad_name' contains '_'; use letters, digits and '-'",
+        );
+        assert_eq!(lines.len(), 5, "{lines:?}");
+    }
+
+    #[test]
+    fn launch_missing_required() {
+        let text = BASE
+            .replace("name = \"convoy\"\n", "")
+            .replace("exec = \"planner --fast\"\n", "");
+        let lines = errors(&text, &[]);
+        assert_eq!(
+            lines,
+            [
+                "FILE:1: group: missing required key 'name'",
+                "FILE:18: process 'planner': missing required key 'exec'",
+            ]
+        );
+        let lines = errors("[[process]]\nname = \"a\"\nexec = \"sleep\"\n", &[]);
+        assert_eq!(
+            lines,
+            ["FILE: file: missing [group] table with at least name = \"…\""]
+        );
+    }
+
+    #[test]
+    fn launch_inline_lists_and_host_names() {
+        let text = r#"group = { name = "g" }
+hosts = { "a b" = {}, ok = { cpu_slowdown = 1 } }
+process = [
+  { name = "one", exec = "sleep", host = "ok" },
+  { name = "two", exec = "sleep", rte = "1Hz" },
+]
+"#;
+        let lines = errors(text, &[]);
+        assert_eq!(
+            lines,
+            [
+                "FILE:2: host 'a b': host names use letters, digits, '-', '_' and '.'",
+                "FILE:5: process 'two', key 'rte': unknown key; did you mean 'rate'?",
+            ]
+        );
+        let lf = load_text(
+            &text.replace("\"a b\" = {}, ", "").replace("rte", "rate"),
+            &[],
+        )
+        .unwrap();
+        assert_eq!(lf.processes[1].rate.as_deref(), Some("1Hz"));
+    }
+
+    #[test]
+    fn launch_bandwidths() {
+        assert_eq!(parse_bandwidth("54Mbit"), Ok(54_000_000));
+        assert_eq!(parse_bandwidth("10mbit"), Ok(10_000_000));
+        assert_eq!(parse_bandwidth("1Gbit"), Ok(1_000_000_000));
+        assert_eq!(parse_bandwidth("500kbit"), Ok(500_000));
+        assert_eq!(parse_bandwidth("1.5 Mbit"), Ok(1_500_000));
+        for bad in ["", "54", "54MB", "0Mbit", "fast"] {
+            assert!(parse_bandwidth(bad).is_err(), "{bad}");
+        }
+    }
 }

@@ -98,9 +98,9 @@ fn apply_one(doc: &mut DocumentMut, text: &str) -> Result<Vec<Seg>, String> {
             i += 2;
         } else {
             let kind = item.type_name();
-            table = item.as_table_like_mut().ok_or_else(|| {
-                format!("'{}' is a {kind}, not a table", keys[..=i].join("."))
-            })?;
+            table = item
+                .as_table_like_mut()
+                .ok_or_else(|| format!("'{}' is a {kind}, not a table", keys[..=i].join(".")))?;
             i += 1;
         }
     }
@@ -167,9 +167,9 @@ fn pick_index(item: &Item, path: &[Seg], pick: &str) -> Result<usize, String> {
             .iter()
             .filter_map(|t| t.and_then(|t| t.get("name")).and_then(|n| n.as_str()))
             .collect();
-        let found = entries.iter().position(|t| {
-            t.and_then(|t| t.get("name")).and_then(|n| n.as_str()) == Some(pick)
-        });
+        let found = entries
+            .iter()
+            .position(|t| t.and_then(|t| t.get("name")).and_then(|n| n.as_str()) == Some(pick));
         return found.ok_or_else(|| {
             format!(
                 "no process '{pick}'{}",
@@ -181,7 +181,10 @@ fn pick_index(item: &Item, path: &[Seg], pick: &str) -> Result<usize, String> {
         .parse()
         .map_err(|_| format!("'{pick}' is not an entry number (0, 1, …)"))?;
     if index >= entries.len() {
-        return Err(format!("there are only {} entries, numbered from 0", entries.len()));
+        return Err(format!(
+            "there are only {} entries, numbered from 0",
+            entries.len()
+        ));
     }
     Ok(index)
 }
@@ -248,10 +251,17 @@ exec = "planner"
         assert!(text.contains("count = 9"), "{text}");
         let doc: DocumentMut = text.parse().unwrap();
         assert_eq!(doc["process"][1]["args"][0].as_str(), Some("-v"));
-        assert_eq!(doc["process"][0]["params"]["world"]["size"][1].as_integer(), Some(2));
+        assert_eq!(
+            doc["process"][0]["params"]["world"]["size"][1].as_integer(),
+            Some(2)
+        );
         assert_eq!(
             applied[4].path,
-            vec![Seg::Key("process".into()), Seg::Index(1), Seg::Key("rate".into())]
+            vec![
+                Seg::Key("process".into()),
+                Seg::Index(1),
+                Seg::Key("rate".into())
+            ]
         );
     }
 
@@ -268,8 +278,14 @@ exec = "planner"
         assert!(applied.is_empty(), "{applied:?}");
         let messages: Vec<&str> = rejected.iter().map(|r| r.message.as_str()).collect();
         assert_eq!(messages[0], "no process 'phyiscs'; did you mean 'physics'?");
-        assert_eq!(messages[1], "the file has no table 'grup'; did you mean 'group'?");
-        assert_eq!(messages[2], "'group' has no key 'sed'; did you mean 'seed'?");
+        assert_eq!(
+            messages[1],
+            "the file has no table 'grup'; did you mean 'group'?"
+        );
+        assert_eq!(
+            messages[2],
+            "'group' has no key 'sed'; did you mean 'seed'?"
+        );
         assert!(messages[3].contains("KEY=VALUE"));
         assert!(messages[4].contains("only 1 entries"));
         assert!(messages[5].contains("name a key of process"));
@@ -282,6 +298,9 @@ exec = "planner"
         assert_eq!(parse_value("1.5").as_float(), Some(1.5));
         assert_eq!(parse_value("250Hz").as_str(), Some("250Hz"));
         assert_eq!(parse_value("abc").as_str(), Some("abc"));
-        assert_eq!(parse_value("[\"a\",\"b\"]").as_array().map(|a| a.len()), Some(2));
+        assert_eq!(
+            parse_value("[\"a\",\"b\"]").as_array().map(|a| a.len()),
+            Some(2)
+        );
     }
 }

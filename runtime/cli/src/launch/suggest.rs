@@ -35,7 +35,7 @@ pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str
 
 /// A hint for an unknown word: the nearest candidate, or else the full list when it is short
 /// enough to read.
-pub fn hint<'a>(word: &str, candidates: &[&'a str]) -> String {
+pub fn hint(word: &str, candidates: &[&str]) -> String {
     let near = did_you_mean(word, candidates.iter().copied());
     if !near.is_empty() || candidates.is_empty() {
         return near;
@@ -51,7 +51,15 @@ pub fn hint<'a>(word: &str, candidates: &[&'a str]) -> String {
 mod tests {
     use super::*;
 
-    const KEYS: &[&str] = &["name", "exec", "args", "rate", "on", "restart", "restart_backoff"];
+    const KEYS: &[&str] = &[
+        "name",
+        "exec",
+        "args",
+        "rate",
+        "on",
+        "restart",
+        "restart_backoff",
+    ];
 
     #[test]
     fn launch_suggest_close_words() {

@@ -104,6 +104,17 @@ impl Supervisor {
             // Own process group: Ctrl-C reaches the launcher only, which stops the group in
             // order instead of every process racing to exit.
             .process_group(0);
+        // SAFETY: prctl is async-signal-safe; it only sets this child's parent-death signal.
+        unsafe {
+            // If the launcher is killed (even with SIGKILL) its processes get SIGTERM and exit
+            // cleanly instead of living on as orphans holding the group's shared memory.
+            cmd.pre_exec(|| {
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
         if let Some(rate) = &spec.rate {
             cmd.env(caravan::env_vars::RATE, rate);
         }

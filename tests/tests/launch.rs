@@ -1,0 +1,436 @@
+//! `caravan launch` and the inspection commands, with real process groups.
+
+use caravan_tests::{TestGroup, workspace_bin};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::Duration;
+
+/// A launch file for a fresh group in its own temp directory.
+struct Scenario {
+    group: TestGroup,
+    dir: PathBuf,
+    file: PathBuf,
+}
+
+impl Scenario {
+    /// `body` is the launch file after its `[group]` header line and name.
+    fn new(tag: &str, body: &str) -> Self {
+        let group = TestGroup::new(tag);
+        let dir = std::env::temp_dir().join(format!("caravan-{}", group.name));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("launch.toml");
+        std::fs::write(&file, format!("[group]\nname = \"{}\"\n{body}", group.name)).unwrap();
+        Self { group, dir, file }
+    }
+
+    fn command(&self, extra: &[&str]) -> Command {
+        let mut cmd = Command::new(workspace_bin("caravan"));
+        cmd.arg("launch").arg(&self.file).arg("--runs-dir").arg(self.dir.join("runs")).arg("--quiet").args(extra);
+        cmd
+    }
+
+    fn run(&self, extra: &[&str]) -> Output {
+        self.command(extra).output().unwrap()
+    }
+
+    fn run_dirs(&self) -> Vec<PathBuf> {
+        let mut dirs: Vec<PathBuf> = std::fs::read_dir(self.dir.join("runs"))
+            .map(|rd| rd.flatten().map(|e| e.path()).collect())
+            .unwrap_or_default();
+        dirs.sort();
+        dirs
+    }
+
+    fn report(&self) -> serde_json::Value {
+        let dir = self.run_dirs().pop().expect("a run directory");
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+    }
+
+    fn shm_entries(&self) -> Vec<String> {
+        let prefix = caravan::group::prefix(&self.group.name);
+        std::fs::read_dir("/dev/shm")
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().to_string())
+            .filter(|n| n.starts_with(&prefix))
+            .collect()
+    }
+}
+
+impl Drop for Scenario {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+const PINGPONG: &str = r#"clock = "lockstep"
+duration = "10s"
+seed = 3
+record = ["demo/*"]
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+rate = "10Hz"
+
+[[process]]
+name = "pong"
+exec = "caravan-demo pong"
+on = "demo/ping"
+params = { gain = 2.0 }
+
+[[process]]
+name = "sum"
+exec = "caravan-demo sum"
+rate = "20Hz"
+
+[[process]]
+name = "noise"
+exec = "caravan-demo noise"
+rate = "7Hz"
+"#;
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+fn node<'a>(report: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    report["nodes"].as_array().unwrap().iter().find(|n| n["name"] == name).unwrap()
+}
+
+#[test]
+fn lockstep_group_runs_records_and_reports() {
+    let s = Scenario::new("pingpong", PINGPONG);
+    let out = s.run(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = s.report();
+    assert_eq!(report["run"]["outcome"], "completed");
+    assert_eq!(report["run"]["sim_time_s"], 10.0);
+    assert!(report["run"]["real_time_factor"].as_f64().unwrap() > 0.0);
+    assert_eq!(node(&report, "ping")["steps"], 101); // 0 s … 10 s inclusive at 10 Hz
+    assert_eq!(node(&report, "sum")["steps"], 201);
+    assert_eq!(node(&report, "pong")["steps"], 100); // one tick after each ping but the last
+    assert_eq!(node(&report, "pong")["exit_status"], "exited 0");
+    assert!(s.shm_entries().is_empty(), "left behind: {:?}", s.shm_entries());
+
+    // The recording, read back with the mcap crate, holds what was published.
+    let bytes = std::fs::read(s.run_dirs()[0].join("record.mcap")).unwrap();
+    let mut ping = Vec::new();
+    let mut pong = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        assert_eq!(m.log_time, v["header"]["stamp_ns"].as_u64().unwrap());
+        assert!(v["header"].get("send_wall_ns").is_none(), "lockstep recordings carry no wall clock");
+        match m.channel.topic.as_str() {
+            "demo/ping" => ping.push((m.log_time, v["x"].as_f64().unwrap())),
+            "demo/pong" => pong.push((m.log_time, v["x"].as_f64().unwrap())),
+            _ => {}
+        }
+    }
+    assert_eq!(ping.len(), 101);
+    for (i, (t, x)) in ping.iter().enumerate() {
+        assert_eq!((*t, *x), (i as u64 * 100_000_000, i as f64));
+    }
+    assert_eq!(pong.len(), 100);
+    for (i, (t, x)) in pong.iter().enumerate() {
+        // Stepped by ping i one tick (1 ms) later, doubling it.
+        assert_eq!((*t, *x), (i as u64 * 100_000_000 + 1_000_000, 2.0 * i as f64));
+    }
+}
+
+/// Loads both cores for as long as it lives: determinism must not depend on timing.
+struct CpuLoad(Vec<std::thread::JoinHandle<()>>, std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+impl CpuLoad {
+    fn start() -> Self {
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let threads = (0..2)
+            .map(|_| {
+                let stop = stop.clone();
+                std::thread::spawn(move || {
+                    let mut x = 0u64;
+                    while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                        x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+                    }
+                })
+            })
+            .collect();
+        Self(threads, stop)
+    }
+}
+
+impl Drop for CpuLoad {
+    fn drop(&mut self) {
+        self.1.store(true, std::sync::atomic::Ordering::Relaxed);
+        for t in self.0.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
+
+#[test]
+fn lockstep_reruns_are_byte_identical_under_cpu_load() {
+    let s = Scenario::new("determinism", PINGPONG);
+    let quiet = s.run(&["--duration", "5s"]);
+    assert!(quiet.status.success(), "{}", stderr(&quiet));
+    let loaded = {
+        let _load = CpuLoad::start();
+        s.run(&["--duration", "5s"])
+    };
+    assert!(loaded.status.success(), "{}", stderr(&loaded));
+    let dirs = s.run_dirs();
+    assert_eq!(dirs.len(), 2);
+    let a = std::fs::read(dirs[0].join("record.mcap")).unwrap();
+    let b = std::fs::read(dirs[1].join("record.mcap")).unwrap();
+    assert!(a.len() > 1000);
+    assert!(a == b, "recordings differ");
+}
+
+#[test]
+fn optional_process_is_restarted_per_policy() {
+    let s = Scenario::new(
+        "restart",
+        r#"clock = "realtime"
+duration = "6s"
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+
+[[process]]
+name = "crashy"
+exec = "caravan-demo crash"
+params = { steps = 2 }
+restart = "on-failure"
+restart_backoff = "100ms"
+max_restarts = 2
+required = false
+"#,
+    );
+    let out = s.run(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = s.report();
+    assert_eq!(node(&report, "crashy")["restarts"], 2);
+    assert_eq!(node(&report, "crashy")["exit_status"], "exited 3");
+    assert_eq!(node(&report, "ping")["exit_status"], "exited 0");
+    assert_eq!(report["run"]["outcome"], "completed");
+}
+
+#[test]
+fn failed_required_process_fails_the_group() {
+    let s = Scenario::new(
+        "required",
+        r#"clock = "realtime"
+duration = "20s"
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+
+[[process]]
+name = "crashy"
+exec = "caravan-demo crash"
+params = { steps = 2 }
+"#,
+    );
+    let out = s.run(&[]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("required process 'crashy' exited 3"), "{}", stderr(&out));
+    let report = s.report();
+    assert_eq!(report["run"]["outcome"], "failed");
+    // Its peer was stopped cleanly, not killed.
+    assert_eq!(node(&report, "ping")["exit_status"], "exited 0");
+    assert!(s.shm_entries().is_empty());
+}
+
+fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
+    // Polling with sleeps is fine in a test helper; nothing asserts how long it takes.
+    for _ in 0..300 {
+        if cond() {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    panic!("timed out waiting until {what}");
+}
+
+fn caravan(args: &[&str]) -> Output {
+    Command::new(workspace_bin("caravan")).args(args).output().unwrap()
+}
+
+fn start_realtime_group(s: &Scenario) -> Child {
+    let child = s.command(&["--clock", "realtime", "--duration", "10min"]).stderr(Stdio::piped()).spawn().unwrap();
+    wait_until("all four nodes run", || {
+        let out = caravan(&["node", "list", "--group", &s.group.name]);
+        String::from_utf8_lossy(&out.stdout).lines().filter(|l| !l.starts_with("(launcher)")).count() >= 4
+    });
+    child
+}
+
+#[test]
+fn sigterm_stops_the_group_cleanly() {
+    let s = Scenario::new("sigterm", PINGPONG);
+    let child = start_realtime_group(&s);
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = s.report();
+    assert_eq!(report["run"]["outcome"], "interrupted");
+    for n in report["nodes"].as_array().unwrap() {
+        // Each process handled SIGTERM within the grace period instead of being killed.
+        assert_eq!(n["exit_status"], "exited 0", "{n}");
+    }
+    assert!(s.shm_entries().is_empty());
+}
+
+#[test]
+fn inspection_commands_see_a_running_group() {
+    let s = Scenario::new("inspect", PINGPONG);
+    let child = start_realtime_group(&s);
+    let g = s.group.name.as_str();
+    let list = String::from_utf8_lossy(&caravan(&["topic", "list", "--group", g]).stdout).to_string();
+    assert!(list.contains("demo/ping") && list.contains("caravan::Pose2D"), "{list}");
+    let echo = caravan(&["topic", "echo", "demo/pong", "-n", "3", "--group", g]);
+    let lines: Vec<serde_json::Value> =
+        String::from_utf8_lossy(&echo.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), 3);
+    assert!(lines.iter().all(|l| l["data"]["x"].as_f64().unwrap() % 2.0 == 0.0));
+    let hz = String::from_utf8_lossy(&caravan(&["topic", "hz", "demo/ping", "--seconds", "2", "--group", g]).stdout).to_string();
+    assert!(hz.contains("demo/ping:") && hz.contains("Hz"), "{hz}");
+    let mcap = s.dir.join("manual.mcap");
+    let rec = caravan(&["record", "demo/sum", "-o", mcap.to_str().unwrap(), "--seconds", "2", "--group", g]);
+    assert!(rec.status.success(), "{}", stderr(&rec));
+    let bytes = std::fs::read(&mcap).unwrap();
+    let topics: Vec<String> =
+        mcap::MessageStream::new(&bytes).unwrap().map(|m| m.unwrap().channel.topic.clone()).collect();
+    assert!(!topics.is_empty() && topics.iter().all(|t| t == "demo/sum"));
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(child.wait_with_output().unwrap().status.success());
+}
+
+#[test]
+fn kill_9_of_a_member_or_the_launcher_leaves_no_shared_memory() {
+    // A member: the launcher notices, stops the group and cleans up.
+    let s = Scenario::new("kill-member", PINGPONG);
+    let child = start_realtime_group(&s);
+    let nodes = caravan(&["node", "list", "--group", &s.group.name]);
+    let pong_pid: i32 = String::from_utf8_lossy(&nodes.stdout)
+        .lines()
+        .find(|l| l.starts_with("pong"))
+        .and_then(|l| l.split_whitespace().last())
+        .and_then(|p| p.parse().ok())
+        .expect("pong's pid");
+    // SAFETY: killing a process of the group under test.
+    unsafe { libc::kill(pong_pid, libc::SIGKILL) };
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+
+    // The launcher: its processes get SIGTERM from the kernel; `caravan clean` sweeps the rest.
+    let s = Scenario::new("kill-launcher", PINGPONG);
+    let mut child = start_realtime_group(&s);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    wait_until("the group's processes are gone", || {
+        let out = caravan(&["node", "list", "--group", &s.group.name]);
+        String::from_utf8_lossy(&out.stdout).trim().is_empty()
+    });
+    assert!(caravan(&["clean"]).status.success());
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}
+
+/// Runs `caravan launch` on a bad launch file and checks it failed as bad input, named where,
+/// and started nothing.
+fn assert_bad_input(s: &Scenario, extra: &[&str], expected: &[&str]) {
+    let out = s.run(extra);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    for e in expected {
+        assert!(err.contains(e), "expected '{e}' in: {err}");
+    }
+    assert!(s.run_dirs().is_empty(), "a run directory was created");
+    assert!(s.shm_entries().is_empty());
+}
+
+fn file_line(s: &Scenario, line: usize) -> String {
+    format!("{}:{line}", s.file.display())
+}
+
+const ONE_PROCESS: &str = "clock = \"lockstep\"\n\n[[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n";
+
+#[test]
+fn typo_in_a_key_is_named_with_a_suggestion() {
+    let s = Scenario::new("bad-key", &format!("{ONE_PROCESS}rat = \"10Hz\"\n"));
+    assert_bad_input(&s, &[], &[&file_line(&s, 8), "rat", "rate"]);
+}
+
+#[test]
+fn wrong_type_is_named() {
+    let s = Scenario::new("bad-type", "seed = \"seven\"\n");
+    assert_bad_input(&s, &[], &[&file_line(&s, 3), "seed"]);
+}
+
+#[test]
+fn unknown_executable_is_rejected() {
+    let s = Scenario::new("bad-exec", "[[process]]\nname = \"x\"\nexec = \"no-such-program-here\"\n");
+    assert_bad_input(&s, &[], &[&file_line(&s, 5), "no-such-program-here"]);
+}
+
+#[test]
+fn duplicate_process_names_are_rejected() {
+    let s = Scenario::new("bad-dup", &format!("{ONE_PROCESS}\n[[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n"));
+    assert_bad_input(&s, &[], &[&file_line(&s, 10), "ping"]);
+}
+
+#[test]
+fn bad_duration_is_rejected() {
+    let s = Scenario::new("bad-duration", "duration = \"ten seconds\"\n");
+    assert_bad_input(&s, &[], &[&file_line(&s, 3), "duration"]);
+}
+
+#[test]
+fn bad_rate_is_rejected() {
+    let s = Scenario::new("bad-rate", &format!("{ONE_PROCESS}rate = \"fast\"\n"));
+    assert_bad_input(&s, &[], &[&file_line(&s, 8), "rate"]);
+}
+
+#[test]
+fn missing_launch_file_is_reported() {
+    let s = Scenario::new("missing", "");
+    std::fs::remove_file(&s.file).unwrap();
+    assert_bad_input(&s, &[], &[&s.file.display().to_string()]);
+}
+
+#[test]
+fn set_of_a_path_that_does_not_exist_is_rejected() {
+    let s = Scenario::new("bad-set", ONE_PROCESS);
+    assert_bad_input(&s, &["--set", "process.pnig.rate=5Hz"], &["pnig", "ping"]);
+}
+
+#[test]
+fn unknown_host_is_rejected() {
+    let s = Scenario::new("bad-host", &format!("\n[hosts.rpi-0]\n{ONE_PROCESS}host = \"rpi-9\"\n"));
+    assert_bad_input(&s, &[], &["host", "rpi-9"]);
+}
+
+#[test]
+fn rate_and_on_together_are_rejected() {
+    let s = Scenario::new("bad-trigger", &format!("{ONE_PROCESS}rate = \"10Hz\"\non = \"demo/x\"\n"));
+    assert_bad_input(&s, &[], &["rate", "on"]);
+}
+
+#[test]
+fn report_is_recomputed_from_the_run_directory() {
+    let s = Scenario::new("report", PINGPONG);
+    assert!(s.run(&["--duration", "2s"]).status.success());
+    let dir = s.run_dirs().pop().unwrap();
+    let before = s.report();
+    std::fs::remove_file(dir.join("report.json")).unwrap();
+    let out = caravan(&["report", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(s.report(), before);
+    assert!(Path::new(&dir.join("report.md")).exists());
+}
