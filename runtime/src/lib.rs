@@ -29,8 +29,8 @@ mod publisher;
 mod rate;
 mod stats;
 mod subscriber;
-mod topic;
 pub mod tap;
+mod topic;
 mod transport;
 
 pub use caravan_schemas as schemas;

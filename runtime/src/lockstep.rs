@@ -248,7 +248,11 @@ impl Scheduler {
 
     /// Waits until every node in `expected` said hello. `watchdog` runs between waits; an `Err`
     /// from it (a member died, a timeout) aborts the wait.
-    pub fn wait_for_nodes(&mut self, expected: &[String], mut watchdog: impl Watchdog) -> Result<(), Error> {
+    pub fn wait_for_nodes(
+        &mut self,
+        expected: &[String],
+        mut watchdog: impl Watchdog,
+    ) -> Result<(), Error> {
         let expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
         loop {
             while let Some(sample) = self
@@ -274,7 +278,11 @@ impl Scheduler {
     }
 
     fn admit_new(&mut self) -> Result<(), Error> {
-        while let Some(sample) = self.hello.receive().map_err(|e| Error::transport("hello", e))? {
+        while let Some(sample) = self
+            .hello
+            .receive()
+            .map_err(|e| Error::transport("hello", e))?
+        {
             self.admit(sample.payload())?;
         }
         Ok(())
@@ -289,7 +297,10 @@ impl Scheduler {
             if !member.active {
                 member.active = true;
                 if member.period_ns > 0 {
-                    self.queue.entry(self.now_ns + self.tick_ns).or_default().insert(i);
+                    self.queue
+                        .entry(self.now_ns + self.tick_ns)
+                        .or_default()
+                        .insert(i);
                 }
             }
             return Ok(());
@@ -321,18 +332,37 @@ impl Scheduler {
     /// Grants the next event time to every node due then and waits until all are done.
     /// Returns `None` when no node will ever be due again.
     pub fn advance(&mut self, mut watchdog: impl Watchdog) -> Result<Option<Advance>, Error> {
-        let Some((now_ns, due)) = self.queue.pop_first() else { return Ok(None) };
+        let Some((now_ns, due)) = self.queue.pop_first() else {
+            return Ok(None);
+        };
         self.now_ns = now_ns;
-        let due: BTreeSet<usize> = due.into_iter().filter(|&i| self.members[i].active).collect();
+        let due: BTreeSet<usize> = due
+            .into_iter()
+            .filter(|&i| self.members[i].active)
+            .collect();
         for &i in &due {
-            self.grant(i, Grant { now_ns, tick_ns: self.tick_ns, stop: 0, _reserved: 0 })?;
+            self.grant(
+                i,
+                Grant {
+                    now_ns,
+                    tick_ns: self.tick_ns,
+                    stop: 0,
+                    _reserved: 0,
+                },
+            )?;
         }
         let mut waiting = due.clone();
         let mut published = BTreeSet::new();
         while !waiting.is_empty() {
-            while let Some(sample) = self.done.receive().map_err(|e| Error::transport("done", e))? {
+            while let Some(sample) = self
+                .done
+                .receive()
+                .map_err(|e| Error::transport("done", e))?
+            {
                 let done = sample.payload();
-                let Some(&i) = self.by_hash.get(&done.node_hash) else { continue };
+                let Some(&i) = self.by_hash.get(&done.node_hash) else {
+                    continue;
+                };
                 if done.now_ns != now_ns || !waiting.remove(&i) {
                     return Err(Error::Lockstep(format!(
                         "node '{}' reported a step at {} ns, expected {} ns",
@@ -346,8 +376,14 @@ impl Scheduler {
                 break;
             }
             let dead = watchdog().map_err(|why| {
-                let names: Vec<_> = waiting.iter().map(|&i| self.members[i].name.as_str()).collect();
-                Error::Lockstep(format!("waiting for {} to finish step at {now_ns} ns: {why}", names.join(", ")))
+                let names: Vec<_> = waiting
+                    .iter()
+                    .map(|&i| self.members[i].name.as_str())
+                    .collect();
+                Error::Lockstep(format!(
+                    "waiting for {} to finish step at {now_ns} ns: {why}",
+                    names.join(", ")
+                ))
             })?;
             self.mark_dead(&dead, &mut waiting);
             self.admit_new()?;
@@ -355,7 +391,11 @@ impl Scheduler {
         }
         let mut stepped: Vec<String> = due.iter().map(|&i| self.members[i].name.clone()).collect();
         stepped.sort();
-        Ok(Some(Advance { now_ns, stepped, published: published.into_iter().collect() }))
+        Ok(Some(Advance {
+            now_ns,
+            stepped,
+            published: published.into_iter().collect(),
+        }))
     }
 
     /// Stops waiting for nodes whose process died; they rejoin when they say hello again.

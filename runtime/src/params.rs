@@ -72,7 +72,10 @@ mod tests {
 
     #[test]
     fn unknown_key_is_named() {
-        let e = parse_params::<Gains>("n", &json!({"k1": 1.0, "limits": {"v_max": 0.1, "vmax": 1}}));
+        let e = parse_params::<Gains>(
+            "n",
+            &json!({"k1": 1.0, "limits": {"v_max": 0.1, "vmax": 1}}),
+        );
         let text = e.unwrap_err().to_string();
         assert!(text.contains("'limits.vmax'"), "{text}");
     }

@@ -19,13 +19,19 @@ pub struct TopicInfo {
 
 /// Topics of the group of `config`, sorted by name. Internal `caravan/` services are left out
 /// unless `internal`.
-pub fn list_topics(config: &iceoryx2::config::Config, internal: bool) -> Result<Vec<TopicInfo>, Error> {
+pub fn list_topics(
+    config: &iceoryx2::config::Config,
+    internal: bool,
+) -> Result<Vec<TopicInfo>, Error> {
     let mut topics = Vec::new();
     ipc::Service::list(config, |details| {
         use iceoryx2::service::static_config::messaging_pattern::MessagingPattern as Pattern;
         if let Pattern::PublishSubscribe(ps) = details.static_details.messaging_pattern() {
             let name = details.static_details.name().to_string();
-            let nodes = details.dynamic_details.as_ref().map_or(0, |d| d.nodes.len());
+            let nodes = details
+                .dynamic_details
+                .as_ref()
+                .map_or(0, |d| d.nodes.len());
             if internal || !name.starts_with("caravan/") {
                 topics.push(TopicInfo {
                     name,
@@ -59,7 +65,10 @@ pub trait DynTap {
 }
 
 /// A listener woken whenever a message is published on `topic`.
-pub fn open_listener(iox: &iceoryx2::node::Node<ipc::Service>, topic: &str) -> Result<Listener<ipc::Service>, Error> {
+pub fn open_listener(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+) -> Result<Listener<ipc::Service>, Error> {
     transport::listener(iox, topic)
 }
 
@@ -80,12 +89,17 @@ impl<T: Message> DynTap for Tap<T> {
     }
 
     fn drain(&self, out: &mut Vec<Tapped>) -> Result<(), Error> {
-        while let Some(sample) = self.port.receive().map_err(|e| Error::topic(&self.topic, format!("{e:?}")))? {
+        while let Some(sample) = self
+            .port
+            .receive()
+            .map_err(|e| Error::topic(&self.topic, format!("{e:?}")))?
+        {
             let header = *sample.user_header();
             let mut last_seq = self.last_seq.borrow_mut();
             match last_seq.iter_mut().find(|(s, _)| *s == header.source_id) {
                 Some((_, last)) => {
-                    self.missed.set(self.missed.get() + header.seq.saturating_sub(*last + 1));
+                    self.missed
+                        .set(self.missed.get() + header.seq.saturating_sub(*last + 1));
                     *last = header.seq.max(*last);
                 }
                 None => last_seq.push((header.source_id, header.seq)),
@@ -109,7 +123,10 @@ pub fn open_tap(
     topic: &str,
     type_name: &str,
 ) -> Result<Box<dyn DynTap>, Error> {
-    fn open<T: Message>(iox: &iceoryx2::node::Node<ipc::Service>, topic: &str) -> Result<Box<dyn DynTap>, Error> {
+    fn open<T: Message>(
+        iox: &iceoryx2::node::Node<ipc::Service>,
+        topic: &str,
+    ) -> Result<Box<dyn DynTap>, Error> {
         let service = iox
             .service_builder(&transport::service_name(topic)?)
             .publish_subscribe::<T>()
@@ -129,6 +146,10 @@ pub fn open_tap(
             missed: Default::default(),
         }))
     }
-    caravan_schemas::with_message_type!(type_name, |T| open::<T>(iox, topic))
-        .unwrap_or_else(|| Err(Error::topic(topic, format!("unknown message type '{type_name}'"))))
+    caravan_schemas::with_message_type!(type_name, |T| open::<T>(iox, topic)).unwrap_or_else(|| {
+        Err(Error::topic(
+            topic,
+            format!("unknown message type '{type_name}'"),
+        ))
+    })
 }

@@ -6,7 +6,10 @@ use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::ser::{Serialize, SerializeStruct, Serializer};
 
 /// `serialize_with` helper for arrays longer than serde's built-in 32.
-pub(crate) fn slice<S: Serializer, T: Serialize, const N: usize>(v: &[T; N], s: S) -> Result<S::Ok, S::Error> {
+pub(crate) fn slice<S: Serializer, T: Serialize, const N: usize>(
+    v: &[T; N],
+    s: S,
+) -> Result<S::Ok, S::Error> {
     s.collect_seq(v.iter())
 }
 
@@ -16,7 +19,9 @@ impl<const N: usize> Serialize for FixedString<N> {
     }
 }
 
-impl<T: Copy + PlacementDefault + ZeroCopySend + Serialize, const N: usize> Serialize for FixedVec<T, N> {
+impl<T: Copy + PlacementDefault + ZeroCopySend + Serialize, const N: usize> Serialize
+    for FixedVec<T, N>
+{
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.collect_seq(self.as_slice())
     }

@@ -25,7 +25,12 @@ impl Scenario {
 
     fn command(&self, extra: &[&str]) -> Command {
         let mut cmd = Command::new(workspace_bin("caravan"));
-        cmd.arg("launch").arg(&self.file).arg("--runs-dir").arg(self.dir.join("runs")).arg("--quiet").args(extra);
+        cmd.arg("launch")
+            .arg(&self.file)
+            .arg("--runs-dir")
+            .arg(self.dir.join("runs"))
+            .arg("--quiet")
+            .args(extra);
         cmd
     }
 
@@ -95,7 +100,12 @@ fn stderr(out: &Output) -> String {
 }
 
 fn node<'a>(report: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
-    report["nodes"].as_array().unwrap().iter().find(|n| n["name"] == name).unwrap()
+    report["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == name)
+        .unwrap()
 }
 
 #[test]
@@ -111,7 +121,11 @@ fn lockstep_group_runs_records_and_reports() {
     assert_eq!(node(&report, "sum")["steps"], 201);
     assert_eq!(node(&report, "pong")["steps"], 100); // one tick after each ping but the last
     assert_eq!(node(&report, "pong")["exit_status"], "exited 0");
-    assert!(s.shm_entries().is_empty(), "left behind: {:?}", s.shm_entries());
+    assert!(
+        s.shm_entries().is_empty(),
+        "left behind: {:?}",
+        s.shm_entries()
+    );
 
     // The recording, read back with the mcap crate, holds what was published.
     let bytes = std::fs::read(s.run_dirs()[0].join("record.mcap")).unwrap();
@@ -121,7 +135,10 @@ fn lockstep_group_runs_records_and_reports() {
         let m = m.unwrap();
         let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
         assert_eq!(m.log_time, v["header"]["stamp_ns"].as_u64().unwrap());
-        assert!(v["header"].get("send_wall_ns").is_none(), "lockstep recordings carry no wall clock");
+        assert!(
+            v["header"].get("send_wall_ns").is_none(),
+            "lockstep recordings carry no wall clock"
+        );
         match m.channel.topic.as_str() {
             "demo/ping" => ping.push((m.log_time, v["x"].as_f64().unwrap())),
             "demo/pong" => pong.push((m.log_time, v["x"].as_f64().unwrap())),
@@ -135,12 +152,18 @@ fn lockstep_group_runs_records_and_reports() {
     assert_eq!(pong.len(), 100);
     for (i, (t, x)) in pong.iter().enumerate() {
         // Stepped by ping i one tick (1 ms) later, doubling it.
-        assert_eq!((*t, *x), (i as u64 * 100_000_000 + 1_000_000, 2.0 * i as f64));
+        assert_eq!(
+            (*t, *x),
+            (i as u64 * 100_000_000 + 1_000_000, 2.0 * i as f64)
+        );
     }
 }
 
 /// Loads both cores for as long as it lives: determinism must not depend on timing.
-struct CpuLoad(Vec<std::thread::JoinHandle<()>>, std::sync::Arc<std::sync::atomic::AtomicBool>);
+struct CpuLoad(
+    Vec<std::thread::JoinHandle<()>>,
+    std::sync::Arc<std::sync::atomic::AtomicBool>,
+);
 
 impl CpuLoad {
     fn start() -> Self {
@@ -151,7 +174,9 @@ impl CpuLoad {
                 std::thread::spawn(move || {
                     let mut x = 0u64;
                     while !stop.load(std::sync::atomic::Ordering::Relaxed) {
-                        x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+                        x = std::hint::black_box(
+                            x.wrapping_mul(6364136223846793005).wrapping_add(1),
+                        );
                     }
                 })
             })
@@ -236,7 +261,11 @@ params = { steps = 2 }
     );
     let out = s.run(&[]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
-    assert!(stderr(&out).contains("required process 'crashy' exited 3"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("required process 'crashy' exited 3"),
+        "{}",
+        stderr(&out)
+    );
     let report = s.report();
     assert_eq!(report["run"]["outcome"], "failed");
     // Its peer was stopped cleanly, not killed.
@@ -256,14 +285,25 @@ fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
 }
 
 fn caravan(args: &[&str]) -> Output {
-    Command::new(workspace_bin("caravan")).args(args).output().unwrap()
+    Command::new(workspace_bin("caravan"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 fn start_realtime_group(s: &Scenario) -> Child {
-    let child = s.command(&["--clock", "realtime", "--duration", "10min"]).stderr(Stdio::piped()).spawn().unwrap();
+    let child = s
+        .command(&["--clock", "realtime", "--duration", "10min"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
     wait_until("all four nodes run", || {
         let out = caravan(&["node", "list", "--group", &s.group.name]);
-        String::from_utf8_lossy(&out.stdout).lines().filter(|l| !l.starts_with("(launcher)")).count() >= 4
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter(|l| !l.starts_with("(launcher)"))
+            .count()
+            >= 4
     });
     child
 }
@@ -290,21 +330,45 @@ fn inspection_commands_see_a_running_group() {
     let s = Scenario::new("inspect", PINGPONG);
     let child = start_realtime_group(&s);
     let g = s.group.name.as_str();
-    let list = String::from_utf8_lossy(&caravan(&["topic", "list", "--group", g]).stdout).to_string();
-    assert!(list.contains("demo/ping") && list.contains("caravan::Pose2D"), "{list}");
+    let list =
+        String::from_utf8_lossy(&caravan(&["topic", "list", "--group", g]).stdout).to_string();
+    assert!(
+        list.contains("demo/ping") && list.contains("caravan::Pose2D"),
+        "{list}"
+    );
     let echo = caravan(&["topic", "echo", "demo/pong", "-n", "3", "--group", g]);
-    let lines: Vec<serde_json::Value> =
-        String::from_utf8_lossy(&echo.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&echo.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     assert_eq!(lines.len(), 3);
-    assert!(lines.iter().all(|l| l["data"]["x"].as_f64().unwrap() % 2.0 == 0.0));
-    let hz = String::from_utf8_lossy(&caravan(&["topic", "hz", "demo/ping", "--seconds", "2", "--group", g]).stdout).to_string();
+    assert!(
+        lines
+            .iter()
+            .all(|l| l["data"]["x"].as_f64().unwrap() % 2.0 == 0.0)
+    );
+    let hz = String::from_utf8_lossy(
+        &caravan(&["topic", "hz", "demo/ping", "--seconds", "2", "--group", g]).stdout,
+    )
+    .to_string();
     assert!(hz.contains("demo/ping:") && hz.contains("Hz"), "{hz}");
     let mcap = s.dir.join("manual.mcap");
-    let rec = caravan(&["record", "demo/sum", "-o", mcap.to_str().unwrap(), "--seconds", "2", "--group", g]);
+    let rec = caravan(&[
+        "record",
+        "demo/sum",
+        "-o",
+        mcap.to_str().unwrap(),
+        "--seconds",
+        "2",
+        "--group",
+        g,
+    ]);
     assert!(rec.status.success(), "{}", stderr(&rec));
     let bytes = std::fs::read(&mcap).unwrap();
-    let topics: Vec<String> =
-        mcap::MessageStream::new(&bytes).unwrap().map(|m| m.unwrap().channel.topic.clone()).collect();
+    let topics: Vec<String> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap().channel.topic.clone())
+        .collect();
     assert!(!topics.is_empty() && topics.iter().all(|t| t == "demo/sum"));
     // SAFETY: signalling our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
@@ -359,7 +423,8 @@ fn file_line(s: &Scenario, line: usize) -> String {
     format!("{}:{line}", s.file.display())
 }
 
-const ONE_PROCESS: &str = "clock = \"lockstep\"\n\n[[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n";
+const ONE_PROCESS: &str =
+    "clock = \"lockstep\"\n\n[[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n";
 
 #[test]
 fn typo_in_a_key_is_named_with_a_suggestion() {
@@ -375,13 +440,19 @@ fn wrong_type_is_named() {
 
 #[test]
 fn unknown_executable_is_rejected() {
-    let s = Scenario::new("bad-exec", "[[process]]\nname = \"x\"\nexec = \"no-such-program-here\"\n");
+    let s = Scenario::new(
+        "bad-exec",
+        "[[process]]\nname = \"x\"\nexec = \"no-such-program-here\"\n",
+    );
     assert_bad_input(&s, &[], &[&file_line(&s, 5), "no-such-program-here"]);
 }
 
 #[test]
 fn duplicate_process_names_are_rejected() {
-    let s = Scenario::new("bad-dup", &format!("{ONE_PROCESS}\n[[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n"));
+    let s = Scenario::new(
+        "bad-dup",
+        &format!("{ONE_PROCESS}\n[[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n"),
+    );
     assert_bad_input(&s, &[], &[&file_line(&s, 10), "ping"]);
 }
 
@@ -412,13 +483,19 @@ fn set_of_a_path_that_does_not_exist_is_rejected() {
 
 #[test]
 fn unknown_host_is_rejected() {
-    let s = Scenario::new("bad-host", &format!("\n[hosts.rpi-0]\n{ONE_PROCESS}host = \"rpi-9\"\n"));
+    let s = Scenario::new(
+        "bad-host",
+        &format!("\n[hosts.rpi-0]\n{ONE_PROCESS}host = \"rpi-9\"\n"),
+    );
     assert_bad_input(&s, &[], &["host", "rpi-9"]);
 }
 
 #[test]
 fn rate_and_on_together_are_rejected() {
-    let s = Scenario::new("bad-trigger", &format!("{ONE_PROCESS}rate = \"10Hz\"\non = \"demo/x\"\n"));
+    let s = Scenario::new(
+        "bad-trigger",
+        &format!("{ONE_PROCESS}rate = \"10Hz\"\non = \"demo/x\"\n"),
+    );
     assert_bad_input(&s, &[], &["rate", "on"]);
 }
 

@@ -90,9 +90,7 @@ fn groups_with_the_same_topic_names_do_not_cross_talk() {
 fn idle_node_costs_almost_no_cpu() {
     let group = TestGroup::new("idle");
     let group = &group.name;
-    let mut child = test_node(group, "idle", "idle", json!({}))
-        .spawn()
-        .unwrap();
+    let mut child = test_node(group, "idle", "idle", json!({})).spawn().unwrap();
     std::thread::sleep(Duration::from_secs(5));
     terminate(&child);
     let (code, cpu) = wait_with_cpu(&mut child);

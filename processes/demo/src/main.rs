@@ -19,7 +19,10 @@ struct Params {
 
 impl Default for Params {
     fn default() -> Self {
-        Self { gain: 2.0, steps: 5 }
+        Self {
+            gain: 2.0,
+            steps: 5,
+        }
     }
 }
 
@@ -45,7 +48,11 @@ fn run(role: &str) -> Result<u8, Error> {
         "ping" => {
             let out = node.publisher(&topic("demo/ping"))?;
             node.run(Trigger::every_hz(10.0), |step| {
-                out.publish(&Pose2D { x: step.index() as f64, y: 0.0, theta: 0.0 })
+                out.publish(&Pose2D {
+                    x: step.index() as f64,
+                    y: 0.0,
+                    theta: 0.0,
+                })
             })?;
         }
         "pong" => {
@@ -53,7 +60,10 @@ fn run(role: &str) -> Result<u8, Error> {
             let out = node.publisher(&topic("demo/pong"))?;
             node.run(Trigger::on("demo/ping"), |_| {
                 while let Some(msg) = input.receive()? {
-                    out.publish(&Pose2D { x: msg.x * p.gain, ..*msg })?;
+                    out.publish(&Pose2D {
+                        x: msg.x * p.gain,
+                        ..*msg
+                    })?;
                 }
                 Ok(())
             })?;
@@ -66,14 +76,22 @@ fn run(role: &str) -> Result<u8, Error> {
                 if let Some(msg) = input.latest()? {
                     total += msg.x;
                 }
-                out.publish(&Pose2D { x: total, y: 0.0, theta: 0.0 })
+                out.publish(&Pose2D {
+                    x: total,
+                    y: 0.0,
+                    theta: 0.0,
+                })
             })?;
         }
         "noise" => {
             let out = node.publisher(&topic("demo/noise"))?;
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(node.identity().node_seed());
             node.run(Trigger::every_hz(7.0), |_| {
-                out.publish(&Pose2D { x: rng.random(), y: rng.random(), theta: 0.0 })
+                out.publish(&Pose2D {
+                    x: rng.random(),
+                    y: rng.random(),
+                    theta: 0.0,
+                })
             })?;
         }
         "crash" => {

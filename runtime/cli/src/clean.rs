@@ -18,7 +18,10 @@ pub fn live_nodes(group: &str) -> Result<Vec<LiveNode>> {
         if let NodeState::Alive(view) = state
             && let Some(details) = view.details()
         {
-            nodes.push(LiveNode { name: details.name().to_string(), pid: details.process_id().value() });
+            nodes.push(LiveNode {
+                name: details.name().to_string(),
+                pid: details.process_id().value(),
+            });
         }
         CallbackProgression::Continue
     })
@@ -28,7 +31,10 @@ pub fn live_nodes(group: &str) -> Result<Vec<LiveNode>> {
 }
 
 pub fn group_is_running(group: &str) -> Result<bool> {
-    Ok(caravan::group::groups_with_resources().iter().any(|g| g == group) && !live_nodes(group)?.is_empty())
+    Ok(caravan::group::groups_with_resources()
+        .iter()
+        .any(|g| g == group)
+        && !live_nodes(group)?.is_empty())
 }
 
 /// Removes the resources of `group` if none of its processes is alive.
@@ -59,7 +65,11 @@ pub fn choose_group(named: Option<&str>) -> Result<String> {
     match running.as_slice() {
         [one] => Ok(one.clone()),
         [] => Err(anyhow!("no Caravan group is running")),
-        many => Err(anyhow!("{} groups are running ({}); choose one with --group", many.len(), many.join(", "))),
+        many => Err(anyhow!(
+            "{} groups are running ({}); choose one with --group",
+            many.len(),
+            many.join(", ")
+        )),
     }
 }
 

@@ -59,36 +59,63 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
         TopicCommand::List(g) => {
             let group = choose_group(g.group.as_deref())?;
             for t in list_topics(&caravan::group::config(&group)?, false)? {
-                println!("{:<32} {:<28} {:>9} B  {} nodes", t.name, t.type_name, t.payload_size, t.nodes);
+                println!(
+                    "{:<32} {:<28} {:>9} B  {} nodes",
+                    t.name, t.type_name, t.payload_size, t.nodes
+                );
             }
             Ok(())
         }
-        TopicCommand::Echo { topic, group, count } => {
+        TopicCommand::Echo {
+            topic,
+            group,
+            count,
+        } => {
             let group = choose_group(group.group.as_deref())?;
             let mut printed = 0;
             follow(&group, &topic, None, |header, json| {
-                println!("{}", serde_json::json!({"header": {"seq": header.seq, "stamp_ns": header.stamp_ns, "source_id": header.source_id}, "data": json}));
+                println!(
+                    "{}",
+                    serde_json::json!({"header": {"seq": header.seq, "stamp_ns": header.stamp_ns, "source_id": header.source_id}, "data": json})
+                );
                 printed += 1;
                 count.is_some_and(|c| printed >= c)
             })
         }
-        TopicCommand::Hz { topic, group, seconds } => {
+        TopicCommand::Hz {
+            topic,
+            group,
+            seconds,
+        } => {
             let group = choose_group(group.group.as_deref())?;
             let started = Instant::now();
             let mut n = 0u64;
-            follow(&group, &topic, Some(Duration::from_secs_f64(seconds)), |_, _| {
-                n += 1;
-                false
-            })?;
+            follow(
+                &group,
+                &topic,
+                Some(Duration::from_secs_f64(seconds)),
+                |_, _| {
+                    n += 1;
+                    false
+                },
+            )?;
             let secs = started.elapsed().as_secs_f64();
-            println!("{topic}: {n} messages in {secs:.2} s = {:.2} Hz", n as f64 / secs);
+            println!(
+                "{topic}: {n} messages in {secs:.2} s = {:.2} Hz",
+                n as f64 / secs
+            );
             Ok(())
         }
     }
 }
 
 /// Calls `each` for every message on `topic` until it returns true, `limit` passes or Ctrl-C.
-fn follow(group: &str, topic: &str, limit: Option<Duration>, mut each: impl FnMut(&caravan::Header, &serde_json::Value) -> bool) -> Result<()> {
+fn follow(
+    group: &str,
+    topic: &str,
+    limit: Option<Duration>,
+    mut each: impl FnMut(&caravan::Header, &serde_json::Value) -> bool,
+) -> Result<()> {
     let (config, node) = iox(group)?;
     let info = list_topics(&config, true)?
         .into_iter()
@@ -100,15 +127,22 @@ fn follow(group: &str, topic: &str, limit: Option<Duration>, mut each: impl FnMu
         .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
         .create::<ipc::Service>()
         .map_err(|e| anyhow!("{e:?}"))?;
-    let _guard = waitset.attach_notification(&listener).map_err(|e| anyhow!("{e:?}"))?;
+    let _guard = waitset
+        .attach_notification(&listener)
+        .map_err(|e| anyhow!("{e:?}"))?;
     let end = limit.map(|l| Instant::now() + l);
     let mut batch = Vec::new();
     loop {
-        let wait = end.map_or(Duration::from_secs(3600), |e| e.saturating_duration_since(Instant::now()));
+        let wait = end.map_or(Duration::from_secs(3600), |e| {
+            e.saturating_duration_since(Instant::now())
+        });
         let result = waitset
             .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, wait)
             .map_err(|e| anyhow!("{e:?}"))?;
-        if !matches!(result, iceoryx2::waitset::WaitSetRunResult::AllEventsHandled) {
+        if !matches!(
+            result,
+            iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
+        ) {
             return Ok(());
         }
         let _ = listener.try_wait(|_| {});
@@ -129,7 +163,15 @@ pub fn node(cmd: NodeCommand) -> Result<()> {
         NodeCommand::List(g) => {
             let group = choose_group(g.group.as_deref())?;
             for n in live_nodes(&group)? {
-                println!("{:<24} pid {}", if n.name.is_empty() { "(launcher)" } else { &n.name }, n.pid);
+                println!(
+                    "{:<24} pid {}",
+                    if n.name.is_empty() {
+                        "(launcher)"
+                    } else {
+                        &n.name
+                    },
+                    n.pid
+                );
             }
             Ok(())
         }
@@ -153,15 +195,33 @@ pub struct RecordArgs {
 /// `caravan record`: records a running group's topics until Ctrl-C.
 pub fn record(args: RecordArgs) -> Result<()> {
     let group = choose_group(args.group.group.as_deref())?;
-    let patterns = if args.patterns.is_empty() { vec!["**".to_string()] } else { args.patterns };
-    let mut recorder = crate::record::Recorder::create(&caravan::group::config(&group)?, &args.output, &patterns, false)?;
-    let end = args.seconds.map(|s| Instant::now() + Duration::from_secs_f64(s));
+    let patterns = if args.patterns.is_empty() {
+        vec!["**".to_string()]
+    } else {
+        args.patterns
+    };
+    let mut recorder = crate::record::Recorder::create(
+        &caravan::group::config(&group)?,
+        &args.output,
+        &patterns,
+        false,
+    )?;
+    let end = args
+        .seconds
+        .map(|s| Instant::now() + Duration::from_secs_f64(s));
     let config = caravan::group::config(&group)?;
-    crate::run::driver::record_until(&config, &mut recorder, SignalHandlingMode::HandleTerminationRequests, || {
-        end.is_some_and(|e| Instant::now() >= e)
-    })?;
+    crate::run::driver::record_until(
+        &config,
+        &mut recorder,
+        SignalHandlingMode::HandleTerminationRequests,
+        || end.is_some_and(|e| Instant::now() >= e),
+    )?;
     let recording = recorder.finish()?;
     let total: u64 = recording.topics.values().map(|t| t.messages).sum();
-    println!("recorded {total} messages on {} topics to {}", recording.topics.len(), args.output.display());
+    println!(
+        "recorded {total} messages on {} topics to {}",
+        recording.topics.len(),
+        args.output.display()
+    );
     Ok(())
 }

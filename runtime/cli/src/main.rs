@@ -12,7 +12,11 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "caravan", version, about = "Run, inspect and measure Caravan process groups")]
+#[command(
+    name = "caravan",
+    version,
+    about = "Run, inspect and measure Caravan process groups"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -1,8 +1,7 @@
 //! Recording topics to MCAP, and reading recordings back.
 
-pub mod pattern;
 pub mod reader;
 pub mod recorder;
 pub mod schema;
 
-pub use recorder::{Recorder, Recording, TopicStats};
+pub use recorder::{Recorder, Recording};

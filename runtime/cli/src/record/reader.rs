@@ -6,7 +6,6 @@ use std::path::Path;
 /// One recorded message.
 pub struct RecordedMessage {
     pub topic: String,
-    pub log_time_ns: u64,
     pub json: serde_json::Value,
 }
 
@@ -18,7 +17,6 @@ pub fn read_all(path: &Path) -> Result<Vec<RecordedMessage>> {
         let message = message?;
         out.push(RecordedMessage {
             topic: message.channel.topic.clone(),
-            log_time_ns: message.log_time,
             json: serde_json::from_slice(&message.data)
                 .with_context(|| format!("message on {} is not JSON", message.channel.topic))?,
         });

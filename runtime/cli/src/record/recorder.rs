@@ -6,8 +6,8 @@
 //! topic statistics instead. Node statuses are tapped too but kept out of the MCAP: their
 //! compute-time fields are wall-clock measurements.
 
-use super::pattern::matches_any;
 use super::schema;
+use crate::launch::model::glob_match;
 use anyhow::{Context, Result};
 use caravan::tap::{DynTap, Tapped, list_topics, open_tap};
 use caravan_schemas::topics::STATUS;
@@ -53,13 +53,19 @@ pub struct Recorder {
 }
 
 impl Recorder {
-    pub fn create(config: &iceoryx2::config::Config, path: &Path, patterns: &[String], lockstep: bool) -> Result<Self> {
+    pub fn create(
+        config: &iceoryx2::config::Config,
+        path: &Path,
+        patterns: &[String],
+        lockstep: bool,
+    ) -> Result<Self> {
         let iox = NodeBuilder::new()
             .config(config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
             .create::<ipc::Service>()
             .map_err(|e| anyhow::anyhow!("recorder node: {e:?}"))?;
-        let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        let file =
+            File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
         let writer = mcap::WriteOptions::new()
             .library("caravan")
             // The crate writes summary channels and schemas in hash order; leave them out so
@@ -99,7 +105,7 @@ impl Recorder {
             }
             if info.name == STATUS {
                 self.status_tap = Some(open_tap(&self.iox, &info.name, &info.type_name)?);
-            } else if matches_any(&self.patterns, &info.name) {
+            } else if self.patterns.iter().any(|p| glob_match(p, &info.name)) {
                 match open_tap(&self.iox, &info.name, &info.type_name) {
                     Ok(tap) => self.taps.push(tap),
                     // A type outside the schemas (a user's own) cannot be decoded; say so once.
@@ -112,7 +118,10 @@ impl Recorder {
     }
 
     pub fn taps(&self) -> impl Iterator<Item = &dyn DynTap> {
-        self.taps.iter().map(|t| t.as_ref()).chain(self.status_tap.as_deref())
+        self.taps
+            .iter()
+            .map(|t| t.as_ref())
+            .chain(self.status_tap.as_deref())
     }
 
     /// Reads every waiting message and writes it.
@@ -150,8 +159,14 @@ impl Recorder {
             Some(&id) => id,
             None => {
                 let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
-                let schema_id = self.writer.add_schema(type_name, "jsonschema", schema.to_string().as_bytes())?;
-                let id = self.writer.add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
+                let schema_id = self.writer.add_schema(
+                    type_name,
+                    "jsonschema",
+                    schema.to_string().as_bytes(),
+                )?;
+                let id = self
+                    .writer
+                    .add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
                 self.channels.insert(topic.clone(), id);
                 id
             }
@@ -182,7 +197,9 @@ impl Recorder {
             latency: Histogram::new_with_bounds(1, 3_600_000_000_000, 3).expect("valid bounds"),
         });
         stats.messages += 1;
-        stats.latency.saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));
+        stats
+            .latency
+            .saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));
         Ok(())
     }
 
@@ -193,7 +210,12 @@ impl Recorder {
                 s.missed = tap.missed();
             }
         }
-        self.writer.finish().context("cannot finish the MCAP file")?;
-        Ok(Recording { topics: self.stats, node_status: self.node_status })
+        self.writer
+            .finish()
+            .context("cannot finish the MCAP file")?;
+        Ok(Recording {
+            topics: self.stats,
+            node_status: self.node_status,
+        })
     }
 }

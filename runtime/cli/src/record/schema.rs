@@ -19,8 +19,10 @@ pub fn describe(sample: &Value) -> Value {
             None => json!({"type": "array"}),
         },
         Value::Object(fields) => {
-            let properties: serde_json::Map<String, Value> =
-                fields.iter().map(|(k, v)| (k.clone(), describe(v))).collect();
+            let properties: serde_json::Map<String, Value> = fields
+                .iter()
+                .map(|(k, v)| (k.clone(), describe(v)))
+                .collect();
             json!({"type": "object", "properties": properties})
         }
     }
@@ -29,7 +31,8 @@ pub fn describe(sample: &Value) -> Value {
 /// The schema of a recorded message of type `type_name`: the payload's fields plus `header`.
 pub fn for_type(type_name: &str, with_wall_clock: bool) -> Option<Value> {
     let payload = caravan_schemas::with_message_type!(type_name, |T| {
-        serde_json::to_value(&*caravan_schemas::boxed_placement_new::<T>()).unwrap_or(Value::Null)
+        serde_json::to_value(caravan_schemas::boxed_placement_new::<T>().as_ref())
+            .unwrap_or(Value::Null)
     })?;
     let mut schema = describe(&payload);
     schema["title"] = json!(type_name);
@@ -55,7 +58,14 @@ mod tests {
     fn pose_schema_lists_fields_and_header() {
         let s = super::for_type("caravan::Pose2D", false).unwrap();
         assert_eq!(s["properties"]["theta"]["type"], "number");
-        assert_eq!(s["properties"]["header"]["properties"]["seq"]["type"], "integer");
-        assert!(s["properties"]["header"]["properties"].get("send_wall_ns").is_none());
+        assert_eq!(
+            s["properties"]["header"]["properties"]["seq"]["type"],
+            "integer"
+        );
+        assert!(
+            s["properties"]["header"]["properties"]
+                .get("send_wall_ns")
+                .is_none()
+        );
     }
 }

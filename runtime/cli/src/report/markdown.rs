@@ -13,14 +13,21 @@ fn num(v: &Value, digits: usize) -> String {
 pub fn render(r: &Value) -> String {
     let mut md = String::new();
     let run = &r["run"];
-    let _ = writeln!(md, "# Run report: {}\n", r["group"]["name"].as_str().unwrap_or("?"));
+    let _ = writeln!(
+        md,
+        "# Run report: {}\n",
+        r["group"]["name"].as_str().unwrap_or("?")
+    );
     let _ = writeln!(
         md,
         "Clock {}, seed {}, outcome **{}**{}.\n",
         r["group"]["clock"].as_str().unwrap_or("?"),
         r["group"]["seed"],
         run["outcome"].as_str().unwrap_or("?"),
-        run["failure"].as_str().map(|f| format!(" ({f})")).unwrap_or_default()
+        run["failure"]
+            .as_str()
+            .map(|f| format!(" ({f})"))
+            .unwrap_or_default()
     );
     let _ = writeln!(
         md,

@@ -11,6 +11,7 @@
 //!   compute_mean_ms, compute_p99_ms, compute_max_ms, messages_missed}`
 //! - `topics[]`: `{name, type, messages, gaps, latency_us: {p50, p90, p99, max}}`; latency is
 //!   wall-clock time from send to the recorder's receipt.
+//!
 //! Scenario sections (`convoy`, `slam`, `links`) are added by later scenarios.
 
 mod markdown;
@@ -56,7 +57,10 @@ pub const RECORDING_FILE: &str = "record.mcap";
 /// Computes the report of `run_dir` and writes `report.json` and `report.md` there.
 pub fn write(run_dir: &Path) -> Result<Value> {
     let report = compute(run_dir)?;
-    std::fs::write(run_dir.join("report.json"), serde_json::to_string_pretty(&report)? + "\n")?;
+    std::fs::write(
+        run_dir.join("report.json"),
+        serde_json::to_string_pretty(&report)? + "\n",
+    )?;
     std::fs::write(run_dir.join("report.md"), markdown::render(&report))?;
     Ok(report)
 }
@@ -64,11 +68,16 @@ pub fn write(run_dir: &Path) -> Result<Value> {
 pub fn compute(run_dir: &Path) -> Result<Value> {
     let facts_path = run_dir.join(FACTS_FILE);
     let facts: RunFacts = serde_json::from_str(
-        &std::fs::read_to_string(&facts_path).with_context(|| format!("cannot read {}", facts_path.display()))?,
+        &std::fs::read_to_string(&facts_path)
+            .with_context(|| format!("cannot read {}", facts_path.display()))?,
     )
     .with_context(|| format!("{} is not a Caravan run record", facts_path.display()))?;
     let messages = read_all(&run_dir.join(RECORDING_FILE))?;
-    let rtf = if facts.wall_time_s > 0.0 { facts.sim_time_s / facts.wall_time_s } else { 0.0 };
+    let rtf = if facts.wall_time_s > 0.0 {
+        facts.sim_time_s / facts.wall_time_s
+    } else {
+        0.0
+    };
     Ok(json!({
         "version": 1,
         "group": {"name": facts.group, "clock": facts.clock, "seed": facts.seed, "launch_file": facts.launch_file},
@@ -125,10 +134,10 @@ fn topics(facts: &RunFacts, messages: &[crate::record::reader::RecordedMessage])
         let entry = per_topic.entry(&m.topic).or_default();
         entry.0 += 1;
         let header = &m.json["header"];
-        if let (Some(src), Some(seq)) = (header["source_id"].as_u64(), header["seq"].as_u64()) {
-            if let Some(last) = entry.2.insert(src, seq) {
-                entry.1 += seq.saturating_sub(last + 1);
-            }
+        if let (Some(src), Some(seq)) = (header["source_id"].as_u64(), header["seq"].as_u64())
+            && let Some(last) = entry.2.insert(src, seq)
+        {
+            entry.1 += seq.saturating_sub(last + 1);
         }
     }
     per_topic

@@ -41,21 +41,37 @@ pub struct DriverOutcome {
 /// Runs the driver on its own thread (iceoryx2 ports stay on the thread that made them).
 /// It sends `Event::DriverDone` when the schedule ends, then waits for `finish` (all
 /// processes exited) to drain the last messages and close the recording.
-pub fn spawn(cfg: DriverConfig, lockstep: bool, control: Arc<Control>, events: Sender<Event>, finish: Receiver<()>) -> std::thread::JoinHandle<Result<DriverOutcome>> {
+pub fn spawn(
+    cfg: DriverConfig,
+    lockstep: bool,
+    control: Arc<Control>,
+    events: Sender<Event>,
+    finish: Receiver<()>,
+) -> std::thread::JoinHandle<Result<DriverOutcome>> {
     std::thread::spawn(move || {
-        let mut recorder = Recorder::create(&cfg.iceoryx, &cfg.record_path, &cfg.patterns, lockstep)?;
+        let mut recorder =
+            Recorder::create(&cfg.iceoryx, &cfg.record_path, &cfg.patterns, lockstep)?;
         let sim_time_ns = if lockstep {
             run_lockstep(&cfg, &mut recorder, &control, &events, &finish)?
         } else {
             run_realtime(&cfg, &mut recorder, &control, &events, &finish)?
         };
-        Ok(DriverOutcome { recording: recorder.finish()?, sim_time_ns })
+        Ok(DriverOutcome {
+            recording: recorder.finish()?,
+            sim_time_ns,
+        })
     })
 }
 
-fn run_lockstep(cfg: &DriverConfig, recorder: &mut Recorder, control: &Control, events: &Sender<Event>, finish: &Receiver<()>) -> Result<u64> {
+fn run_lockstep(
+    cfg: &DriverConfig,
+    recorder: &mut Recorder,
+    control: &Control,
+    events: &Sender<Event>,
+    finish: &Receiver<()>,
+) -> Result<u64> {
     let mut scheduler = Scheduler::new(&cfg.iceoryx, cfg.tick)?;
-    let mut watchdog = || {
+    let watchdog = || {
         if control.stop.load(Ordering::Relaxed) {
             return Err("the group is stopping".to_string());
         }
@@ -64,13 +80,15 @@ fn run_lockstep(cfg: &DriverConfig, recorder: &mut Recorder, control: &Control, 
     let end_ns = cfg.duration.map(|d| d.as_nanos() as u64);
     let mut now_ns = 0;
     let result = (|| -> Result<()> {
-        scheduler.wait_for_nodes(&cfg.expected, &mut watchdog)?;
+        scheduler.wait_for_nodes(&cfg.expected, watchdog)?;
         recorder.discover()?;
         while let Some(next) = scheduler.next_time_ns() {
             if end_ns.is_some_and(|end| next > end) {
                 break;
             }
-            let Some(advance) = scheduler.advance(&mut watchdog)? else { break };
+            let Some(advance) = scheduler.advance(watchdog)? else {
+                break;
+            };
             now_ns = advance.now_ns;
             if recorder.has_unseen(&advance.published) {
                 recorder.discover()?;
@@ -80,16 +98,32 @@ fn run_lockstep(cfg: &DriverConfig, recorder: &mut Recorder, control: &Control, 
         Ok(())
     })();
     // Being stopped from outside (Ctrl-C, a failed process) is not the scheduler's failure.
-    let result = result.or_else(|e| if control.stop.load(Ordering::Relaxed) { Ok(()) } else { Err(e) });
-    let _ = events.send(Event::DriverDone(result.as_ref().map(|_| ()).map_err(|e| format!("{e:#}"))));
+    let result = result.or_else(|e| {
+        if control.stop.load(Ordering::Relaxed) {
+            Ok(())
+        } else {
+            Err(e)
+        }
+    });
+    let _ = events.send(Event::DriverDone(
+        result.as_ref().map(|_| ()).map_err(|e| format!("{e:#}")),
+    ));
     scheduler.stop_all()?;
     let _ = finish.recv();
     Ok(now_ns)
 }
 
-fn run_realtime(cfg: &DriverConfig, recorder: &mut Recorder, _control: &Control, _events: &Sender<Event>, finish: &Receiver<()>) -> Result<u64> {
+fn run_realtime(
+    cfg: &DriverConfig,
+    recorder: &mut Recorder,
+    _control: &Control,
+    _events: &Sender<Event>,
+    finish: &Receiver<()>,
+) -> Result<u64> {
     let started = Instant::now();
-    record_until(&cfg.iceoryx, recorder, SignalHandlingMode::Disabled, || finish.try_recv().is_ok())?;
+    record_until(&cfg.iceoryx, recorder, SignalHandlingMode::Disabled, || {
+        finish.try_recv().is_ok()
+    })?;
     Ok(started.elapsed().as_nanos() as u64)
 }
 
@@ -112,12 +146,20 @@ pub fn record_until(
     loop {
         // Topics appear as processes start: look often at first, then every second.
         recorder.discover()?;
-        for topic in recorder.taps().map(|t| t.topic().to_string()).collect::<Vec<_>>() {
+        for topic in recorder
+            .taps()
+            .map(|t| t.topic().to_string())
+            .collect::<Vec<_>>()
+        {
             if listening.insert(topic.clone()) {
                 listeners.push(caravan::tap::open_listener(&iox, &topic)?);
             }
         }
-        let interval = if started.elapsed() < Duration::from_secs(3) { 100 } else { 1000 };
+        let interval = if started.elapsed() < Duration::from_secs(3) {
+            100
+        } else {
+            1000
+        };
         let next_discovery = Instant::now() + Duration::from_millis(interval);
         let waitset = WaitSetBuilder::new()
             .signal_handling_mode(signals)
@@ -130,7 +172,9 @@ pub fn record_until(
             .map_err(|e| anyhow!("{e:?}"))?;
         while Instant::now() < next_discovery {
             // The timeout bounds how late the end is noticed; idle cost is 4 wake-ups/s.
-            let wait = next_discovery.saturating_duration_since(Instant::now()).min(Duration::from_millis(250));
+            let wait = next_discovery
+                .saturating_duration_since(Instant::now())
+                .min(Duration::from_millis(250));
             let result = if listeners.is_empty() {
                 // Nothing to listen to yet (a WaitSet refuses to wait on nothing).
                 std::thread::sleep(wait);
@@ -144,7 +188,10 @@ pub fn record_until(
                 let _ = l.try_wait(|_| {});
             }
             recorder.drain()?;
-            let interrupted = !matches!(result, iceoryx2::waitset::WaitSetRunResult::AllEventsHandled);
+            let interrupted = !matches!(
+                result,
+                iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
+            );
             if interrupted || done() {
                 return Ok(());
             }

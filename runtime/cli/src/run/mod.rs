@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 use supervisor::{Event, Planned, Supervisor};
 
 #[derive(Args)]
@@ -54,7 +54,9 @@ pub fn resolve_exec(name: &str) -> Option<PathBuf> {
         return Some(beside);
     }
     std::env::var_os("PATH").and_then(|paths| {
-        std::env::split_paths(&paths).map(|dir| dir.join(name)).find(|p| p.is_file())
+        std::env::split_paths(&paths)
+            .map(|dir| dir.join(name))
+            .find(|p| p.is_file())
     })
 }
 
@@ -76,10 +78,15 @@ pub fn load(args: &LaunchArgs) -> Result<LaunchFile, crate::launch::load::Launch
 fn run_dir(base: &Path, group: &str) -> Result<PathBuf> {
     let stamp = chrono::Utc::now().format("%Y%m%d-%H%M%S");
     for n in 0.. {
-        let name = if n == 0 { format!("{group}-{stamp}") } else { format!("{group}-{stamp}-{n}") };
+        let name = if n == 0 {
+            format!("{group}-{stamp}")
+        } else {
+            format!("{group}-{stamp}-{n}")
+        };
         let dir = base.join(name);
         if !dir.exists() {
-            std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
             return Ok(dir);
         }
     }
@@ -91,12 +98,19 @@ fn plan(lf: &LaunchFile) -> Vec<Planned> {
         .iter()
         .map(|spec| {
             let (program, mut args) = match &spec.exec {
-                Exec::Workspace(name) => (resolve_exec(name).unwrap_or_else(|| PathBuf::from(name)), Vec::new()),
+                Exec::Workspace(name) => (
+                    resolve_exec(name).unwrap_or_else(|| PathBuf::from(name)),
+                    Vec::new(),
+                ),
                 Exec::Command(words) => {
                     let first = &words[0];
                     let program = if first.contains('/') {
                         let p = PathBuf::from(first);
-                        if p.is_absolute() { p } else { lf.path.parent().unwrap_or(Path::new(".")).join(p) }
+                        if p.is_absolute() {
+                            p
+                        } else {
+                            lf.path.parent().unwrap_or(Path::new(".")).join(p)
+                        }
                     } else {
                         resolve_exec(first).unwrap_or_else(|| PathBuf::from(first))
                     };
@@ -104,7 +118,11 @@ fn plan(lf: &LaunchFile) -> Vec<Planned> {
                 }
             };
             args.extend(spec.args.iter().cloned());
-            Planned { spec: spec.clone(), program, args }
+            Planned {
+                spec: spec.clone(),
+                program,
+                args,
+            }
         })
         .collect()
 }
@@ -132,14 +150,21 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     let config_path = dir.join("iceoryx2.toml");
     caravan::group::write_config(&group, &config_path)?;
     std::fs::create_dir_all(dir.join("logs"))?;
-    console.say(&format!("group '{group}' ({} clock), run directory {}", lf.group.clock, dir.display()));
+    console.say(&format!(
+        "group '{group}' ({} clock), run directory {}",
+        lf.group.clock,
+        dir.display()
+    ));
 
     let result = run_group(&lf, &dir, &config_path, &console);
     // Whatever happened, leave no shared memory of the group behind.
     let _ = caravan::group::remove_resources(&group);
     let facts = result?;
     let failed = facts.outcome == "failed";
-    std::fs::write(dir.join(report::FACTS_FILE), serde_json::to_string_pretty(&facts)? + "\n")?;
+    std::fs::write(
+        dir.join(report::FACTS_FILE),
+        serde_json::to_string_pretty(&facts)? + "\n",
+    )?;
     let r = report::write(&dir)?;
     console.say(&format!(
         "{}: simulated {:.1} s in {:.1} s (real-time factor {:.2}); report in {}",
@@ -152,13 +177,21 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     Ok(if failed { 1 } else { 0 })
 }
 
-fn run_group(lf: &LaunchFile, dir: &Path, config_path: &Path, console: &Console) -> Result<RunFacts> {
+fn run_group(
+    lf: &LaunchFile,
+    dir: &Path,
+    config_path: &Path,
+    console: &Console,
+) -> Result<RunFacts> {
     let lockstep = lf.group.clock == ClockMode::Lockstep;
     let (events_tx, events) = unbounded();
     let (finish_tx, finish_rx) = unbounded();
     let control = Arc::new(Control::default());
     let signals_tx = events_tx.clone();
-    let mut signals = signal_hook::iterator::Signals::new([signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM])?;
+    let mut signals = signal_hook::iterator::Signals::new([
+        signal_hook::consts::SIGINT,
+        signal_hook::consts::SIGTERM,
+    ])?;
     let signals_handle = signals.handle();
     std::thread::spawn(move || {
         for sig in signals.forever() {
@@ -168,11 +201,29 @@ fn run_group(lf: &LaunchFile, dir: &Path, config_path: &Path, console: &Console)
 
     let mut env = BTreeMap::new();
     env.insert(caravan::env_vars::GROUP.to_string(), lf.group.name.clone());
-    env.insert(caravan::env_vars::ICEORYX_CONFIG.to_string(), std::path::absolute(config_path)?.display().to_string());
-    env.insert(caravan::env_vars::CLOCK.to_string(), lf.group.clock.to_string());
-    env.insert(caravan::env_vars::SEED.to_string(), lf.group.seed.to_string());
-    env.insert(caravan::env_vars::EPOCH_NS.to_string(), caravan::wall_clock_ns().to_string());
-    let mut sup = Supervisor::new(plan(lf), env, &dir.join("logs"), events_tx.clone(), console.clone())?;
+    env.insert(
+        caravan::env_vars::ICEORYX_CONFIG.to_string(),
+        std::path::absolute(config_path)?.display().to_string(),
+    );
+    env.insert(
+        caravan::env_vars::CLOCK.to_string(),
+        lf.group.clock.to_string(),
+    );
+    env.insert(
+        caravan::env_vars::SEED.to_string(),
+        lf.group.seed.to_string(),
+    );
+    env.insert(
+        caravan::env_vars::EPOCH_NS.to_string(),
+        caravan::wall_clock_ns().to_string(),
+    );
+    let mut sup = Supervisor::new(
+        plan(lf),
+        env,
+        &dir.join("logs"),
+        events_tx.clone(),
+        console.clone(),
+    )?;
 
     let driver = driver::spawn(
         DriverConfig {
@@ -191,12 +242,16 @@ fn run_group(lf: &LaunchFile, dir: &Path, config_path: &Path, console: &Console)
     let started = Instant::now();
     sup.start_all()?;
 
-    let wall_deadline = if lockstep { None } else { lf.group.duration.map(|d| started + d) };
+    let wall_deadline = if lockstep {
+        None
+    } else {
+        lf.group.duration.map(|d| started + d)
+    };
     let mut next_restart: Option<Instant> = None;
     let mut kill_at: Option<Instant> = None;
     let (mut outcome, mut failure) = ("completed", None::<String>);
     let mut stopping = false;
-    let mut begin_stop = |sup: &mut Supervisor, stopping: &mut bool, kill_at: &mut Option<Instant>| {
+    let begin_stop = |sup: &mut Supervisor, stopping: &mut bool, kill_at: &mut Option<Instant>| {
         if !*stopping {
             *stopping = true;
             control.stop.store(true, Ordering::Relaxed);
@@ -208,13 +263,20 @@ fn run_group(lf: &LaunchFile, dir: &Path, config_path: &Path, console: &Console)
         if stopping && !sup.any_alive() {
             break;
         }
-        let deadline = [next_restart, wall_deadline.filter(|_| !stopping), kill_at].into_iter().flatten().min();
+        let deadline = [next_restart, wall_deadline.filter(|_| !stopping), kill_at]
+            .into_iter()
+            .flatten()
+            .min();
         let event = match deadline {
             Some(d) => events.recv_timeout(d.saturating_duration_since(Instant::now())),
             None => events.recv().map_err(|_| RecvTimeoutError::Disconnected),
         };
         match event {
-            Ok(Event::Exited { index, generation, status }) => {
+            Ok(Event::Exited {
+                index,
+                generation,
+                status,
+            }) => {
                 let name = sup.names()[index].clone();
                 control.deaths.lock().unwrap().push(name);
                 match sup.on_exit(index, generation, status, stopping) {
@@ -267,19 +329,37 @@ fn run_group(lf: &LaunchFile, dir: &Path, config_path: &Path, console: &Console)
     let wall_time_s = started.elapsed().as_secs_f64();
     signals_handle.close();
     let _ = finish_tx.send(());
-    let outcome_of_driver = driver.join().map_err(|_| anyhow::anyhow!("the driver thread panicked"))?;
+    let outcome_of_driver = driver
+        .join()
+        .map_err(|_| anyhow::anyhow!("the driver thread panicked"))?;
     let driven = outcome_of_driver?;
     let recording = driven.recording;
-    let sim_time_s = if lockstep { driven.sim_time_ns as f64 / 1e9 } else { wall_time_s };
+    let sim_time_s = if lockstep {
+        driven.sim_time_ns as f64 / 1e9
+    } else {
+        wall_time_s
+    };
     let topic_latency = recording
         .topics
         .iter()
         .map(|(name, s)| {
             let q = |q: f64| s.latency.value_at_quantile(q) as f64 / 1e3;
-            (name.clone(), Latency { p50: q(0.5), p90: q(0.9), p99: q(0.99), max: s.latency.max() as f64 / 1e3 })
+            (
+                name.clone(),
+                Latency {
+                    p50: q(0.5),
+                    p90: q(0.9),
+                    p99: q(0.99),
+                    max: s.latency.max() as f64 / 1e3,
+                },
+            )
         })
         .collect();
-    let topic_types = recording.topics.iter().map(|(n, s)| (n.clone(), s.type_name.clone())).collect();
+    let topic_types = recording
+        .topics
+        .iter()
+        .map(|(n, s)| (n.clone(), s.type_name.clone()))
+        .collect();
     Ok(RunFacts {
         group: lf.group.name.clone(),
         clock: lf.group.clock.to_string(),

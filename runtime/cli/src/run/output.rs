@@ -5,7 +5,9 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::sync::{Arc, Mutex};
 
-const COLOURS: [&str; 6] = ["\x1b[36m", "\x1b[32m", "\x1b[35m", "\x1b[33m", "\x1b[34m", "\x1b[31m"];
+const COLOURS: [&str; 6] = [
+    "\x1b[36m", "\x1b[32m", "\x1b[35m", "\x1b[33m", "\x1b[34m", "\x1b[31m",
+];
 const RESET: &str = "\x1b[0m";
 
 /// Where prefixed lines go: the terminal (shared, so lines never interleave mid-line).
@@ -20,7 +22,11 @@ impl Console {
     pub fn new(quiet: bool) -> Self {
         // SAFETY: isatty only inspects the descriptor.
         let colour = unsafe { libc::isatty(libc::STDERR_FILENO) } == 1;
-        Self { colour, quiet, lock: Arc::new(Mutex::new(())) }
+        Self {
+            colour,
+            quiet,
+            lock: Arc::new(Mutex::new(())),
+        }
     }
 
     pub fn prefix(&self, index: usize, name: &str) -> String {

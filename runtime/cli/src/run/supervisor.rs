@@ -15,7 +15,11 @@ use std::time::{Duration, Instant};
 
 /// Something the launcher's main loop reacts to.
 pub enum Event {
-    Exited { index: usize, generation: u32, status: ExitStatus },
+    Exited {
+        index: usize,
+        generation: u32,
+        status: ExitStatus,
+    },
     Signal(i32),
     /// The lockstep schedule or the realtime recorder finished (or failed).
     DriverDone(Result<(), String>),
@@ -67,17 +71,39 @@ fn describe(status: &ExitStatus) -> String {
 
 impl Supervisor {
     /// `env` is what every process gets (group, config path, clock…); each adds its own.
-    pub fn new(plans: Vec<Planned>, env: BTreeMap<String, String>, logs: &Path, events: Sender<Event>, console: Console) -> std::io::Result<Self> {
+    pub fn new(
+        plans: Vec<Planned>,
+        env: BTreeMap<String, String>,
+        logs: &Path,
+        events: Sender<Event>,
+        console: Console,
+    ) -> std::io::Result<Self> {
         let mut procs = Vec::new();
         for plan in plans {
             let log = File::create(logs.join(format!("{}.log", plan.spec.name)))?;
-            procs.push(Proc { plan, pid: None, generation: 0, restarts: 0, last_status: None, restart_at: None, log: Arc::new(Mutex::new(log)) });
+            procs.push(Proc {
+                plan,
+                pid: None,
+                generation: 0,
+                restarts: 0,
+                last_status: None,
+                restart_at: None,
+                log: Arc::new(Mutex::new(log)),
+            });
         }
-        Ok(Self { procs, env, events, console })
+        Ok(Self {
+            procs,
+            env,
+            events,
+            console,
+        })
     }
 
     pub fn names(&self) -> Vec<String> {
-        self.procs.iter().map(|p| p.plan.spec.name.clone()).collect()
+        self.procs
+            .iter()
+            .map(|p| p.plan.spec.name.clone())
+            .collect()
     }
 
     pub fn start_all(&mut self) -> std::io::Result<()> {
@@ -88,7 +114,9 @@ impl Supervisor {
     }
 
     fn spawn(&mut self, index: usize) -> std::io::Result<()> {
-        let prefix = self.console.prefix(index, &self.procs[index].plan.spec.name);
+        let prefix = self
+            .console
+            .prefix(index, &self.procs[index].plan.spec.name);
         let p = &mut self.procs[index];
         let spec = &p.plan.spec;
         let mut cmd = Command::new(&p.plan.program);
@@ -122,8 +150,13 @@ impl Supervisor {
             cmd.env(caravan::env_vars::ON, on);
         }
         let mut child = cmd.spawn()?;
-        self.console.pump(child.stdout.take().expect("piped"), prefix.clone(), p.log.clone());
-        self.console.pump(child.stderr.take().expect("piped"), prefix, p.log.clone());
+        self.console.pump(
+            child.stdout.take().expect("piped"),
+            prefix.clone(),
+            p.log.clone(),
+        );
+        self.console
+            .pump(child.stderr.take().expect("piped"), prefix, p.log.clone());
         p.pid = Some(child.id() as i32);
         p.generation += 1;
         let (events, generation) = (self.events.clone(), p.generation);
@@ -131,7 +164,11 @@ impl Supervisor {
         // iceoryx2's process locks alive.
         std::thread::spawn(move || {
             if let Ok(status) = child.wait() {
-                let _ = events.send(Event::Exited { index, generation, status });
+                let _ = events.send(Event::Exited {
+                    index,
+                    generation,
+                    status,
+                });
             }
         });
         Ok(())
@@ -139,7 +176,13 @@ impl Supervisor {
 
     /// Records an exit. Returns the restart time if the policy restarts it, or `Err(name)` if
     /// a required process failed for good.
-    pub fn on_exit(&mut self, index: usize, generation: u32, status: ExitStatus, stopping: bool) -> Result<Option<Instant>, String> {
+    pub fn on_exit(
+        &mut self,
+        index: usize,
+        generation: u32,
+        status: ExitStatus,
+        stopping: bool,
+    ) -> Result<Option<Instant>, String> {
         let p = &mut self.procs[index];
         if generation != p.generation {
             return Ok(None);
@@ -150,7 +193,8 @@ impl Supervisor {
         if stopping {
             return Ok(None);
         }
-        self.console.say(&format!("process '{}' {}", spec.name, describe(&status)));
+        self.console
+            .say(&format!("process '{}' {}", spec.name, describe(&status)));
         let wants = match spec.restart {
             Restart::Never => false,
             Restart::OnFailure => !status.success(),
@@ -158,15 +202,25 @@ impl Supervisor {
         };
         if wants && p.restarts < spec.max_restarts {
             // Exponential back-off, capped, so a crash loop does not eat the machine.
-            let delay = spec.restart_backoff.saturating_mul(1 << p.restarts.min(6)).min(Duration::from_secs(30));
+            let delay = spec
+                .restart_backoff
+                .saturating_mul(1 << p.restarts.min(6))
+                .min(Duration::from_secs(30));
             p.restarts += 1;
-            self.console.say(&format!("restarting '{}' in {:?} ({}/{})", spec.name, delay, p.restarts, spec.max_restarts));
+            self.console.say(&format!(
+                "restarting '{}' in {:?} ({}/{})",
+                spec.name, delay, p.restarts, spec.max_restarts
+            ));
             let at = Instant::now() + delay;
             p.restart_at = Some(at);
             return Ok(Some(at));
         }
         if spec.required && !status.success() {
-            return Err(format!("required process '{}' {}", spec.name, describe(&status)));
+            return Err(format!(
+                "required process '{}' {}",
+                spec.name,
+                describe(&status)
+            ));
         }
         Ok(None)
     }
@@ -188,7 +242,9 @@ impl Supervisor {
 
     /// True when every process ended and none waits for a restart.
     pub fn all_done(&self) -> bool {
-        self.procs.iter().all(|p| p.pid.is_none() && p.restart_at.is_none())
+        self.procs
+            .iter()
+            .all(|p| p.pid.is_none() && p.restart_at.is_none())
     }
 
     pub fn signal_all(&mut self, signal: i32) {
