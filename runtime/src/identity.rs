@@ -22,6 +22,8 @@ pub mod env_vars {
     pub const EPOCH_NS: &str = "CARAVAN_EPOCH_NS";
     /// The group's random seed; nodes derive their own streams from it.
     pub const SEED: &str = "CARAVAN_SEED";
+    /// Directory of the launch file; relative paths in params are relative to it.
+    pub const LAUNCH_DIR: &str = "CARAVAN_LAUNCH_DIR";
 }
 
 /// Identity and settings of one node.
@@ -40,6 +42,8 @@ pub struct NodeIdentity {
     /// Wall-clock ns at which the group's time started (realtime).
     pub epoch_ns: Option<u64>,
     pub seed: u64,
+    /// Directory relative paths in params are resolved against.
+    pub launch_dir: PathBuf,
 }
 
 impl NodeIdentity {
@@ -55,6 +59,7 @@ impl NodeIdentity {
             on_override: None,
             epoch_ns: None,
             seed: 0,
+            launch_dir: PathBuf::from("."),
         }
     }
 
@@ -85,6 +90,9 @@ impl NodeIdentity {
                 message,
             })?;
         }
+        if let Some(dir) = optional(env_vars::LAUNCH_DIR) {
+            id.launch_dir = PathBuf::from(dir);
+        }
         id.rate_override = optional(env_vars::RATE);
         id.on_override = optional(env_vars::ON);
         if let Some(seed) = optional(env_vars::SEED) {
@@ -100,6 +108,11 @@ impl NodeIdentity {
             })?);
         }
         Ok(id)
+    }
+
+    /// `path` from a params table, resolved against the launch file's directory.
+    pub fn resolve_path(&self, path: &str) -> PathBuf {
+        self.launch_dir.join(path)
     }
 
     /// A seed for this node's random streams: the group seed mixed with the node name, so

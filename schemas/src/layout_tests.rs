@@ -18,6 +18,7 @@ const _: () = {
     assert!(size_of::<OccupancyGrid>() == 8 + 24 + 8 + MAP_MAX_CELLS);
     assert!(size_of::<Path2D>() == 8 + 24 * PATH_MAX_POSES);
     assert!(size_of::<Goal>() == 40);
+    assert!(size_of::<Collision>() == 16);
     assert!(offset_of!(LaserScan, ranges) == 32);
     assert!(offset_of!(OccupancyGrid, data) == 40);
 };

@@ -22,7 +22,7 @@ pub use fixed::{FixedString, FixedVec};
 pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3};
 pub use header::Header;
 pub use map::{Goal, MAP_MAX_CELLS, MAP_MAX_SIDE, OccupancyGrid, PATH_MAX_POSES, Path2D};
-pub use robot::{EncoderTicks, Odometry, WheelSetpoint, WheelState};
+pub use robot::{Collision, EncoderTicks, Odometry, WheelSetpoint, WheelState};
 pub use sensors::{Imu, LaserScan, SCAN_MAX_BEAMS};
 pub use status::NodeStatus;
 

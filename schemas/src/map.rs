@@ -50,9 +50,11 @@ pub struct Path2D {
 #[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Goal")]
 pub struct Goal {
-    /// 0-based index in the goal sequence (A = 0, B = 1, …).
+    /// 0-based index in the goal sequence (A = 0, B = 1, …); equal to `total` once the last
+    /// goal was reached.
     pub index: u32,
-    pub _reserved: u32,
+    /// Number of goals in the sequence.
+    pub total: u32,
     pub pose: Pose2D,
     pub tolerance_m: f64,
 }

@@ -59,3 +59,17 @@ impl Default for Odometry {
         crate::placement_new()
     }
 }
+
+/// A contact between a robot and another robot or an obstacle began or ended.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize)]
+#[type_name("caravan::Collision")]
+pub struct Collision {
+    /// Index of the robot.
+    pub robot: u32,
+    /// Index of the other robot, or −1 for a world obstacle (wall, box, cylinder).
+    pub other_robot: i32,
+    /// 1 when the contact began, 0 when it ended.
+    pub started: u32,
+    pub _reserved: u32,
+}

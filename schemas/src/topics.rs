@@ -7,6 +7,8 @@ pub const STATUS: &str = "status";
 pub const MAP: &str = "map";
 /// The current operator goal ([`crate::Goal`]).
 pub const GOAL: &str = "goal";
+/// Contacts between robots and with obstacles ([`crate::Collision`]).
+pub const COLLISIONS: &str = "collisions";
 
 fn robot(i: usize, leaf: &str) -> String {
     format!("robot/{i}/{leaf}")

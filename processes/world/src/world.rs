@@ -1,0 +1,252 @@
+//! World files: a floor with walls, boxes and cylinders, in the map frame (z up).
+//!
+//! ```toml
+//! [world]
+//! name = "lab"
+//! size = [6.0, 4.0]        # floor from (0, 0) to (6, 4) m
+//! wall_height = 0.3
+//!
+//! [[wall]]                 # a wall segment
+//! from = [0.0, 0.0]
+//! to = [6.0, 0.0]
+//! thickness = 0.05         # optional, default 0.05
+//!
+//! [[box]]
+//! center = [2.0, 1.5]
+//! size = [0.4, 0.4]        # x, y extent
+//! yaw = 0.0                # optional, rad
+//! height = 0.3             # optional, default wall_height
+//!
+//! [[cylinder]]
+//! center = [4.0, 2.5]
+//! radius = 0.15
+//! ```
+
+use serde::Deserialize;
+use std::path::Path;
+
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {message}")]
+pub struct WorldError {
+    pub file: String,
+    pub message: String,
+}
+
+/// A solid's cross-section in the plane; it is extruded from the floor up to its height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    Box { half_x: f64, half_y: f64 },
+    Cylinder { radius: f64 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ObstacleKind {
+    Wall,
+    Box,
+    Cylinder,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Obstacle {
+    pub kind: ObstacleKind,
+    pub center: [f64; 2],
+    pub yaw: f64,
+    pub height: f64,
+    pub shape: Shape,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct World {
+    pub name: String,
+    /// Floor extent from the origin, m.
+    pub size: [f64; 2],
+    pub obstacles: Vec<Obstacle>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    world: Header,
+    #[serde(default)]
+    wall: Vec<Wall>,
+    #[serde(default, rename = "box")]
+    boxes: Vec<BoxSpec>,
+    #[serde(default)]
+    cylinder: Vec<Cylinder>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Header {
+    name: String,
+    size: [f64; 2],
+    #[serde(default = "default_height")]
+    wall_height: f64,
+}
+
+fn default_height() -> f64 {
+    0.3
+}
+
+fn default_thickness() -> f64 {
+    0.05
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Wall {
+    from: [f64; 2],
+    to: [f64; 2],
+    #[serde(default = "default_thickness")]
+    thickness: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoxSpec {
+    center: [f64; 2],
+    size: [f64; 2],
+    #[serde(default)]
+    yaw: f64,
+    height: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Cylinder {
+    center: [f64; 2],
+    radius: f64,
+    height: Option<f64>,
+}
+
+/// Reads and checks a world file.
+pub fn load_world(path: &Path) -> Result<World, WorldError> {
+    let file = path.display().to_string();
+    let err = |message: String| WorldError { file: file.clone(), message };
+    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    parse_world(&text).map_err(err)
+}
+
+/// Parses a world file's text; errors name the line and key.
+pub fn parse_world(text: &str) -> Result<World, String> {
+    let f: File = toml::from_str(text).map_err(|e| e.to_string().trim_end().replace('\n', " "))?;
+    let positive = |what: String, v: f64| if v.is_finite() && v > 0.0 { Ok(()) } else { Err(format!("{what} must be positive, got {v}")) };
+    positive("world.size[0]".into(), f.world.size[0])?;
+    positive("world.size[1]".into(), f.world.size[1])?;
+    positive("world.wall_height".into(), f.world.wall_height)?;
+    let h = f.world.wall_height;
+    let mut obstacles = Vec::new();
+    for (i, w) in f.wall.iter().enumerate() {
+        let (dx, dy) = (w.to[0] - w.from[0], w.to[1] - w.from[1]);
+        let len = dx.hypot(dy);
+        positive(format!("wall[{i}] length"), len)?;
+        positive(format!("wall[{i}].thickness"), w.thickness)?;
+        obstacles.push(Obstacle {
+            kind: ObstacleKind::Wall,
+            center: [(w.from[0] + w.to[0]) / 2.0, (w.from[1] + w.to[1]) / 2.0],
+            yaw: dy.atan2(dx),
+            height: h,
+            // Walls overlap by half a thickness at corners so rays cannot slip through.
+            shape: Shape::Box { half_x: len / 2.0 + w.thickness / 2.0, half_y: w.thickness / 2.0 },
+        });
+    }
+    for (i, b) in f.boxes.iter().enumerate() {
+        positive(format!("box[{i}].size[0]"), b.size[0])?;
+        positive(format!("box[{i}].size[1]"), b.size[1])?;
+        obstacles.push(Obstacle {
+            kind: ObstacleKind::Box,
+            center: b.center,
+            yaw: b.yaw,
+            height: b.height.unwrap_or(h),
+            shape: Shape::Box { half_x: b.size[0] / 2.0, half_y: b.size[1] / 2.0 },
+        });
+    }
+    for (i, c) in f.cylinder.iter().enumerate() {
+        positive(format!("cylinder[{i}].radius"), c.radius)?;
+        obstacles.push(Obstacle {
+            kind: ObstacleKind::Cylinder,
+            center: c.center,
+            yaw: 0.0,
+            height: c.height.unwrap_or(h),
+            shape: Shape::Cylinder { radius: c.radius },
+        });
+    }
+    Ok(World { name: f.world.name, size: f.world.size, obstacles })
+}
+
+impl World {
+    /// Distance from point `p` to the nearest obstacle surface (negative inside one), m.
+    pub fn clearance(&self, p: [f64; 2]) -> f64 {
+        self.obstacles.iter().map(|o| o.distance(p)).fold(f64::INFINITY, f64::min)
+    }
+}
+
+impl Obstacle {
+    /// Signed distance from `p` to this obstacle's outline in the plane.
+    pub fn distance(&self, p: [f64; 2]) -> f64 {
+        let (dx, dy) = (p[0] - self.center[0], p[1] - self.center[1]);
+        match self.shape {
+            Shape::Cylinder { radius } => dx.hypot(dy) - radius,
+            Shape::Box { half_x, half_y } => {
+                let (s, c) = self.yaw.sin_cos();
+                let (lx, ly) = ((c * dx + s * dy).abs() - half_x, (-s * dx + c * dy).abs() - half_y);
+                let outside = lx.max(0.0).hypot(ly.max(0.0));
+                outside + lx.max(ly).min(0.0)
+            }
+        }
+    }
+
+    /// Corners of a box obstacle's outline (counter-clockwise), for plots; empty for cylinders.
+    pub fn corners(&self) -> Vec<[f64; 2]> {
+        let Shape::Box { half_x, half_y } = self.shape else { return Vec::new() };
+        let (s, c) = self.yaw.sin_cos();
+        [(-half_x, -half_y), (half_x, -half_y), (half_x, half_y), (-half_x, half_y)]
+            .iter()
+            .map(|(x, y)| [self.center[0] + c * x - s * y, self.center[1] + s * x + c * y])
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LAB: &str = r#"
+[world]
+name = "t"
+size = [4.0, 3.0]
+
+[[wall]]
+from = [0.0, 0.0]
+to = [4.0, 0.0]
+
+[[box]]
+center = [2.0, 1.5]
+size = [0.4, 0.2]
+
+[[cylinder]]
+center = [3.0, 2.0]
+radius = 0.1
+"#;
+
+    #[test]
+    fn parses_and_measures_clearance() {
+        let w = parse_world(LAB).unwrap();
+        assert_eq!(w.obstacles.len(), 3);
+        assert!((w.clearance([2.0, 1.0]) - 0.4).abs() < 1e-9); // box edge at y = 1.4
+        assert!((w.obstacles[0].distance([1.0, 0.5]) - 0.475).abs() < 1e-9);
+        assert!(w.obstacles[1].distance([2.0, 1.5]) < 0.0);
+    }
+
+    #[test]
+    fn unknown_key_names_line_and_key() {
+        let e = parse_world("[world]\nname = \"x\"\nsize = [1.0, 1.0]\n\n[[box]]\ncentre = [0.0, 0.0]\nsize = [1.0, 1.0]\n").unwrap_err();
+        assert!(e.contains("line 6") && e.contains("centre"), "{e}");
+    }
+
+    #[test]
+    fn negative_sizes_are_rejected() {
+        let e = parse_world("[world]\nname = \"x\"\nsize = [1.0, -1.0]\n").unwrap_err();
+        assert!(e.contains("world.size[1]"), "{e}");
+    }
+}
