@@ -73,5 +73,30 @@ pub fn render(r: &Value) -> String {
             num(&l["max"], 1)
         );
     }
+    if let Some(c) = r.get("convoy") {
+        convoy(&mut md, c);
+    }
     md
+}
+
+fn convoy(md: &mut String, c: &Value) {
+    let _ = writeln!(
+        md,
+        "\n## Convoy\n\nGoals reached {} of {} at {} s; minimum gap {} m; collisions {}; order kept: {}.\n\n![trajectories]({})\n",
+        c["goals_reached"],
+        c["goals_total"],
+        c["goal_times_s"].as_array().map(|t| t.iter().map(|x| num(x, 1)).collect::<Vec<_>>().join(", ")).unwrap_or_default(),
+        num(&c["min_gap_m"], 3),
+        c["collisions"],
+        c["order_kept"],
+        c["plot"].as_str().unwrap_or("")
+    );
+    md.push_str("| follower | cross-track to predecessor mean / p95 / max m | to leader mean / p95 / max m |\n|---|---|---|\n");
+    for f in c["followers"].as_array().into_iter().flatten() {
+        let e = |k: &str| {
+            let v = &f[k];
+            format!("{} / {} / {}", num(&v["mean"], 3), num(&v["p95"], 3), num(&v["max"], 3))
+        };
+        let _ = writeln!(md, "| R{} | {} | {} |", f["robot"], e("cross_track_to_predecessor_m"), e("cross_track_to_leader_m"));
+    }
 }

@@ -12,9 +12,18 @@
 //! - `topics[]`: `{name, type, messages, gaps, latency_us: {p50, p90, p99, max}}`; latency is
 //!   wall-clock time from send to the recorder's receipt.
 //!
-//! Scenario sections (`convoy`, `slam`, `links`) are added by later scenarios.
+//! - `convoy` (when the recording holds `robot/<i>/pose_true` of two or more robots and
+//!   `goal`): `{robots, goals_total, goals_reached, goal_times_s[], min_gap_m, collisions,
+//!   order_kept, followers[]: {robot, cross_track_to_predecessor_m, cross_track_to_leader_m}
+//!   (each {mean, p95, max}), plot}`; definitions in `report/convoy.rs`. The plot is
+//!   `trajectories.svg` in the run directory.
+//!
+//! Further scenario sections (`slam`, `links`) are added by later scenarios.
 
+mod convoy;
+mod geometry;
 mod markdown;
+mod svg;
 
 use crate::record::reader::read_all;
 use crate::run::supervisor::ProcessRecord;
@@ -78,7 +87,9 @@ pub fn compute(run_dir: &Path) -> Result<Value> {
     } else {
         0.0
     };
-    Ok(json!({
+    let launch_dir = Path::new(&facts.launch_file).parent().unwrap_or(Path::new(".")).to_path_buf();
+    let scene = convoy::Scene::from_run(run_dir, &launch_dir);
+    let mut report = json!({
         "version": 1,
         "group": {"name": facts.group, "clock": facts.clock, "seed": facts.seed, "launch_file": facts.launch_file},
         "run": {
@@ -90,7 +101,11 @@ pub fn compute(run_dir: &Path) -> Result<Value> {
         },
         "nodes": nodes(&facts),
         "topics": topics(&facts, &messages),
-    }))
+    });
+    if let Some(section) = convoy::section(&messages, &scene, run_dir) {
+        report["convoy"] = section;
+    }
+    Ok(report)
 }
 
 fn ms(ns: &Value) -> Value {

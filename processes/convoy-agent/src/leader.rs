@@ -1,0 +1,92 @@
+//! The leader's goal-to-goal driver (ground-truth pose for now; the autonomy issue replaces
+//! pose and path without changing this interface). It turns toward the current goal and
+//! drives within the reference limits v ∈ [0.1, 0.2] m/s, ω ∈ [−1.5, 2.0] rad/s, advancing
+//! to the next goal within the tolerance and stopping at the last.
+
+use crate::angle::wrap;
+use caravan_schemas::Pose2D;
+use serde::Deserialize;
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct LeaderParams {
+    /// Goals A, B, C, D… as [x, y] in the map frame.
+    pub goals: Vec<[f64; 2]>,
+    pub tolerance_m: f64,
+    pub v_min: f64,
+    pub v_max: f64,
+    pub omega_min: f64,
+    pub omega_max: f64,
+    /// Heading gain, s⁻¹.
+    pub k_heading: f64,
+}
+
+impl Default for LeaderParams {
+    fn default() -> Self {
+        Self { goals: Vec::new(), tolerance_m: 0.15, v_min: 0.1, v_max: 0.2, omega_min: -1.5, omega_max: 2.0, k_heading: 2.0 }
+    }
+}
+
+/// Progress through the goal sequence.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Progress {
+    /// Index of the goal being driven to; `goals.len()` once all were reached.
+    pub current: usize,
+}
+
+impl Progress {
+    pub fn finished(&self, p: &LeaderParams) -> bool {
+        self.current >= p.goals.len()
+    }
+}
+
+/// Updates `progress` for the pose and returns the command (v, ω).
+pub fn command(pose: Pose2D, progress: &mut Progress, p: &LeaderParams) -> (f64, f64) {
+    while let Some(goal) = p.goals.get(progress.current) {
+        if (goal[0] - pose.x).hypot(goal[1] - pose.y) > p.tolerance_m {
+            break;
+        }
+        progress.current += 1;
+    }
+    let Some(goal) = p.goals.get(progress.current) else { return (0.0, 0.0) };
+    let heading_error = wrap((goal[1] - pose.y).atan2(goal[0] - pose.x) - pose.theta);
+    let omega = (p.k_heading * heading_error).clamp(p.omega_min, p.omega_max);
+    // Slow down while facing away from the goal, but never under the planner's minimum speed.
+    let v = (p.v_max * heading_error.cos().max(0.0)).clamp(p.v_min, p.v_max);
+    (v, omega)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> LeaderParams {
+        LeaderParams { goals: vec![[2.0, 0.0], [2.0, 2.0]], ..Default::default() }
+    }
+
+    #[test]
+    fn drives_straight_at_full_speed_toward_the_goal() {
+        let mut pr = Progress::default();
+        let (v, w) = command(Pose2D { x: 0.0, y: 0.0, theta: 0.0 }, &mut pr, &params());
+        assert_eq!((v, w), (0.2, 0.0));
+    }
+
+    #[test]
+    fn turns_within_limits_at_minimum_speed() {
+        let mut pr = Progress::default();
+        let (v, w) = command(Pose2D { x: 0.0, y: 0.0, theta: std::f64::consts::PI }, &mut pr, &params());
+        assert_eq!(v, 0.1);
+        assert!(w == -1.5 || w == 2.0, "{w}");
+    }
+
+    #[test]
+    fn advances_through_goals_and_stops_after_the_last() {
+        let p = params();
+        let mut pr = Progress::default();
+        command(Pose2D { x: 1.9, y: 0.05, theta: 0.0 }, &mut pr, &p);
+        assert_eq!(pr.current, 1);
+        let (v, w) = command(Pose2D { x: 2.0, y: 1.95, theta: 1.57 }, &mut pr, &p);
+        assert!(pr.finished(&p));
+        assert_eq!((v, w), (0.0, 0.0));
+    }
+}

@@ -1,0 +1,60 @@
+//! The agent's params, from the launch file.
+
+use crate::follower::FollowerParams;
+use crate::leader::LeaderParams;
+use serde::Deserialize;
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    Leader,
+    #[default]
+    Follower,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Params {
+    /// This robot's index: 0 is the leader, i follows i − 1.
+    pub robot: usize,
+    pub mode: Mode,
+    /// Where the robot learns its own pose (Pose2D); default `robot/<i>/pose_true`.
+    pub pose_topic: Option<String>,
+    /// Where a follower learns its predecessor's pose; default `robot/<i−1>/pose_true`.
+    pub predecessor_topic: Option<String>,
+    pub wheel_radius_m: f64,
+    pub wheel_separation_m: f64,
+    pub follower: FollowerParams,
+    pub leader: LeaderParams,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            robot: 0,
+            mode: Mode::default(),
+            pose_topic: None,
+            predecessor_topic: None,
+            wheel_radius_m: 0.067,
+            wheel_separation_m: 0.172,
+            follower: FollowerParams::default(),
+            leader: LeaderParams::default(),
+        }
+    }
+}
+
+impl Params {
+    /// Checks what serde cannot: a follower needs a predecessor, a leader needs goals.
+    pub fn validate(&self) -> Result<(), String> {
+        match self.mode {
+            Mode::Follower if self.robot == 0 && self.predecessor_topic.is_none() => {
+                Err("key 'robot': robot 0 has no predecessor; make it the leader (mode = \"leader\") or set 'predecessor_topic'".into())
+            }
+            Mode::Leader if self.leader.goals.is_empty() => Err("key 'leader.goals': a leader needs at least one goal".into()),
+            _ if self.wheel_radius_m <= 0.0 || self.wheel_separation_m <= 0.0 => {
+                Err("keys 'wheel_radius_m' and 'wheel_separation_m' must be positive".into())
+            }
+            _ => Ok(()),
+        }
+    }
+}

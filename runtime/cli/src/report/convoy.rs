@@ -1,0 +1,167 @@
+//! The convoy section of the report, computed from the recording: goals, gaps, collisions,
+//! order, and each follower's cross-track error to its predecessor's and the leader's paths.
+//!
+//! Definitions (Caravan's, documented in report.json's doc):
+//! - gap: distance between two robots' footprint rectangles (0.20 × 0.18 m, centred 0.02 m
+//!   behind base_link, from the URDF when found), at every recorded physics stamp;
+//! - order kept: along the leader's path (extended 5 m backwards along its start heading, so
+//!   the followers' start line counts), every robot stays behind its predecessor, within 5 cm;
+//! - cross-track error: distance from a follower's position to the other robot's whole path
+//!   (extended the same way), over all recorded samples.
+
+use super::geometry::{Polyline, footprint, rect_distance};
+use super::svg::Plot;
+use crate::record::reader::RecordedMessage;
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Footprint of the robot, from its URDF if the launch file names one.
+struct Footprint {
+    half: [f64; 2],
+    offset: f64,
+}
+
+/// Where the run's world and robot description are, from the resolved launch file.
+pub struct Scene {
+    pub world: Option<caravan_world::World>,
+    footprint: Footprint,
+}
+
+impl Scene {
+    /// Reads `launch.toml` of the run; paths are relative to `launch_dir`.
+    pub fn from_run(run_dir: &Path, launch_dir: &Path) -> Self {
+        let text = std::fs::read_to_string(run_dir.join("launch.toml")).unwrap_or_default();
+        let doc: toml::Table = toml::from_str(&text).unwrap_or_default();
+        let param = |key: &str| -> Option<std::path::PathBuf> {
+            doc.get("process")?.as_array()?.iter().find_map(|p| {
+                p.get("params")?.get(key)?.as_str().map(|s| launch_dir.join(s))
+            })
+        };
+        let world = param("world").and_then(|p| caravan_world::load_world(&p).ok());
+        let footprint = param("robot")
+            .and_then(|p| caravan_world::load_robot(&p).ok())
+            .map(|m| Footprint { half: [m.chassis_half_extents[0], m.chassis_half_extents[1]], offset: m.chassis_center[0] })
+            .unwrap_or(Footprint { half: [0.10, 0.09], offset: -0.02 });
+        Self { world, footprint }
+    }
+}
+
+type Trajectory = Vec<(u64, [f64; 3])>;
+
+fn robot_index(topic: &str) -> Option<usize> {
+    topic.strip_prefix("robot/")?.strip_suffix("/pose_true")?.parse().ok()
+}
+
+/// The convoy section, or `None` if the recording is not of a convoy.
+pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> Option<Value> {
+    let mut robots: BTreeMap<usize, Trajectory> = BTreeMap::new();
+    let mut goals: Vec<(u64, u64, u64, [f64; 2])> = Vec::new(); // (stamp, index, total, pose)
+    let mut collisions = 0;
+    for m in messages {
+        let stamp = m.json["header"]["stamp_ns"].as_u64().unwrap_or(0);
+        let f = |k: &str| m.json[k].as_f64().unwrap_or(0.0);
+        if let Some(i) = robot_index(&m.topic) {
+            robots.entry(i).or_default().push((stamp, [f("x"), f("y"), f("theta")]));
+        } else if m.topic == caravan_schemas::topics::GOAL {
+            let pose = &m.json["pose"];
+            let p = [pose["x"].as_f64().unwrap_or(0.0), pose["y"].as_f64().unwrap_or(0.0)];
+            goals.push((stamp, m.json["index"].as_u64()?, m.json["total"].as_u64()?, p));
+        } else if m.topic == caravan_schemas::topics::COLLISIONS && m.json["started"] == 1 {
+            collisions += 1;
+        }
+    }
+    if robots.len() < 2 || !robots.contains_key(&0) || goals.is_empty() {
+        return None;
+    }
+    let total = goals.iter().map(|g| g.2).max().unwrap_or(0);
+    let goal_times_s: Vec<f64> = (0..total)
+        .filter_map(|k| goals.iter().find(|g| g.1 > k).map(|g| g.0 as f64 * 1e-9))
+        .collect();
+    let trajectories: Vec<&Trajectory> = robots.values().collect();
+    let paths: Vec<Polyline> = trajectories.iter().map(|t| extended_path(t)).collect();
+    let (min_gap, order_kept) = gaps_and_order(&trajectories, &paths[0], &scene.footprint);
+    let followers: Vec<Value> = (1..trajectories.len())
+        .map(|i| {
+            let errors = |path: &Polyline| stats(trajectories[i].iter().map(|(_, p)| path.project([p[0], p[1]]).0).collect());
+            json!({
+                "robot": robots.keys().nth(i),
+                "cross_track_to_predecessor_m": errors(&paths[i - 1]),
+                "cross_track_to_leader_m": errors(&paths[0]),
+            })
+        })
+        .collect();
+    let plot = plot(scene, &robots, &goals);
+    let _ = std::fs::write(run_dir.join("trajectories.svg"), plot);
+    Some(json!({
+        "robots": robots.len(),
+        "goals_total": total,
+        "goals_reached": goal_times_s.len(),
+        "goal_times_s": goal_times_s,
+        "min_gap_m": min_gap,
+        "collisions": collisions,
+        "order_kept": order_kept,
+        "followers": followers,
+        "plot": "trajectories.svg",
+    }))
+}
+
+/// A robot's path, with 5 m prepended behind its start along its start heading.
+fn extended_path(t: &Trajectory) -> Polyline {
+    let mut points: Vec<[f64; 2]> = Vec::with_capacity(t.len() + 1);
+    if let Some((_, p)) = t.first() {
+        points.push([p[0] - 5.0 * p[2].cos(), p[1] - 5.0 * p[2].sin()]);
+    }
+    points.extend(t.iter().map(|(_, p)| [p[0], p[1]]));
+    Polyline::from_trajectory(&points, 0.02)
+}
+
+fn gaps_and_order(robots: &[&Trajectory], leader_path: &Polyline, fp: &Footprint) -> (f64, bool) {
+    // Physics publishes every robot at the same stamps; align by index, checking the stamps.
+    let n = robots.iter().map(|t| t.len()).min().unwrap_or(0);
+    let mut min_gap = f64::INFINITY;
+    let mut order_kept = true;
+    for k in 0..n {
+        if robots.iter().any(|t| t[k].0 != robots[0][k].0) {
+            continue;
+        }
+        let rects: Vec<_> = robots.iter().map(|t| footprint(t[k].1, fp.half, fp.offset)).collect();
+        for a in 0..rects.len() {
+            for b in a + 1..rects.len() {
+                min_gap = min_gap.min(rect_distance(&rects[a], &rects[b]));
+            }
+        }
+        let along: Vec<f64> = robots.iter().map(|t| leader_path.project([t[k].1[0], t[k].1[1]]).1).collect();
+        order_kept &= along.windows(2).all(|w| w[1] <= w[0] + 0.05);
+    }
+    (min_gap, order_kept)
+}
+
+fn stats(mut v: Vec<f64>) -> Value {
+    if v.is_empty() {
+        return Value::Null;
+    }
+    v.sort_by(f64::total_cmp);
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    let p95 = v[((v.len() as f64 * 0.95) as usize).min(v.len() - 1)];
+    json!({"mean": mean, "p95": p95, "max": v[v.len() - 1]})
+}
+
+fn plot(scene: &Scene, robots: &BTreeMap<usize, Trajectory>, goals: &[(u64, u64, u64, [f64; 2])]) -> String {
+    let size = scene.world.as_ref().map_or([6.0, 4.0], |w| w.size);
+    let mut plot = Plot::new(size, 120.0);
+    if let Some(w) = &scene.world {
+        plot.world(w);
+    }
+    for (i, t) in robots {
+        let points: Vec<[f64; 2]> = t.iter().step_by(10).map(|(_, p)| [p[0], p[1]]).collect();
+        plot.path(*i, &format!("R{i}"), &points);
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    for g in goals {
+        if g.1 < g.2 && seen.insert(g.1) {
+            plot.goal(&((b'A' + g.1 as u8) as char).to_string(), g.3);
+        }
+    }
+    plot.finish()
+}
