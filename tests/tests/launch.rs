@@ -212,26 +212,23 @@ fn lockstep_reruns_are_byte_identical_under_cpu_load() {
     assert!(a == b, "recordings differ");
 }
 
+/// A realtime group of a healthy node and one that exits with status 3 after two steps;
+/// `policy` is appended to the crashing process's table.
+fn crash_scenario(duration: &str, policy: &str) -> String {
+    format!(
+        "clock = \"realtime\"\nduration = \"{duration}\"\n\n[[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n\n\
+         [[process]]\nname = \"crashy\"\nexec = \"caravan-demo crash\"\nparams = {{ steps = 2 }}\n{policy}"
+    )
+}
+
 #[test]
 fn optional_process_is_restarted_per_policy() {
     let s = Scenario::new(
         "restart",
-        r#"clock = "realtime"
-duration = "6s"
-
-[[process]]
-name = "ping"
-exec = "caravan-demo ping"
-
-[[process]]
-name = "crashy"
-exec = "caravan-demo crash"
-params = { steps = 2 }
-restart = "on-failure"
-restart_backoff = "100ms"
-max_restarts = 2
-required = false
-"#,
+        &crash_scenario(
+            "6s",
+            "restart = \"on-failure\"\nrestart_backoff = \"100ms\"\nmax_restarts = 2\nrequired = false\n",
+        ),
     );
     let out = s.run(&[]);
     assert!(out.status.success(), "{}", stderr(&out));
@@ -244,21 +241,7 @@ required = false
 
 #[test]
 fn failed_required_process_fails_the_group() {
-    let s = Scenario::new(
-        "required",
-        r#"clock = "realtime"
-duration = "20s"
-
-[[process]]
-name = "ping"
-exec = "caravan-demo ping"
-
-[[process]]
-name = "crashy"
-exec = "caravan-demo crash"
-params = { steps = 2 }
-"#,
-    );
+    let s = Scenario::new("required", &crash_scenario("20s", ""));
     let out = s.run(&[]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(

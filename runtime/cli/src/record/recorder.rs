@@ -103,13 +103,22 @@ impl Recorder {
             if !self.seen.insert(hash) {
                 continue;
             }
-            if info.name == STATUS {
-                self.status_tap = Some(open_tap(&self.iox, &info.name, &info.type_name)?);
-            } else if self.patterns.iter().any(|p| glob_match(p, &info.name)) {
-                match open_tap(&self.iox, &info.name, &info.type_name) {
-                    Ok(tap) => self.taps.push(tap),
-                    // A type outside the schemas (a user's own) cannot be decoded; say so once.
-                    Err(e) => eprintln!("caravan: not recording '{}': {e}", info.name),
+            let wanted = info.name == STATUS || self.patterns.iter().any(|p| glob_match(p, &info.name));
+            if !wanted {
+                continue;
+            }
+            if caravan_schemas::with_message_type!(&info.type_name, |T| ()).is_none() {
+                // A type outside the schemas (a user's own) cannot be decoded; say so once.
+                eprintln!("caravan: not recording '{}': unknown message type '{}'", info.name, info.type_name);
+                continue;
+            }
+            match open_tap(&self.iox, &info.name, &info.type_name) {
+                Ok(tap) if info.name == STATUS => self.status_tap = Some(tap),
+                Ok(tap) => self.taps.push(tap),
+                // The service went away between listing and opening (its last node exited);
+                // look again next time.
+                Err(_) => {
+                    self.seen.remove(&hash);
                 }
             }
         }

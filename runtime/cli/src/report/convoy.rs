@@ -35,14 +35,23 @@ impl Scene {
         let doc: toml::Table = toml::from_str(&text).unwrap_or_default();
         let param = |key: &str| -> Option<std::path::PathBuf> {
             doc.get("process")?.as_array()?.iter().find_map(|p| {
-                p.get("params")?.get(key)?.as_str().map(|s| launch_dir.join(s))
+                p.get("params")?
+                    .get(key)?
+                    .as_str()
+                    .map(|s| launch_dir.join(s))
             })
         };
         let world = param("world").and_then(|p| caravan_world::load_world(&p).ok());
         let footprint = param("robot")
             .and_then(|p| caravan_world::load_robot(&p).ok())
-            .map(|m| Footprint { half: [m.chassis_half_extents[0], m.chassis_half_extents[1]], offset: m.chassis_center[0] })
-            .unwrap_or(Footprint { half: [0.10, 0.09], offset: -0.02 });
+            .map(|m| Footprint {
+                half: [m.chassis_half_extents[0], m.chassis_half_extents[1]],
+                offset: m.chassis_center[0],
+            })
+            .unwrap_or(Footprint {
+                half: [0.10, 0.09],
+                offset: -0.02,
+            });
         Self { world, footprint }
     }
 }
@@ -50,7 +59,11 @@ impl Scene {
 type Trajectory = Vec<(u64, [f64; 3])>;
 
 fn robot_index(topic: &str) -> Option<usize> {
-    topic.strip_prefix("robot/")?.strip_suffix("/pose_true")?.parse().ok()
+    topic
+        .strip_prefix("robot/")?
+        .strip_suffix("/pose_true")?
+        .parse()
+        .ok()
 }
 
 /// The convoy section, or `None` if the recording is not of a convoy.
@@ -62,11 +75,22 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
         let stamp = m.json["header"]["stamp_ns"].as_u64().unwrap_or(0);
         let f = |k: &str| m.json[k].as_f64().unwrap_or(0.0);
         if let Some(i) = robot_index(&m.topic) {
-            robots.entry(i).or_default().push((stamp, [f("x"), f("y"), f("theta")]));
+            robots
+                .entry(i)
+                .or_default()
+                .push((stamp, [f("x"), f("y"), f("theta")]));
         } else if m.topic == caravan_schemas::topics::GOAL {
             let pose = &m.json["pose"];
-            let p = [pose["x"].as_f64().unwrap_or(0.0), pose["y"].as_f64().unwrap_or(0.0)];
-            goals.push((stamp, m.json["index"].as_u64()?, m.json["total"].as_u64()?, p));
+            let p = [
+                pose["x"].as_f64().unwrap_or(0.0),
+                pose["y"].as_f64().unwrap_or(0.0),
+            ];
+            goals.push((
+                stamp,
+                m.json["index"].as_u64()?,
+                m.json["total"].as_u64()?,
+                p,
+            ));
         } else if m.topic == caravan_schemas::topics::COLLISIONS && m.json["started"] == 1 {
             collisions += 1;
         }
@@ -83,7 +107,14 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
     let (min_gap, order_kept) = gaps_and_order(&trajectories, &paths[0], &scene.footprint);
     let followers: Vec<Value> = (1..trajectories.len())
         .map(|i| {
-            let errors = |path: &Polyline| stats(trajectories[i].iter().map(|(_, p)| path.project([p[0], p[1]]).0).collect());
+            let errors = |path: &Polyline| {
+                stats(
+                    trajectories[i]
+                        .iter()
+                        .map(|(_, p)| path.project([p[0], p[1]]).0)
+                        .collect(),
+                )
+            };
             json!({
                 "robot": robots.keys().nth(i),
                 "cross_track_to_predecessor_m": errors(&paths[i - 1]),
@@ -125,13 +156,19 @@ fn gaps_and_order(robots: &[&Trajectory], leader_path: &Polyline, fp: &Footprint
         if robots.iter().any(|t| t[k].0 != robots[0][k].0) {
             continue;
         }
-        let rects: Vec<_> = robots.iter().map(|t| footprint(t[k].1, fp.half, fp.offset)).collect();
+        let rects: Vec<_> = robots
+            .iter()
+            .map(|t| footprint(t[k].1, fp.half, fp.offset))
+            .collect();
         for a in 0..rects.len() {
             for b in a + 1..rects.len() {
                 min_gap = min_gap.min(rect_distance(&rects[a], &rects[b]));
             }
         }
-        let along: Vec<f64> = robots.iter().map(|t| leader_path.project([t[k].1[0], t[k].1[1]]).1).collect();
+        let along: Vec<f64> = robots
+            .iter()
+            .map(|t| leader_path.project([t[k].1[0], t[k].1[1]]).1)
+            .collect();
         order_kept &= along.windows(2).all(|w| w[1] <= w[0] + 0.05);
     }
     (min_gap, order_kept)
@@ -147,7 +184,11 @@ fn stats(mut v: Vec<f64>) -> Value {
     json!({"mean": mean, "p95": p95, "max": v[v.len() - 1]})
 }
 
-fn plot(scene: &Scene, robots: &BTreeMap<usize, Trajectory>, goals: &[(u64, u64, u64, [f64; 2])]) -> String {
+fn plot(
+    scene: &Scene,
+    robots: &BTreeMap<usize, Trajectory>,
+    goals: &[(u64, u64, u64, [f64; 2])],
+) -> String {
     let size = scene.world.as_ref().map_or([6.0, 4.0], |w| w.size);
     let mut plot = Plot::new(size, 120.0);
     if let Some(w) = &scene.world {

@@ -18,7 +18,11 @@ fn norm(a: P) -> f64 {
 pub fn point_segment(p: P, a: P, b: P) -> (f64, f64) {
     let ab = sub(b, a);
     let len2 = dot(ab, ab);
-    let t = if len2 > 0.0 { (dot(sub(p, a), ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if len2 > 0.0 {
+        (dot(sub(p, a), ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     (norm(sub(p, [a[0] + t * ab[0], a[1] + t * ab[1]])), t)
 }
 
@@ -33,7 +37,10 @@ impl Polyline {
     pub fn from_trajectory(points: &[P], spacing: f64) -> Self {
         let mut kept: Vec<P> = Vec::new();
         for &p in points {
-            if kept.last().is_none_or(|&last| norm(sub(p, last)) >= spacing) {
+            if kept
+                .last()
+                .is_none_or(|&last| norm(sub(p, last)) >= spacing)
+            {
                 kept.push(p);
             }
         }
@@ -62,7 +69,10 @@ impl Polyline {
                     let (d, t) = point_segment(p, w[0], w[1]);
                     (d, self.arc[i] + t * (self.arc[i + 1] - self.arc[i]))
                 })
-                .fold((f64::INFINITY, 0.0), |best, c| if c.0 < best.0 { c } else { best }),
+                .fold(
+                    (f64::INFINITY, 0.0),
+                    |best, c| if c.0 < best.0 { c } else { best },
+                ),
         }
     }
 }

@@ -36,11 +36,11 @@ pub fn render(r: &Value) -> String {
         num(&run["wall_time_s"], 2),
         num(&run["real_time_factor"], 2)
     );
-    md.push_str("## Nodes\n\n| node | host | steps | rate Hz | deadline misses | jitter p50/p99/max ms | compute mean/p99/max ms | missed msgs | restarts | exit |\n|---|---|---:|---:|---:|---|---|---:|---:|---|\n");
+    md.push_str("## Nodes\n\n| node | host | steps | rate Hz | deadline misses | jitter p50/p99/max ms | compute mean/p99/max ms | missed msgs | CPU s | peak MiB | restarts | exit |\n|---|---|---:|---:|---:|---|---|---:|---:|---:|---:|---|\n");
     for n in r["nodes"].as_array().into_iter().flatten() {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {} | {} | {} | {} | {} | {} |",
             n["name"].as_str().unwrap_or(""),
             n["host"].as_str().unwrap_or(""),
             n["steps"],
@@ -53,6 +53,8 @@ pub fn render(r: &Value) -> String {
             num(&n["compute_p99_ms"], 3),
             num(&n["compute_max_ms"], 3),
             n["messages_missed"],
+            num(&n["cpu_s"], 2),
+            num(&n["max_rss_mib"], 1),
             n["restarts"],
             n["exit_status"].as_str().unwrap_or("")
         );
@@ -85,7 +87,10 @@ fn convoy(md: &mut String, c: &Value) {
         "\n## Convoy\n\nGoals reached {} of {} at {} s; minimum gap {} m; collisions {}; order kept: {}.\n\n![trajectories]({})\n",
         c["goals_reached"],
         c["goals_total"],
-        c["goal_times_s"].as_array().map(|t| t.iter().map(|x| num(x, 1)).collect::<Vec<_>>().join(", ")).unwrap_or_default(),
+        c["goal_times_s"]
+            .as_array()
+            .map(|t| t.iter().map(|x| num(x, 1)).collect::<Vec<_>>().join(", "))
+            .unwrap_or_default(),
         num(&c["min_gap_m"], 3),
         c["collisions"],
         c["order_kept"],
@@ -95,8 +100,19 @@ fn convoy(md: &mut String, c: &Value) {
     for f in c["followers"].as_array().into_iter().flatten() {
         let e = |k: &str| {
             let v = &f[k];
-            format!("{} / {} / {}", num(&v["mean"], 3), num(&v["p95"], 3), num(&v["max"], 3))
+            format!(
+                "{} / {} / {}",
+                num(&v["mean"], 3),
+                num(&v["p95"], 3),
+                num(&v["max"], 3)
+            )
         };
-        let _ = writeln!(md, "| R{} | {} | {} |", f["robot"], e("cross_track_to_predecessor_m"), e("cross_track_to_leader_m"));
+        let _ = writeln!(
+            md,
+            "| R{} | {} | {} |",
+            f["robot"],
+            e("cross_track_to_predecessor_m"),
+            e("cross_track_to_leader_m")
+        );
     }
 }

@@ -8,7 +8,8 @@
 //!   sim_time_s, wall_time_s, real_time_factor}`
 //! - `nodes[]`: `{name, host, required, restarts, exit_status, period_ms (null when stepped by
 //!   messages), steps, rate_hz, deadline_misses, jitter_p50_ms, jitter_p99_ms, jitter_max_ms,
-//!   compute_mean_ms, compute_p99_ms, compute_max_ms, messages_missed}`
+//!   compute_mean_ms, compute_p99_ms, compute_max_ms, messages_missed, cpu_s (CPU time of the
+//!   process, all runs), max_rss_mib (peak resident memory)}`
 //! - `topics[]`: `{name, type, messages, gaps, latency_us: {p50, p90, p99, max}}`; latency is
 //!   wall-clock time from send to the recorder's receipt.
 //!
@@ -87,7 +88,10 @@ pub fn compute(run_dir: &Path) -> Result<Value> {
     } else {
         0.0
     };
-    let launch_dir = Path::new(&facts.launch_file).parent().unwrap_or(Path::new(".")).to_path_buf();
+    let launch_dir = Path::new(&facts.launch_file)
+        .parent()
+        .unwrap_or(Path::new("."))
+        .to_path_buf();
     let scene = convoy::Scene::from_run(run_dir, &launch_dir);
     let mut report = json!({
         "version": 1,
@@ -137,6 +141,8 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
                 "compute_p99_ms": ms(&s["compute_p99_ns"]),
                 "compute_max_ms": ms(&s["compute_max_ns"]),
                 "messages_missed": s["messages_missed"],
+                "cpu_s": p.cpu_s,
+                "max_rss_mib": p.max_rss_mib,
             })
         })
         .collect()

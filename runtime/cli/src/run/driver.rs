@@ -54,7 +54,14 @@ pub fn spawn(
         let sim_time_ns = if lockstep {
             run_lockstep(&cfg, &mut recorder, &control, &events, &finish)?
         } else {
-            run_realtime(&cfg, &mut recorder, &control, &events, &finish)?
+            let started = Instant::now();
+            record_until(
+                &cfg.iceoryx,
+                &mut recorder,
+                SignalHandlingMode::Disabled,
+                || finish.try_recv().is_ok(),
+            )?;
+            started.elapsed().as_nanos() as u64
         };
         Ok(DriverOutcome {
             recording: recorder.finish()?,
@@ -111,20 +118,6 @@ fn run_lockstep(
     scheduler.stop_all()?;
     let _ = finish.recv();
     Ok(now_ns)
-}
-
-fn run_realtime(
-    cfg: &DriverConfig,
-    recorder: &mut Recorder,
-    _control: &Control,
-    _events: &Sender<Event>,
-    finish: &Receiver<()>,
-) -> Result<u64> {
-    let started = Instant::now();
-    record_until(&cfg.iceoryx, recorder, SignalHandlingMode::Disabled, || {
-        finish.try_recv().is_ok()
-    })?;
-    Ok(started.elapsed().as_nanos() as u64)
 }
 
 /// Records as messages arrive, woken by the topics' listeners, until `done()` or (with

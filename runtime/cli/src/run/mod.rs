@@ -276,10 +276,11 @@ fn run_group(
                 index,
                 generation,
                 status,
+                usage,
             }) => {
                 let name = sup.names()[index].clone();
                 control.deaths.lock().unwrap().push(name);
-                match sup.on_exit(index, generation, status, stopping) {
+                match sup.on_exit(index, generation, status, usage, stopping) {
                     Ok(Some(at)) => next_restart = Some(next_restart.map_or(at, |n| n.min(at))),
                     Ok(None) => {}
                     Err(why) => {

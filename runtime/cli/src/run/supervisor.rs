@@ -19,10 +19,44 @@ pub enum Event {
         index: usize,
         generation: u32,
         status: ExitStatus,
+        usage: Usage,
     },
     Signal(i32),
     /// The lockstep schedule or the realtime recorder finished (or failed).
     DriverDone(Result<(), String>),
+}
+
+/// Resources a process used, from the kernel's accounting at exit (wait4).
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
+pub struct Usage {
+    /// User + system CPU time, s.
+    pub cpu_s: f64,
+    /// Peak resident set size, MiB.
+    pub max_rss_mib: f64,
+}
+
+/// Waits for `pid` to exit; returns its status and resource usage.
+fn reap(pid: i32) -> std::io::Result<(ExitStatus, Usage)> {
+    let mut status = 0;
+    // SAFETY: rusage is plain data that wait4 fills in.
+    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+    loop {
+        // SAFETY: waits for our own child; the pointers are valid for the call.
+        let r = unsafe { libc::wait4(pid, &mut status, 0, &mut ru) };
+        if r == pid {
+            break;
+        }
+        let e = std::io::Error::last_os_error();
+        if e.kind() != std::io::ErrorKind::Interrupted {
+            return Err(e);
+        }
+    }
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    let usage = Usage {
+        cpu_s: secs(ru.ru_utime) + secs(ru.ru_stime),
+        max_rss_mib: ru.ru_maxrss as f64 / 1024.0,
+    };
+    Ok((ExitStatus::from_raw(status), usage))
 }
 
 /// How a process ended, for the report.
@@ -35,6 +69,12 @@ pub struct ProcessRecord {
     /// "exited 0", "exited 3", "killed by signal 9", "running", "never started"
     pub exit_status: String,
     pub success: bool,
+    /// CPU time summed over all its runs (restarts included), s.
+    #[serde(default)]
+    pub cpu_s: f64,
+    /// Largest peak resident set of its runs, MiB.
+    #[serde(default)]
+    pub max_rss_mib: f64,
 }
 
 /// One process to run: its spec and the resolved program and arguments.
@@ -52,6 +92,7 @@ struct Proc {
     last_status: Option<ExitStatus>,
     restart_at: Option<Instant>,
     log: Arc<Mutex<File>>,
+    usage: Usage,
 }
 
 pub struct Supervisor {
@@ -89,6 +130,7 @@ impl Supervisor {
                 last_status: None,
                 restart_at: None,
                 log: Arc::new(Mutex::new(log)),
+                usage: Usage::default(),
             });
         }
         Ok(Self {
@@ -162,12 +204,15 @@ impl Supervisor {
         let (events, generation) = (self.events.clone(), p.generation);
         // One reaper per child: it is reaped the moment it exits, so no zombie keeps
         // iceoryx2's process locks alive.
+        let pid = child.id() as i32;
+        drop(child); // std never reaps on drop; `reap` does, with resource usage.
         std::thread::spawn(move || {
-            if let Ok(status) = child.wait() {
+            if let Ok((status, usage)) = reap(pid) {
                 let _ = events.send(Event::Exited {
                     index,
                     generation,
                     status,
+                    usage,
                 });
             }
         });
@@ -181,9 +226,12 @@ impl Supervisor {
         index: usize,
         generation: u32,
         status: ExitStatus,
+        usage: Usage,
         stopping: bool,
     ) -> Result<Option<Instant>, String> {
         let p = &mut self.procs[index];
+        p.usage.cpu_s += usage.cpu_s;
+        p.usage.max_rss_mib = p.usage.max_rss_mib.max(usage.max_rss_mib);
         if generation != p.generation {
             return Ok(None);
         }
@@ -271,6 +319,8 @@ impl Supervisor {
                     (None, None) => "never started".into(),
                 },
                 success: p.last_status.is_some_and(|s| s.success()),
+                cpu_s: p.usage.cpu_s,
+                max_rss_mib: p.usage.max_rss_mib,
             })
             .collect()
     }
