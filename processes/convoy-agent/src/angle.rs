@@ -1,7 +1,11 @@
 /// Wraps an angle to (−π, π].
 pub fn wrap(a: f64) -> f64 {
     let w = a.rem_euclid(std::f64::consts::TAU);
-    if w > std::f64::consts::PI { w - std::f64::consts::TAU } else { w }
+    if w > std::f64::consts::PI {
+        w - std::f64::consts::TAU
+    } else {
+        w
+    }
 }
 
 #[cfg(test)]

@@ -32,7 +32,16 @@ pub struct FollowerParams {
 
 impl Default for FollowerParams {
     fn default() -> Self {
-        Self { k1: 1.0, k2: 1.0, k3: 2.0, tau_s: 2.0, safety_distance_m: 0.15, robot_length_m: 0.20, v_max: 0.25, omega_max: 2.0 }
+        Self {
+            k1: 1.0,
+            k2: 1.0,
+            k3: 2.0,
+            tau_s: 2.0,
+            safety_distance_m: 0.15,
+            robot_length_m: 0.20,
+            v_max: 0.25,
+            omega_max: 2.0,
+        }
     }
 }
 
@@ -47,8 +56,14 @@ pub enum Reason {
 }
 
 /// (v, ω) for a follower at `own`, given its predecessor's history, at time `now_s`.
-pub fn command(own: Pose2D, predecessor: &PoseHistory, now_s: f64, p: &FollowerParams) -> (f64, f64, Reason) {
-    let (Some(target), Some(current)) = (predecessor.at(now_s - p.tau_s), predecessor.latest()) else {
+pub fn command(
+    own: Pose2D,
+    predecessor: &PoseHistory,
+    now_s: f64,
+    p: &FollowerParams,
+) -> (f64, f64, Reason) {
+    let (Some(target), Some(current)) = (predecessor.at(now_s - p.tau_s), predecessor.latest())
+    else {
         return (0.0, 0.0, Reason::Waiting);
     };
     let gap = (current.x - own.x).hypot(current.y - own.y) - p.robot_length_m;
@@ -58,7 +73,11 @@ pub fn command(own: Pose2D, predecessor: &PoseHistory, now_s: f64, p: &FollowerP
     let (s, c) = own.theta.sin_cos();
     let v = p.k1 * (target.x - own.x) * c + p.k2 * (target.y - own.y) * s;
     let omega = p.k3 * wrap(target.theta - own.theta);
-    (v.clamp(0.0, p.v_max), omega.clamp(-p.omega_max, p.omega_max), Reason::Tracking)
+    (
+        v.clamp(0.0, p.v_max),
+        omega.clamp(-p.omega_max, p.omega_max),
+        Reason::Tracking,
+    )
 }
 
 #[cfg(test)]
@@ -96,7 +115,10 @@ mod tests {
         h.push(10.0, pose(5.0, 0.0, 3.0));
         let (_, w, _) = command(pose(-1.0, 0.0, -3.0), &h, 10.0, &FollowerParams::default());
         // θ_p − θ = 6 rad ≡ −0.283 rad: turn right, not 6 rad left.
-        assert!(w < 0.0 && (w - 2.0 * (6.0 - std::f64::consts::TAU)).abs() < 1e-9, "{w}");
+        assert!(
+            w < 0.0 && (w - 2.0 * (6.0 - std::f64::consts::TAU)).abs() < 1e-9,
+            "{w}"
+        );
     }
 
     #[test]

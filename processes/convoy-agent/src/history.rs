@@ -14,7 +14,10 @@ pub struct PoseHistory {
 
 impl PoseHistory {
     pub fn new(keep_s: f64) -> Self {
-        Self { samples: VecDeque::new(), keep_s }
+        Self {
+            samples: VecDeque::new(),
+            keep_s,
+        }
     }
 
     /// Adds a pose at time `t` (s); older samples beyond the horizon are dropped.
@@ -23,7 +26,11 @@ impl PoseHistory {
             return;
         }
         self.samples.push_back((t, pose));
-        while self.samples.front().is_some_and(|(t0, _)| *t0 < t - self.keep_s) {
+        while self
+            .samples
+            .front()
+            .is_some_and(|(t0, _)| *t0 < t - self.keep_s)
+        {
             self.samples.pop_front();
         }
     }
@@ -68,7 +75,11 @@ mod tests {
         h.push(1.0, pose(1.0, -3.0)); // across ±π: the short way is +0.283 rad
         let p = h.at(0.5).unwrap();
         assert!((p.x - 0.5).abs() < 1e-12);
-        assert!((p.theta.abs() - std::f64::consts::PI).abs() < 1e-9, "{}", p.theta);
+        assert!(
+            (p.theta.abs() - std::f64::consts::PI).abs() < 1e-9,
+            "{}",
+            p.theta
+        );
     }
 
     #[test]

@@ -23,7 +23,15 @@ pub struct LeaderParams {
 
 impl Default for LeaderParams {
     fn default() -> Self {
-        Self { goals: Vec::new(), tolerance_m: 0.15, v_min: 0.1, v_max: 0.2, omega_min: -1.5, omega_max: 2.0, k_heading: 2.0 }
+        Self {
+            goals: Vec::new(),
+            tolerance_m: 0.15,
+            v_min: 0.1,
+            v_max: 0.2,
+            omega_min: -1.5,
+            omega_max: 2.0,
+            k_heading: 2.0,
+        }
     }
 }
 
@@ -48,7 +56,9 @@ pub fn command(pose: Pose2D, progress: &mut Progress, p: &LeaderParams) -> (f64,
         }
         progress.current += 1;
     }
-    let Some(goal) = p.goals.get(progress.current) else { return (0.0, 0.0) };
+    let Some(goal) = p.goals.get(progress.current) else {
+        return (0.0, 0.0);
+    };
     let heading_error = wrap((goal[1] - pose.y).atan2(goal[0] - pose.x) - pose.theta);
     let omega = (p.k_heading * heading_error).clamp(p.omega_min, p.omega_max);
     // Slow down while facing away from the goal, but never under the planner's minimum speed.
@@ -61,20 +71,39 @@ mod tests {
     use super::*;
 
     fn params() -> LeaderParams {
-        LeaderParams { goals: vec![[2.0, 0.0], [2.0, 2.0]], ..Default::default() }
+        LeaderParams {
+            goals: vec![[2.0, 0.0], [2.0, 2.0]],
+            ..Default::default()
+        }
     }
 
     #[test]
     fn drives_straight_at_full_speed_toward_the_goal() {
         let mut pr = Progress::default();
-        let (v, w) = command(Pose2D { x: 0.0, y: 0.0, theta: 0.0 }, &mut pr, &params());
+        let (v, w) = command(
+            Pose2D {
+                x: 0.0,
+                y: 0.0,
+                theta: 0.0,
+            },
+            &mut pr,
+            &params(),
+        );
         assert_eq!((v, w), (0.2, 0.0));
     }
 
     #[test]
     fn turns_within_limits_at_minimum_speed() {
         let mut pr = Progress::default();
-        let (v, w) = command(Pose2D { x: 0.0, y: 0.0, theta: std::f64::consts::PI }, &mut pr, &params());
+        let (v, w) = command(
+            Pose2D {
+                x: 0.0,
+                y: 0.0,
+                theta: std::f64::consts::PI,
+            },
+            &mut pr,
+            &params(),
+        );
         assert_eq!(v, 0.1);
         assert!(w == -1.5 || w == 2.0, "{w}");
     }
@@ -83,9 +112,25 @@ mod tests {
     fn advances_through_goals_and_stops_after_the_last() {
         let p = params();
         let mut pr = Progress::default();
-        command(Pose2D { x: 1.9, y: 0.05, theta: 0.0 }, &mut pr, &p);
+        command(
+            Pose2D {
+                x: 1.9,
+                y: 0.05,
+                theta: 0.0,
+            },
+            &mut pr,
+            &p,
+        );
         assert_eq!(pr.current, 1);
-        let (v, w) = command(Pose2D { x: 2.0, y: 1.95, theta: 1.57 }, &mut pr, &p);
+        let (v, w) = command(
+            Pose2D {
+                x: 2.0,
+                y: 1.95,
+                theta: 1.57,
+            },
+            &mut pr,
+            &p,
+        );
         assert!(pr.finished(&p));
         assert_eq!((v, w), (0.0, 0.0));
     }

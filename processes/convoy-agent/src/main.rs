@@ -22,13 +22,21 @@ fn main() -> std::process::ExitCode {
 fn run() -> Result<(), Error> {
     let mut node = Node::from_env()?;
     let p: Params = node.params()?;
-    p.validate().map_err(|message| Error::Params { node: node.name().to_string(), message })?;
+    p.validate().map_err(|message| Error::Params {
+        node: node.name().to_string(),
+        message,
+    })?;
     let i = p.robot;
-    let own = node.subscriber(&Topic::<Pose2D>::new(&p.pose_topic.clone().unwrap_or_else(|| topics::pose_true(i))))?;
+    let own = node.subscriber(&Topic::<Pose2D>::new(
+        &p.pose_topic.clone().unwrap_or_else(|| topics::pose_true(i)),
+    ))?;
     let setpoint = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(i)))?;
     let publish = |(v, omega): (f64, f64)| {
         let (left, right) = wheel_speeds(v, omega, p.wheel_radius_m, p.wheel_separation_m);
-        setpoint.publish(&WheelSetpoint { left_rad_s: left, right_rad_s: right })
+        setpoint.publish(&WheelSetpoint {
+            left_rad_s: left,
+            right_rad_s: right,
+        })
     };
     let mut pose = None;
     match p.mode {
@@ -45,11 +53,20 @@ fn run() -> Result<(), Error> {
                 // Announce goal changes, and once a second for late subscribers.
                 if announced != Some(progress.current) || step.index() % 20 == 0 {
                     announced = Some(progress.current);
-                    let target = p.leader.goals.get(progress.current).copied().unwrap_or([current.x, current.y]);
+                    let target = p
+                        .leader
+                        .goals
+                        .get(progress.current)
+                        .copied()
+                        .unwrap_or([current.x, current.y]);
                     goal_pub.publish(&Goal {
                         index: progress.current as u32,
                         total: p.leader.goals.len() as u32,
-                        pose: Pose2D { x: target[0], y: target[1], theta: 0.0 },
+                        pose: Pose2D {
+                            x: target[0],
+                            y: target[1],
+                            theta: 0.0,
+                        },
                         tolerance_m: p.leader.tolerance_m,
                     })?;
                 }
@@ -57,7 +74,10 @@ fn run() -> Result<(), Error> {
             })?;
         }
         Mode::Follower => {
-            let predecessor_topic = p.predecessor_topic.clone().unwrap_or_else(|| topics::pose_true(i - 1));
+            let predecessor_topic = p
+                .predecessor_topic
+                .clone()
+                .unwrap_or_else(|| topics::pose_true(i - 1));
             let predecessor = node.subscriber(&Topic::<Pose2D>::new(&predecessor_topic))?;
             let mut history = PoseHistory::new(p.follower.tau_s + 2.0);
             node.run(Trigger::every_hz(20.0), |step| {
@@ -68,7 +88,8 @@ fn run() -> Result<(), Error> {
                     pose = Some(*msg);
                 }
                 let Some(current) = pose else { return Ok(()) };
-                let (v, omega, _) = follower::command(current, &history, step.now().as_secs_f64(), &p.follower);
+                let (v, omega, _) =
+                    follower::command(current, &history, step.now().as_secs_f64(), &p.follower);
                 publish((v, omega))
             })?;
         }

@@ -4,7 +4,10 @@
 /// with wheel radius `r` and wheel separation `l` (m):
 /// ω_R = (2v + l·ω)/(2r), ω_L = (2v − l·ω)/(2r).
 pub fn wheel_speeds(v: f64, omega: f64, r: f64, l: f64) -> (f64, f64) {
-    ((2.0 * v - l * omega) / (2.0 * r), (2.0 * v + l * omega) / (2.0 * r))
+    (
+        (2.0 * v - l * omega) / (2.0 * r),
+        (2.0 * v + l * omega) / (2.0 * r),
+    )
 }
 
 /// Body velocity (v, ω) from wheel speeds (left, right) in rad/s.
@@ -22,7 +25,10 @@ mod tests {
     #[test]
     fn reference_examples() {
         let (left, right) = wheel_speeds(0.2, 2.0, R, L);
-        assert!((right - 5.552).abs() < 5e-4 && (left - 0.418).abs() < 5e-4, "{left} {right}");
+        assert!(
+            (right - 5.552).abs() < 5e-4 && (left - 0.418).abs() < 5e-4,
+            "{left} {right}"
+        );
         let (left, right) = wheel_speeds(0.2, 0.0, R, L);
         assert!((left - 2.985).abs() < 5e-4 && (right - 2.985).abs() < 5e-4);
     }

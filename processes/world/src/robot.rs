@@ -55,26 +55,45 @@ impl RobotModel {
 /// Reads a robot description and checks it has what the convoy robot needs.
 pub fn load_robot(path: &Path) -> Result<RobotModel, RobotError> {
     let file = path.display().to_string();
-    let err = |message: String| RobotError { file: file.clone(), message };
+    let err = |message: String| RobotError {
+        file: file.clone(),
+        message,
+    };
     let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
-    let urdf = urdf_rs::read_from_string(&text).map_err(|e| err(format!("not a valid URDF: {e}")))?;
+    let urdf =
+        urdf_rs::read_from_string(&text).map_err(|e| err(format!("not a valid URDF: {e}")))?;
     model(&urdf).map_err(err)
 }
 
 fn body(link: &urdf_rs::Link, position: [f64; 3]) -> Result<Body, String> {
     let i = &link.inertial;
     if i.mass.value <= 0.0 {
-        return Err(format!("link '{}' needs an <inertial> with a positive mass", link.name));
+        return Err(format!(
+            "link '{}' needs an <inertial> with a positive mass",
+            link.name
+        ));
     }
     let inertia = [i.inertia.ixx, i.inertia.iyy, i.inertia.izz];
     if inertia.iter().any(|&v| v <= 0.0) {
-        return Err(format!("link '{}' needs positive ixx, iyy and izz", link.name));
+        return Err(format!(
+            "link '{}' needs positive ixx, iyy and izz",
+            link.name
+        ));
     }
-    Ok(Body { mass: i.mass.value, inertia, position })
+    Ok(Body {
+        mass: i.mass.value,
+        inertia,
+        position,
+    })
 }
 
 fn model(urdf: &urdf_rs::Robot) -> Result<RobotModel, String> {
-    let link = |name: &str| urdf.links.iter().find(|l| l.name == name).ok_or(format!("no link named '{name}'"));
+    let link = |name: &str| {
+        urdf.links
+            .iter()
+            .find(|l| l.name == name)
+            .ok_or(format!("no link named '{name}'"))
+    };
     let children: Vec<&str> = urdf.joints.iter().map(|j| j.child.link.as_str()).collect();
     let root = urdf
         .links
@@ -85,14 +104,23 @@ fn model(urdf: &urdf_rs::Robot) -> Result<RobotModel, String> {
         .collision
         .iter()
         .find_map(|c| match &c.geometry {
-            urdf_rs::Geometry::Box { size } => Some(([size[0] / 2.0, size[1] / 2.0, size[2] / 2.0], *c.origin.xyz)),
+            urdf_rs::Geometry::Box { size } => {
+                Some(([size[0] / 2.0, size[1] / 2.0, size[2] / 2.0], *c.origin.xyz))
+            }
             _ => None,
         })
-        .ok_or(format!("root link '{}' needs a <box> collision shape (the chassis)", root.name))?;
+        .ok_or(format!(
+            "root link '{}' needs a <box> collision shape (the chassis)",
+            root.name
+        ))?;
     let chassis = body(root, [0.0; 3])?;
 
     let mut wheels = Vec::new();
-    for j in urdf.joints.iter().filter(|j| matches!(j.joint_type, urdf_rs::JointType::Continuous)) {
+    for j in urdf
+        .joints
+        .iter()
+        .filter(|j| matches!(j.joint_type, urdf_rs::JointType::Continuous))
+    {
         let child = link(&j.child.link)?;
         let (radius, width) = child
             .collision
@@ -101,16 +129,24 @@ fn model(urdf: &urdf_rs::Robot) -> Result<RobotModel, String> {
                 urdf_rs::Geometry::Cylinder { radius, length } => Some((*radius, *length)),
                 _ => None,
             })
-            .ok_or(format!("wheel link '{}' (joint '{}') needs a <cylinder> collision shape", child.name, j.name))?;
+            .ok_or(format!(
+                "wheel link '{}' (joint '{}') needs a <cylinder> collision shape",
+                child.name, j.name
+            ))?;
         wheels.push((body(child, *j.origin.xyz)?, radius, width));
     }
     if wheels.len() != 2 {
-        return Err(format!("expected exactly two continuous (wheel) joints, found {}", wheels.len()));
+        return Err(format!(
+            "expected exactly two continuous (wheel) joints, found {}",
+            wheels.len()
+        ));
     }
     wheels.sort_by(|a, b| b.0.position[1].total_cmp(&a.0.position[1]));
     let (right, left) = (wheels.pop().unwrap(), wheels.pop().unwrap());
     if left.0.position[1] <= 0.0 || right.0.position[1] >= 0.0 {
-        return Err("wheels must sit on either side of base_link (one at y > 0, one at y < 0)".into());
+        return Err(
+            "wheels must sit on either side of base_link (one at y > 0, one at y < 0)".into(),
+        );
     }
     if (left.1 - right.1).abs() > 1e-9 {
         return Err(format!("wheel radii differ: {} and {}", left.1, right.1));
@@ -119,7 +155,14 @@ fn model(urdf: &urdf_rs::Robot) -> Result<RobotModel, String> {
     let caster_joint = urdf
         .joints
         .iter()
-        .find(|j| matches!(j.joint_type, urdf_rs::JointType::Fixed) && link(&j.child.link).is_ok_and(|l| l.collision.iter().any(|c| matches!(c.geometry, urdf_rs::Geometry::Sphere { .. }))))
+        .find(|j| {
+            matches!(j.joint_type, urdf_rs::JointType::Fixed)
+                && link(&j.child.link).is_ok_and(|l| {
+                    l.collision
+                        .iter()
+                        .any(|c| matches!(c.geometry, urdf_rs::Geometry::Sphere { .. }))
+                })
+        })
         .ok_or("no caster: expected a link with a <sphere> collision shape on a fixed joint")?;
     let caster_link = link(&caster_joint.child.link)?;
     let caster_radius = caster_link
@@ -162,7 +205,9 @@ mod tests {
 
     #[test]
     fn a_robot_without_wheels_is_rejected() {
-        let text = std::fs::read_to_string(convoy_bot()).unwrap().replace("continuous", "fixed");
+        let text = std::fs::read_to_string(convoy_bot())
+            .unwrap()
+            .replace("continuous", "fixed");
         let urdf = urdf_rs::read_from_string(&text).unwrap();
         let e = model(&urdf).unwrap_err();
         assert!(e.contains("two continuous"), "{e}");
@@ -175,6 +220,9 @@ mod tests {
         let p = dir.join("bad.urdf");
         std::fs::write(&p, "<robot name='x'><link name='a'>").unwrap();
         let e = load_robot(&p).unwrap_err().to_string();
-        assert!(e.contains("bad.urdf") && e.contains("not a valid URDF"), "{e}");
+        assert!(
+            e.contains("bad.urdf") && e.contains("not a valid URDF"),
+            "{e}"
+        );
     }
 }

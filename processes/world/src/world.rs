@@ -122,7 +122,10 @@ struct Cylinder {
 /// Reads and checks a world file.
 pub fn load_world(path: &Path) -> Result<World, WorldError> {
     let file = path.display().to_string();
-    let err = |message: String| WorldError { file: file.clone(), message };
+    let err = |message: String| WorldError {
+        file: file.clone(),
+        message,
+    };
     let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
     parse_world(&text).map_err(err)
 }
@@ -130,7 +133,13 @@ pub fn load_world(path: &Path) -> Result<World, WorldError> {
 /// Parses a world file's text; errors name the line and key.
 pub fn parse_world(text: &str) -> Result<World, String> {
     let f: File = toml::from_str(text).map_err(|e| e.to_string().trim_end().replace('\n', " "))?;
-    let positive = |what: String, v: f64| if v.is_finite() && v > 0.0 { Ok(()) } else { Err(format!("{what} must be positive, got {v}")) };
+    let positive = |what: String, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(format!("{what} must be positive, got {v}"))
+        }
+    };
     positive("world.size[0]".into(), f.world.size[0])?;
     positive("world.size[1]".into(), f.world.size[1])?;
     positive("world.wall_height".into(), f.world.wall_height)?;
@@ -147,7 +156,10 @@ pub fn parse_world(text: &str) -> Result<World, String> {
             yaw: dy.atan2(dx),
             height: h,
             // Walls overlap by half a thickness at corners so rays cannot slip through.
-            shape: Shape::Box { half_x: len / 2.0 + w.thickness / 2.0, half_y: w.thickness / 2.0 },
+            shape: Shape::Box {
+                half_x: len / 2.0 + w.thickness / 2.0,
+                half_y: w.thickness / 2.0,
+            },
         });
     }
     for (i, b) in f.boxes.iter().enumerate() {
@@ -158,7 +170,10 @@ pub fn parse_world(text: &str) -> Result<World, String> {
             center: b.center,
             yaw: b.yaw,
             height: b.height.unwrap_or(h),
-            shape: Shape::Box { half_x: b.size[0] / 2.0, half_y: b.size[1] / 2.0 },
+            shape: Shape::Box {
+                half_x: b.size[0] / 2.0,
+                half_y: b.size[1] / 2.0,
+            },
         });
     }
     for (i, c) in f.cylinder.iter().enumerate() {
@@ -171,13 +186,20 @@ pub fn parse_world(text: &str) -> Result<World, String> {
             shape: Shape::Cylinder { radius: c.radius },
         });
     }
-    Ok(World { name: f.world.name, size: f.world.size, obstacles })
+    Ok(World {
+        name: f.world.name,
+        size: f.world.size,
+        obstacles,
+    })
 }
 
 impl World {
     /// Distance from point `p` to the nearest obstacle surface (negative inside one), m.
     pub fn clearance(&self, p: [f64; 2]) -> f64 {
-        self.obstacles.iter().map(|o| o.distance(p)).fold(f64::INFINITY, f64::min)
+        self.obstacles
+            .iter()
+            .map(|o| o.distance(p))
+            .fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -189,7 +211,10 @@ impl Obstacle {
             Shape::Cylinder { radius } => dx.hypot(dy) - radius,
             Shape::Box { half_x, half_y } => {
                 let (s, c) = self.yaw.sin_cos();
-                let (lx, ly) = ((c * dx + s * dy).abs() - half_x, (-s * dx + c * dy).abs() - half_y);
+                let (lx, ly) = (
+                    (c * dx + s * dy).abs() - half_x,
+                    (-s * dx + c * dy).abs() - half_y,
+                );
                 let outside = lx.max(0.0).hypot(ly.max(0.0));
                 outside + lx.max(ly).min(0.0)
             }
@@ -198,12 +223,24 @@ impl Obstacle {
 
     /// Corners of a box obstacle's outline (counter-clockwise), for plots; empty for cylinders.
     pub fn corners(&self) -> Vec<[f64; 2]> {
-        let Shape::Box { half_x, half_y } = self.shape else { return Vec::new() };
+        let Shape::Box { half_x, half_y } = self.shape else {
+            return Vec::new();
+        };
         let (s, c) = self.yaw.sin_cos();
-        [(-half_x, -half_y), (half_x, -half_y), (half_x, half_y), (-half_x, half_y)]
-            .iter()
-            .map(|(x, y)| [self.center[0] + c * x - s * y, self.center[1] + s * x + c * y])
-            .collect()
+        [
+            (-half_x, -half_y),
+            (half_x, -half_y),
+            (half_x, half_y),
+            (-half_x, half_y),
+        ]
+        .iter()
+        .map(|(x, y)| {
+            [
+                self.center[0] + c * x - s * y,
+                self.center[1] + s * x + c * y,
+            ]
+        })
+        .collect()
     }
 }
 

@@ -1,0 +1,14 @@
+//! Caravan's per-robot sensors, one process per robot as on its Raspberry Pi:
+//! - [`laser`]: a planar laser scanner (Hokuyo URG-04LX-UG01 defaults) by ray casting;
+//! - [`encoders`]: wheel encoder ticks from the wheels' accumulated angles;
+//! - [`imu`]: a virtual accelerometer, gyroscope and orientation from ground truth.
+//!
+//! The algorithms live here with their tests; `main.rs` only wires them to topics.
+
+pub mod encoders;
+pub mod imu;
+pub mod laser;
+pub mod noise;
+pub mod params;
+pub mod schedule;
+pub mod sync;
