@@ -1,0 +1,42 @@
+//! The lab world keeps the convoy's start corridor and the goal route free.
+
+use crate::common::launch_dir;
+use caravan_physics::Params;
+use caravan_world::load_world;
+
+const ROUTE: [[f64; 2]; 5] = [[1.9, 0.7], [4.6, 0.8], [5.2, 2.6], [3.0, 3.3], [1.0, 2.4]];
+
+#[test]
+fn goal_route_keeps_045_m_from_obstacles() {
+    let world = load_world(&launch_dir().join("worlds/lab.toml")).unwrap();
+    for leg in ROUTE.windows(2) {
+        let (a, b) = (leg[0], leg[1]);
+        for k in 0..=200 {
+            let t = k as f64 / 200.0;
+            let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            let c = world.clearance(p);
+            assert!(c >= 0.45, "clearance {c} m at {p:?} on {a:?} → {b:?}");
+        }
+    }
+}
+
+#[test]
+fn start_corridor_is_free() {
+    let world = load_world(&launch_dir().join("worlds/lab.toml")).unwrap();
+    for i in 0..=300 {
+        for j in 0..=10 {
+            let p = [0.3 + i as f64 * 0.01, 0.5 + j as f64 * 0.05];
+            assert!(
+                world.clearance(p) > 0.15,
+                "{p:?} is too close to an obstacle"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_convoy_starts_in_the_lab() {
+    let sim = caravan_physics::load(&Params::default(), &launch_dir(), 2_000_000).unwrap();
+    assert_eq!(sim.robot_count(), 5);
+    assert!((sim.pose(4).x - 0.3).abs() < 1e-6);
+}

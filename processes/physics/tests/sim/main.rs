@@ -1,0 +1,10 @@
+//! In-process tests of the physics: the simulation is driven directly, without iceoryx2.
+//! Every time is simulated time.
+
+mod bad_input;
+mod collisions;
+mod common;
+mod determinism;
+mod driving;
+mod lab;
+mod step_response;
