@@ -5,14 +5,17 @@
 //!
 //! (poses in the map frame). Nothing corrects lateral error, so lateral offsets persist and
 //! pass down the chain, as in the paper. Caravan's choices where the paper is silent: gains
-//! k1 = k2 = 1 s⁻¹ and k3 = 2 s⁻¹; no reversing (v ≥ 0); limits |ω| ≤ 2 rad/s, v ≤ 0.25 m/s;
-//! the robot holds still while t − τ precedes the predecessor's history and whenever the
-//! bumper-to-bumper gap to the predecessor (centre distance minus one robot length) is under
-//! the 0.15 m safety distance.
+//! k1 = k2 = 1.5 s⁻¹ and k3 = 1 s⁻¹ (the wheel-speed loop settles in 2.5 s on the floor and
+//! overshoots; higher heading gains make the chain oscillate); no reversing (v ≥ 0); limits
+//! |ω| ≤ 2 rad/s, v ≤ 0.25 m/s; the robot holds still while t − τ precedes the predecessor's
+//! history; near the predecessor the speed is capped at k_gap·(gap − safety − margin), so it
+//! eases to a stop before the gap between the two footprints reaches the 0.15 m safety
+//! distance (a robot rolls about 6 cm after a zero set-point).
 
 use crate::angle::wrap;
 use crate::history::PoseHistory;
 use caravan_schemas::Pose2D;
+use caravan_world::geometry::{footprint, rect_distance};
 use serde::Deserialize;
 
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -24,8 +27,13 @@ pub struct FollowerParams {
     /// Delay τ, s.
     pub tau_s: f64,
     pub safety_distance_m: f64,
-    /// Length of a robot along the convoy, m (centre distance minus this is the gap).
-    pub robot_length_m: f64,
+    /// Extra gap kept for the distance a robot rolls after it is told to stop, m.
+    pub stop_margin_m: f64,
+    /// Speed allowed per metre of gap beyond safety distance and margin, s⁻¹.
+    pub k_gap: f64,
+    /// Footprint half extents (x, y) and its centre's offset ahead of base_link, m.
+    pub footprint_half_m: [f64; 2],
+    pub footprint_offset_m: f64,
     pub v_max: f64,
     pub omega_max: f64,
 }
@@ -33,12 +41,15 @@ pub struct FollowerParams {
 impl Default for FollowerParams {
     fn default() -> Self {
         Self {
-            k1: 1.0,
-            k2: 1.0,
-            k3: 2.0,
+            k1: 1.5,
+            k2: 1.5,
+            k3: 1.0,
             tau_s: 2.0,
             safety_distance_m: 0.15,
-            robot_length_m: 0.20,
+            stop_margin_m: 0.05,
+            k_gap: 1.5,
+            footprint_half_m: [0.10, 0.09],
+            footprint_offset_m: -0.02,
             v_max: 0.25,
             omega_max: 2.0,
         }
@@ -66,15 +77,24 @@ pub fn command(
     else {
         return (0.0, 0.0, Reason::Waiting);
     };
-    let gap = (current.x - own.x).hypot(current.y - own.y) - p.robot_length_m;
-    if gap < p.safety_distance_m {
+    let rect = |q: Pose2D| {
+        footprint(
+            [q.x, q.y, q.theta],
+            p.footprint_half_m,
+            p.footprint_offset_m,
+        )
+    };
+    let room = rect_distance(&rect(own), &rect(current)) - p.safety_distance_m - p.stop_margin_m;
+    if room <= 0.0 {
         return (0.0, 0.0, Reason::SafetyStop);
     }
     let (s, c) = own.theta.sin_cos();
     let v = p.k1 * (target.x - own.x) * c + p.k2 * (target.y - own.y) * s;
     let omega = p.k3 * wrap(target.theta - own.theta);
+    // Ease off near the predecessor: the wheels need time (and distance) to stop.
+    let v_max = p.v_max.min(p.k_gap * room);
     (
-        v.clamp(0.0, p.v_max),
+        v.clamp(0.0, v_max),
         omega.clamp(-p.omega_max, p.omega_max),
         Reason::Tracking,
     )
@@ -105,7 +125,10 @@ mod tests {
         // τ = 2 s ago the predecessor was at x = 2.6; we are at 2.4 heading +x.
         let (v, w, why) = command(pose(2.4, 0.0, 0.0), &h, 10.0, &FollowerParams::default());
         assert_eq!(why, Reason::Tracking);
-        assert!((v - 0.2).abs() < 1e-9 && w.abs() < 1e-12, "{v} {w}");
+        assert!(
+            (v - 0.3_f64.min(0.25)).abs() < 1e-9 && w.abs() < 1e-12,
+            "{v} {w}"
+        );
     }
 
     #[test]
@@ -116,16 +139,27 @@ mod tests {
         let (_, w, _) = command(pose(-1.0, 0.0, -3.0), &h, 10.0, &FollowerParams::default());
         // θ_p − θ = 6 rad ≡ −0.283 rad: turn right, not 6 rad left.
         assert!(
-            w < 0.0 && (w - 2.0 * (6.0 - std::f64::consts::TAU)).abs() < 1e-9,
+            w < 0.0
+                && (w - FollowerParams::default().k3 * (6.0 - std::f64::consts::TAU)).abs() < 1e-9,
             "{w}"
         );
     }
 
     #[test]
     fn stops_inside_the_safety_distance() {
-        let h = straight_history(10.0); // predecessor now at x = 3.0
-        let (v, w, why) = command(pose(2.7, 0.0, 0.0), &h, 10.0, &FollowerParams::default());
+        let h = straight_history(10.0); // predecessor now at x = 3.0: footprints 0.24 m apart
+        let (v, w, why) = command(pose(2.56, 0.0, 0.0), &h, 10.0, &FollowerParams::default());
         assert_eq!((v, w, why), (0.0, 0.0, Reason::SafetyStop));
+    }
+
+    #[test]
+    fn slows_down_when_closing_in() {
+        let h = straight_history(10.0);
+        let p = FollowerParams::default();
+        // Footprints 0.30 m apart: 0.05 m of room beyond safety distance and margin.
+        let (v, _, why) = command(pose(2.5, 0.0, 0.0), &h, 10.0, &p);
+        assert_eq!(why, Reason::Tracking);
+        assert!((v - p.k_gap * 0.05).abs() < 1e-9, "{v}");
     }
 
     #[test]
@@ -143,7 +177,7 @@ mod tests {
         assert_eq!(v, p.v_max);
         let (v, _, _) = command(pose(2.4, 0.0, std::f64::consts::PI), &h, 10.0, &p);
         assert_eq!(v, 0.0);
-        let (_, w, _) = command(pose(2.4, 0.0, 1.5), &h, 10.0, &p);
+        let (_, w, _) = command(pose(2.4, 0.0, 2.5), &h, 10.0, &p);
         assert_eq!(w, -p.omega_max);
     }
 

@@ -1,6 +1,7 @@
 //! The leader's goal-to-goal driver (ground-truth pose for now; the autonomy issue replaces
 //! pose and path without changing this interface). It turns toward the current goal and
-//! drives within the reference limits v ∈ [0.1, 0.2] m/s, ω ∈ [−1.5, 2.0] rad/s, advancing
+//! drives within the reference limits (heading gain 0.7 s⁻¹: the wheels' slow, overshooting
+//! speed loop makes higher gains weave) v ∈ [0.1, 0.2] m/s, ω ∈ [−1.5, 2.0] rad/s, advancing
 //! to the next goal within the tolerance and stopping at the last.
 
 use crate::angle::wrap;
@@ -30,7 +31,7 @@ impl Default for LeaderParams {
             v_max: 0.2,
             omega_min: -1.5,
             omega_max: 2.0,
-            k_heading: 2.0,
+            k_heading: 0.7,
         }
     }
 }

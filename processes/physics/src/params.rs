@@ -2,7 +2,7 @@
 //!
 //! ```toml
 //! params = { world = "worlds/lab.toml", robot = "robots/convoy_bot.urdf", count = 2,
-//!            poses = [[1.9, 0.7, 0.0], [1.5, 0.7, 0.0]], substeps = 5,
+//!            poses = [[2.2, 1.0, 0.0], [1.8, 1.0, 0.0]], substeps = 5,
 //!            motor = { resistance_ohm = 20.0 }, pid = { kp = 0.2, ki = 2.0 } }
 //! ```
 //!
@@ -36,13 +36,13 @@ pub struct Params {
     pub pid: FirmwareParams,
 }
 
-/// The reference convoy's start line: R0 (leader) in front at x = 1.9, R4 last at x = 0.3.
+/// The reference convoy's start line: R0 (leader) in front at x = 2.2, R4 last at x = 0.6.
 pub const CONVOY_START: [[f64; 3]; 5] = [
-    [1.9, 0.7, 0.0],
-    [1.5, 0.7, 0.0],
-    [1.1, 0.7, 0.0],
-    [0.7, 0.7, 0.0],
-    [0.3, 0.7, 0.0],
+    [2.2, 1.0, 0.0],
+    [1.8, 1.0, 0.0],
+    [1.4, 1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [0.6, 1.0, 0.0],
 ];
 
 impl Default for Params {
@@ -127,7 +127,7 @@ mod tests {
     fn defaults_are_the_convoy() {
         let p = parse(json!({})).unwrap();
         assert_eq!(p.count, 5);
-        assert_eq!(p.poses[0], [1.9, 0.7, 0.0]);
+        assert_eq!(p.poses[0], [2.2, 1.0, 0.0]);
     }
 
     #[test]

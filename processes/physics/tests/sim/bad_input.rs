@@ -90,7 +90,7 @@ fn wrong_number_of_poses_is_rejected() {
 #[test]
 fn pose_inside_an_obstacle_is_rejected() {
     // The bench in the middle of the lab.
-    let e = error(&one_robot([3.3, 1.95, 0.0]), &launch_dir());
+    let e = error(&one_robot([3.5, 2.3, 0.0]), &launch_dir());
     assert!(
         e.contains("poses[0]") && e.contains("inside the box"),
         "{e}"
@@ -109,7 +109,7 @@ fn overlapping_robots_and_poses_off_the_floor_are_rejected() {
     };
     let e = error(&params, &launch_dir());
     assert!(e.contains("robots 0 and 1"), "{e}");
-    let e = error(&one_robot([7.0, 1.0, 0.0]), &launch_dir());
+    let e = error(&one_robot([8.0, 1.0, 0.0]), &launch_dir());
     assert!(e.contains("poses[0]") && e.contains("off the floor"), "{e}");
 }
 

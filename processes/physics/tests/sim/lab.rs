@@ -4,7 +4,7 @@ use crate::common::launch_dir;
 use caravan_physics::Params;
 use caravan_world::load_world;
 
-const ROUTE: [[f64; 2]; 5] = [[1.9, 0.7], [4.6, 0.8], [5.2, 2.6], [3.0, 3.3], [1.0, 2.4]];
+const ROUTE: [[f64; 2]; 5] = [[2.2, 1.0], [5.0, 1.1], [5.6, 3.0], [3.4, 3.8], [1.4, 3.0]];
 
 #[test]
 fn goal_route_keeps_045_m_from_obstacles() {
@@ -25,7 +25,7 @@ fn start_corridor_is_free() {
     let world = load_world(&launch_dir().join("worlds/lab.toml")).unwrap();
     for i in 0..=300 {
         for j in 0..=10 {
-            let p = [0.3 + i as f64 * 0.01, 0.5 + j as f64 * 0.05];
+            let p = [0.6 + i as f64 * 0.01, 0.75 + j as f64 * 0.05];
             assert!(
                 world.clearance(p) > 0.15,
                 "{p:?} is too close to an obstacle"
@@ -38,5 +38,5 @@ fn start_corridor_is_free() {
 fn the_convoy_starts_in_the_lab() {
     let sim = caravan_physics::load(&Params::default(), &launch_dir(), 2_000_000).unwrap();
     assert_eq!(sim.robot_count(), 5);
-    assert!((sim.pose(4).x - 0.3).abs() < 1e-6);
+    assert!((sim.pose(4).x - 0.6).abs() < 1e-6);
 }

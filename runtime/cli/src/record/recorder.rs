@@ -66,12 +66,18 @@ impl Recorder {
             .map_err(|e| anyhow::anyhow!("recorder node: {e:?}"))?;
         let file =
             File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-        let writer = mcap::WriteOptions::new()
-            .library("caravan")
-            // The crate writes summary channels and schemas in hash order; leave them out so
-            // that lockstep reruns are byte-identical (they are still in the data section).
-            .repeat_channels(false)
-            .repeat_schemas(false)
+        let mut options = mcap::WriteOptions::new().library("caravan");
+        if lockstep {
+            // The crate writes summary channels and schemas in hash order. Leave them out so
+            // that reruns are byte-identical (they stay in the data section), and the chunk
+            // indexes with them: readers that find indexes expect summary channels, and
+            // without indexes they read the file linearly.
+            options = options
+                .repeat_channels(false)
+                .repeat_schemas(false)
+                .emit_chunk_indexes(false);
+        }
+        let writer = options
             .create(BufWriter::new(file))
             .context("cannot start the MCAP file")?;
         Ok(Self {
@@ -103,13 +109,17 @@ impl Recorder {
             if !self.seen.insert(hash) {
                 continue;
             }
-            let wanted = info.name == STATUS || self.patterns.iter().any(|p| glob_match(p, &info.name));
+            let wanted =
+                info.name == STATUS || self.patterns.iter().any(|p| glob_match(p, &info.name));
             if !wanted {
                 continue;
             }
             if caravan_schemas::with_message_type!(&info.type_name, |T| ()).is_none() {
                 // A type outside the schemas (a user's own) cannot be decoded; say so once.
-                eprintln!("caravan: not recording '{}': unknown message type '{}'", info.name, info.type_name);
+                eprintln!(
+                    "caravan: not recording '{}': unknown message type '{}'",
+                    info.name, info.type_name
+                );
                 continue;
             }
             match open_tap(&self.iox, &info.name, &info.type_name) {

@@ -9,9 +9,9 @@
 //! - cross-track error: distance from a follower's position to the other robot's whole path
 //!   (extended the same way), over all recorded samples.
 
-use super::geometry::{Polyline, footprint, rect_distance};
 use super::svg::Plot;
 use crate::record::reader::RecordedMessage;
+use caravan_world::geometry::{Polyline, footprint, rect_distance};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::path::Path;

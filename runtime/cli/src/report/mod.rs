@@ -22,7 +22,6 @@
 //! Further scenario sections (`slam`, `links`) are added by later scenarios.
 
 mod convoy;
-mod geometry;
 mod markdown;
 mod svg;
 

@@ -213,6 +213,16 @@ fn run_group(
         caravan::env_vars::SEED.to_string(),
         lf.group.seed.to_string(),
     );
+    // Relative paths in params (worlds, robot descriptions) are relative to the launch file.
+    let parent = lf
+        .path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    env.insert(
+        caravan::env_vars::LAUNCH_DIR.to_string(),
+        std::path::absolute(parent)?.display().to_string(),
+    );
     env.insert(
         caravan::env_vars::EPOCH_NS.to_string(),
         caravan::wall_clock_ns().to_string(),
