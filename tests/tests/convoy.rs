@@ -15,6 +15,9 @@ fn lockstep_convoy_reaches_every_goal_without_collision() {
         .arg(&launch)
         .args([
             "--quiet",
+            // The leader reaches D after about 47 s and the followers line up behind it.
+            "--duration",
+            "70s",
             "--set",
             &format!("group.name={}", group.name),
             "--runs-dir",
