@@ -104,9 +104,11 @@ impl<T: Message> Publisher<T> {
             .send()
             .map_err(|e| Error::topic(&self.topic, format!("cannot send: {e:?}")))?;
         self.shared.note_published(self.topic_hash);
-        // A failed wake-up only delays an event-driven subscriber to its next event; the message
-        // itself is delivered, so this is not an error of the publish.
-        let _ = self.notifier.notify();
+        // In lockstep the scheduler wakes subscribers. A failed wake-up only delays an
+        // event-driven subscriber to its next event; the message itself is delivered.
+        if !self.shared.lockstep {
+            let _ = self.notifier.notify();
+        }
         Ok(())
     }
 }

@@ -56,7 +56,11 @@ impl<T: Message> Subscriber<T> {
             .buffer_size(topic.delivery().depth())
             .create()
             .map_err(|e| Error::topic(topic.name(), format!("cannot create subscriber: {e:?}")))?;
-        shared.listener(topic.name())?;
+        if !shared.lockstep {
+            // Realtime steps wake on these; in lockstep the scheduler wakes nodes instead, and
+            // an unused listener would only cost every publish a system call.
+            shared.listener(topic.name())?;
+        }
         Ok(Self {
             topic: topic.name().to_string(),
             port,

@@ -8,7 +8,8 @@ use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
 
 /// Most topics a node may trigger on or publish to in one step, as seen by the scheduler.
-pub const MAX_TOPICS: usize = 32;
+/// Enough for one physics process publishing three topics for each of 64+ robots.
+pub const MAX_TOPICS: usize = 512;
 
 /// Service where nodes announce themselves.
 pub const HELLO: &str = "caravan/lockstep/hello";

@@ -62,8 +62,8 @@ impl Default for Params {
 }
 
 /// Most robots one physics process simulates. Each robot adds three topics to a step's
-/// publications, and the lockstep protocol carries at most 32 per step.
-pub const MAX_ROBOTS: usize = 10;
+/// publications, and the lockstep protocol carries at most `MAX_TOPICS` per step.
+pub const MAX_ROBOTS: usize = (caravan_schemas::lockstep::MAX_TOPICS - 1) / 3;
 
 impl Params {
     /// Checks values serde cannot; the message names the key.
