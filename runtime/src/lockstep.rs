@@ -80,6 +80,10 @@ pub(crate) struct Client {
     done_notifier: Notifier<ipc::Service>,
     /// Kept open: a sample whose publisher is gone before the subscriber attached is lost.
     _hello: Pub<Hello>,
+    hello_notifier: Notifier<ipc::Service>,
+    hello: Hello,
+    /// The last report, repeated if the scheduler grants the same step again.
+    last_done: std::cell::RefCell<Option<Done>>,
     shared: Rc<Shared>,
 }
 
@@ -92,16 +96,6 @@ impl Client {
     ) -> Result<Self, Error> {
         let iox = &shared.iox;
         let grant_name = proto::grant_service(node);
-        let hello_port = publisher::<Hello>(iox, proto::HELLO)?;
-        let client = Self {
-            node_hash: shared.node_hash,
-            grants: subscriber::<Grant>(iox, &grant_name)?,
-            grant_listener: transport::listener(iox, &grant_name)?,
-            done: publisher::<Done>(iox, proto::DONE)?,
-            done_notifier: transport::notifier(iox, proto::DONE)?,
-            shared: shared.clone(),
-            _hello: hello_port,
-        };
         let mut hello = Hello {
             node: FixedString::new(node),
             period_ns: period.map_or(0, |p| p.as_nanos() as u64),
@@ -112,33 +106,53 @@ impl Client {
                 Error::Lockstep(format!("node '{node}' triggers on too many topics"))
             })?;
         }
-        send(&client._hello, hello, proto::HELLO)?;
-        transport::notifier(iox, proto::HELLO)?
-            .notify()
-            .map_err(|e| Error::transport(proto::HELLO, e))?;
+        let client = Self {
+            node_hash: shared.node_hash,
+            grants: subscriber::<Grant>(iox, &grant_name)?,
+            grant_listener: transport::listener(iox, &grant_name)?,
+            done: publisher::<Done>(iox, proto::DONE)?,
+            done_notifier: transport::notifier(iox, proto::DONE)?,
+            _hello: publisher::<Hello>(iox, proto::HELLO)?,
+            hello_notifier: transport::notifier(iox, proto::HELLO)?,
+            hello,
+            last_done: std::cell::RefCell::new(None),
+            shared: shared.clone(),
+        };
+        client.say_hello()?;
         Ok(client)
     }
 
-    /// Blocks (event-driven) until the scheduler grants a step or stops the run.
+    /// Blocks (event-driven) until the scheduler grants a new step or stops the run.
+    ///
+    /// iceoryx2 can, rarely, fail to connect a new publisher to a subscriber, losing a
+    /// sample; the protocol therefore tolerates repeats: until the first grant the hello is
+    /// sent again every second, and a repeated grant for the step already done is answered by
+    /// repeating its report (the scheduler re-grants when a report is overdue).
     pub fn wait_for_grant(&self, waitset: &WaitSet<ipc::Service>) -> Result<GrantOutcome, Error> {
         let _guard = waitset
             .attach_notification(&self.grant_listener)
             .map_err(|e| Error::transport("lockstep grant wait", e))?;
         loop {
-            if let Some(sample) = self
+            while let Some(sample) = self
                 .grants
                 .receive()
                 .map_err(|e| Error::transport("grant", e))?
             {
                 let grant = *sample.payload();
-                return Ok(if grant.stop != 0 {
-                    GrantOutcome::Stop
-                } else {
-                    GrantOutcome::Step(grant)
-                });
+                if grant.stop != 0 {
+                    return Ok(GrantOutcome::Stop);
+                }
+                match *self.last_done.borrow() {
+                    Some(done) if grant.now_ns == done.now_ns => self.send_done(done)?,
+                    Some(done) if grant.now_ns < done.now_ns => {}
+                    _ => return Ok(GrantOutcome::Step(grant)),
+                }
             }
             let result = waitset
-                .wait_and_process_once(|_| CallbackProgression::Continue)
+                .wait_and_process_once_with_timeout(
+                    |_| CallbackProgression::Continue,
+                    Duration::from_secs(1),
+                )
                 .map_err(|e| Error::transport("lockstep grant wait", e))?;
             self.grant_listener
                 .try_wait(|_| {})
@@ -149,7 +163,18 @@ impl Client {
             ) {
                 return Ok(GrantOutcome::Terminated);
             }
+            if self.last_done.borrow().is_none() {
+                self.say_hello()?;
+            }
         }
+    }
+
+    fn say_hello(&self) -> Result<(), Error> {
+        send(&self._hello, self.hello, proto::HELLO)?;
+        self.hello_notifier
+            .notify()
+            .map_err(|e| Error::transport(proto::HELLO, e))?;
+        Ok(())
     }
 
     /// Reports the step at `now_ns` finished, with the topics it published to.
@@ -161,9 +186,14 @@ impl Client {
         };
         for topic in self.shared.published.borrow_mut().drain(..) {
             // More topics than fit cannot be scheduled precisely; the node is still woken by
-            // its period, so truncation only delays subscribers and is reported at hello time.
+            // its period, so truncation only delays subscribers.
             let _ = done.published.push(topic);
         }
+        *self.last_done.borrow_mut() = Some(done);
+        self.send_done(done)
+    }
+
+    fn send_done(&self, done: Done) -> Result<(), Error> {
         send(&self.done, done, proto::DONE)?;
         self.done_notifier
             .notify()
@@ -173,6 +203,9 @@ impl Client {
 }
 
 use iceoryx2::waitset::WaitSetRunResult;
+
+/// How long a node may take to report a step before its grant is repeated.
+const REGRANT_AFTER: Duration = Duration::from_secs(1);
 
 struct Member {
     name: String,
@@ -193,10 +226,10 @@ pub struct Advance {
     pub published: Vec<u64>,
 }
 
-/// Consulted while the scheduler waits: returns the names of nodes whose process died since
-/// the last call, or `Err` to abort the run.
-pub trait Watchdog: FnMut() -> Result<Vec<String>, String> {}
-impl<F: FnMut() -> Result<Vec<String>, String>> Watchdog for F {}
+/// Consulted while the scheduler waits, with the names of the nodes it waits for: returns the
+/// names of nodes whose process died since the last call, or `Err` to abort the run.
+pub trait Watchdog: FnMut(&[&str]) -> Result<Vec<String>, String> {}
+impl<F: FnMut(&[&str]) -> Result<Vec<String>, String>> Watchdog for F {}
 
 /// Owns simulated time for a group. The launcher runs one; tests can run one directly.
 pub struct Scheduler {
@@ -253,26 +286,25 @@ impl Scheduler {
         expected: &[String],
         mut watchdog: impl Watchdog,
     ) -> Result<(), Error> {
-        let expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
+        let mut expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
         loop {
-            while let Some(sample) = self
-                .hello
-                .receive()
-                .map_err(|e| Error::transport("hello", e))?
-            {
-                self.admit(sample.payload())?;
-            }
+            self.admit_new()?;
             let joined: BTreeSet<&str> = self.members.iter().map(|m| m.name.as_str()).collect();
             if expected.is_subset(&joined) {
                 return Ok(());
             }
-            watchdog().map_err(|why| {
-                let missing: Vec<_> = expected.difference(&joined).copied().collect();
+            let missing: Vec<&str> = expected.difference(&joined).copied().collect();
+            let dead = watchdog(&missing).map_err(|why| {
                 Error::Lockstep(format!(
                     "waiting for {} to start: {why}",
                     missing.join(", ")
                 ))
             })?;
+            // A process that died before joining is the supervisor's business (restart,
+            // or stop the group if it was required); a restarted one joins later.
+            for name in &dead {
+                expected.remove(name.as_str());
+            }
             self.wait_on(true)?;
         }
     }
@@ -353,6 +385,7 @@ impl Scheduler {
         }
         let mut waiting = due.clone();
         let mut published = BTreeSet::new();
+        let mut granted_at = std::time::Instant::now();
         while !waiting.is_empty() {
             while let Some(sample) = self
                 .done
@@ -363,11 +396,15 @@ impl Scheduler {
                 let Some(&i) = self.by_hash.get(&done.node_hash) else {
                     continue;
                 };
-                if done.now_ns != now_ns || !waiting.remove(&i) {
+                if done.now_ns > now_ns {
                     return Err(Error::Lockstep(format!(
-                        "node '{}' reported a step at {} ns, expected {} ns",
+                        "node '{}' reported a step at {} ns, but time is {} ns",
                         self.members[i].name, done.now_ns, now_ns
                     )));
+                }
+                // Repeats of reports (answers to repeated grants) are expected; skip them.
+                if done.now_ns < now_ns || !waiting.remove(&i) {
+                    continue;
                 }
                 published.extend(done.published.as_slice().iter().copied());
                 self.schedule_after(i, now_ns, done.published.as_slice());
@@ -375,11 +412,11 @@ impl Scheduler {
             if waiting.is_empty() {
                 break;
             }
-            let dead = watchdog().map_err(|why| {
-                let names: Vec<_> = waiting
-                    .iter()
-                    .map(|&i| self.members[i].name.as_str())
-                    .collect();
+            let names: Vec<&str> = waiting
+                .iter()
+                .map(|&i| self.members[i].name.as_str())
+                .collect();
+            let dead = watchdog(&names).map_err(|why| {
                 Error::Lockstep(format!(
                     "waiting for {} to finish step at {now_ns} ns: {why}",
                     names.join(", ")
@@ -387,6 +424,21 @@ impl Scheduler {
             })?;
             self.mark_dead(&dead, &mut waiting);
             self.admit_new()?;
+            if granted_at.elapsed() > REGRANT_AFTER {
+                // A grant (or its report) may have been lost; nodes answer repeats safely.
+                for &i in &waiting {
+                    self.grant(
+                        i,
+                        Grant {
+                            now_ns,
+                            tick_ns: self.tick_ns,
+                            stop: 0,
+                            _reserved: 0,
+                        },
+                    )?;
+                }
+                granted_at = std::time::Instant::now();
+            }
             self.wait_on(false)?;
         }
         let mut stepped: Vec<String> = due.iter().map(|&i| self.members[i].name.clone()).collect();
@@ -410,7 +462,7 @@ impl Scheduler {
 
     /// Between advances: notes deaths and restarts reported by the watchdog.
     pub fn poll_members(&mut self, mut watchdog: impl Watchdog) -> Result<(), Error> {
-        let dead = watchdog().map_err(Error::Lockstep)?;
+        let dead = watchdog(&[]).map_err(Error::Lockstep)?;
         self.mark_dead(&dead, &mut BTreeSet::new());
         self.admit_new()
     }

@@ -20,6 +20,10 @@ impl<const N: usize> Default for FixedString<N> {
 }
 
 impl<const N: usize> FixedString<N> {
+    /// Offsets of the length and the bytes inside the string, for layout descriptions.
+    pub(crate) const LEN_OFFSET: usize = core::mem::offset_of!(Self, len);
+    pub(crate) const BYTES_OFFSET: usize = core::mem::offset_of!(Self, bytes);
+
     /// Copies `s`, truncated to `N` bytes at a character boundary.
     pub fn new(s: &str) -> Self {
         let mut end = s.len().min(N);
@@ -54,6 +58,9 @@ pub struct FixedVec<T: Copy + PlacementDefault + ZeroCopySend, const N: usize> {
 
 impl<T: Copy + PlacementDefault + ZeroCopySend, const N: usize> FixedVec<T, N> {
     pub const CAPACITY: usize = N;
+    /// Offsets of the length and the items inside the vector, for layout descriptions.
+    pub(crate) const LEN_OFFSET: usize = core::mem::offset_of!(Self, len);
+    pub(crate) const ITEMS_OFFSET: usize = core::mem::offset_of!(Self, items);
 
     /// An empty vector.
     pub fn new() -> Self {

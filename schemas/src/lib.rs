@@ -5,6 +5,7 @@
 //! type name (`caravan::<Name>`) that iceoryx2 uses to reject mismatched publishers and
 //! subscribers. The stamped [`Header`] travels as iceoryx2's user header, beside the payload.
 
+pub mod describe;
 mod fixed;
 mod geometry;
 mod header;

@@ -494,3 +494,67 @@ fn report_is_recomputed_from_the_run_directory() {
     assert_eq!(s.report(), before);
     assert!(Path::new(&dir.join("report.md")).exists());
 }
+
+#[test]
+fn hung_lockstep_process_is_killed_and_named() {
+    let s = Scenario::new(
+        "hang",
+        r#"clock = "lockstep"
+duration = "5s"
+step_timeout = "1s"
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+
+[[process]]
+name = "stuck"
+exec = "caravan-testnode hang"
+params = { count = 3 }
+required = false
+"#,
+    );
+    let out = s.run(&[]);
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("process 'stuck' has not finished its step") && err.contains("hung"),
+        "{err}"
+    );
+    let report = s.report();
+    assert_eq!(node(&report, "stuck")["exit_status"], "killed by signal 9");
+    // The group went on without it.
+    assert_eq!(report["run"]["outcome"], "completed");
+    assert_eq!(node(&report, "ping")["steps"], 51);
+}
+
+#[test]
+fn mismatched_message_type_is_reported_and_tolerated_when_optional() {
+    let s = Scenario::new(
+        "mismatch",
+        r#"clock = "realtime"
+duration = "3s"
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+
+[[process]]
+name = "impostor"
+exec = "caravan-testnode wrong-type"
+params = { topic = "demo/ping", count = 700 }
+required = false
+"#,
+    );
+    let out = s.run(&[]);
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("process 'impostor' exited 1")
+            && err.contains("'demo/ping'")
+            && err.contains("caravan::WheelSetpoint")
+            && err.contains("different message type"),
+        "{err}"
+    );
+    assert_eq!(node(&s.report(), "ping")["exit_status"], "exited 0");
+}

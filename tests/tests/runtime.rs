@@ -156,10 +156,10 @@ fn lockstep_nodes_step_at_granted_times_and_never_see_the_future() {
     );
     let alive = |c: &mut Child| c.try_wait().unwrap().is_none();
     let names = vec!["source".to_string(), "sink".to_string()];
-    scheduler.wait_for_nodes(&names, || Ok(vec![])).unwrap();
+    scheduler.wait_for_nodes(&names, |_| Ok(vec![])).unwrap();
     let mut advances = Vec::new();
     while scheduler.next_time_ns().unwrap() <= 1_000_000_000 {
-        advances.push(scheduler.advance(|| Ok(vec![])).unwrap().unwrap());
+        advances.push(scheduler.advance(|_| Ok(vec![])).unwrap().unwrap());
     }
     scheduler.stop_all().unwrap();
     assert!(source.wait().unwrap().success() && sink.wait().unwrap().success());

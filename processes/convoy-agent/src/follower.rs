@@ -147,19 +147,38 @@ mod tests {
 
     #[test]
     fn stops_inside_the_safety_distance() {
-        let h = straight_history(10.0); // predecessor now at x = 3.0: footprints 0.24 m apart
-        let (v, w, why) = command(pose(2.56, 0.0, 0.0), &h, 10.0, &FollowerParams::default());
+        let h = straight_history(10.0); // predecessor now at x = 3.0
+        let p = FollowerParams::default();
+        let gap = p.safety_distance_m + p.stop_margin_m - 0.01;
+        let (v, w, why) = command(
+            pose(3.0 - 2.0 * p.footprint_half_m[0] - gap, 0.0, 0.0),
+            &h,
+            10.0,
+            &p,
+        );
         assert_eq!((v, w, why), (0.0, 0.0, Reason::SafetyStop));
     }
 
     #[test]
     fn slows_down_when_closing_in() {
         let h = straight_history(10.0);
-        let p = FollowerParams::default();
-        // Footprints 0.30 m apart: 0.05 m of room beyond safety distance and margin.
-        let (v, _, why) = command(pose(2.5, 0.0, 0.0), &h, 10.0, &p);
+        // Stiff gains, so the law alone would drive at full speed.
+        let p = FollowerParams {
+            k1: 10.0,
+            k2: 10.0,
+            ..Default::default()
+        };
+        // Predecessor at x = 3.0; 0.05 m of room beyond safety distance and margin.
+        let room = 0.05;
+        let gap = p.safety_distance_m + p.stop_margin_m + room;
+        let (v, _, why) = command(
+            pose(3.0 - 2.0 * p.footprint_half_m[0] - gap, 0.0, 0.0),
+            &h,
+            10.0,
+            &p,
+        );
         assert_eq!(why, Reason::Tracking);
-        assert!((v - p.k_gap * 0.05).abs() < 1e-9, "{v}");
+        assert!((v - p.k_gap * room).abs() < 1e-9, "{v}");
     }
 
     #[test]

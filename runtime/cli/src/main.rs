@@ -7,6 +7,7 @@ mod launch;
 mod record;
 mod report;
 mod run;
+mod schemas_py;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -44,6 +45,8 @@ enum Command {
     /// Latency benchmarks
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+    /// Message layouts for other languages: a Python module (--python) or JSON (--layout)
+    Schemas(schemas_py::SchemasArgs),
 }
 
 fn main() -> ExitCode {
@@ -59,6 +62,7 @@ fn main() -> ExitCode {
         }),
         Command::Clean => clean::clean().map(|_| ExitCode::SUCCESS),
         Command::Bench(cmd) => bench::run(cmd).map(|_| ExitCode::SUCCESS),
+        Command::Schemas(args) => schemas_py::run(&args).map(|_| ExitCode::SUCCESS),
     };
     result.unwrap_or_else(|e| {
         eprintln!("caravan: {e:#}");

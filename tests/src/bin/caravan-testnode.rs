@@ -7,6 +7,8 @@
 //! - `idle`: steps at the launch rate doing nothing.
 //! - `params`: only parses its params (`gain: f64`, `name: String`).
 //! - `lockstep-source` / `lockstep-sink`: see the lockstep protocol test.
+//! - `hang`: steps at 10 Hz and hangs in its step after `count` steps.
+//! - `wrong-type`: after `count` ms, publishes `WheelSetpoint`s on `topic` (type-mismatch tests).
 
 use caravan::{Error, Node, Topic, Trigger};
 use caravan_schemas::Pose2D;
@@ -85,6 +87,27 @@ fn run(mode: &str) -> Result<(), Error> {
                         .map_err(|e| Error::Step(e.to_string()))?;
                 }
                 Ok(())
+            })?;
+        }
+        "hang" => {
+            let count = p.count;
+            node.run(Trigger::every_hz(10.0), |step| {
+                if step.index() >= count {
+                    // Simulates a node stuck in its computation (a deadlock, an endless loop).
+                    loop {
+                        std::thread::park();
+                    }
+                }
+                Ok(())
+            })?;
+        }
+        "wrong-type" => {
+            // Join late, as a plug-in would, so the group's own publisher owns the topic.
+            std::thread::sleep(std::time::Duration::from_millis(p.count));
+            let publisher =
+                node.publisher(&Topic::<caravan_schemas::WheelSetpoint>::new(&p.topic))?;
+            node.run(Trigger::every_hz(10.0), |_| {
+                publisher.publish(&Default::default())
             })?;
         }
         other => return Err(Error::Step(format!("unknown mode '{other}'"))),

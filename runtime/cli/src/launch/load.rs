@@ -13,7 +13,14 @@ use toml_edit::{Document, Item, TableLike, Value};
 
 const TOP_KEYS: &[&str] = &["group", "hosts", "links", "process"];
 const GROUP_KEYS: &[&str] = &[
-    "name", "clock", "duration", "seed", "tick", "record", "grace",
+    "name",
+    "clock",
+    "duration",
+    "seed",
+    "tick",
+    "record",
+    "grace",
+    "step_timeout",
 ];
 const HOST_KEYS: &[&str] = &["cpu_slowdown"];
 const LINK_KEYS: &[&str] = &["between", "latency", "jitter", "loss", "bandwidth"];
@@ -355,6 +362,7 @@ impl Checker<'_> {
             tick: GroupSpec::DEFAULT_TICK,
             record: Vec::new(),
             grace: GroupSpec::DEFAULT_GRACE,
+            step_timeout: GroupSpec::DEFAULT_STEP_TIMEOUT,
         };
         let Some(s) = self.table(root, "group", "group".into(), Some(GROUP_KEYS)) else {
             if root.get("group").is_none() {
@@ -380,6 +388,9 @@ impl Checker<'_> {
         group.grace = self
             .get(&s, "grace", duration)
             .unwrap_or(GroupSpec::DEFAULT_GRACE);
+        group.step_timeout = self
+            .get(&s, "step_timeout", positive_duration)
+            .unwrap_or(GroupSpec::DEFAULT_STEP_TIMEOUT);
         group
     }
 

@@ -35,11 +35,14 @@ pub struct GroupSpec {
     pub record: Vec<String>,
     /// Time between SIGTERM and SIGKILL when stopping a process.
     pub grace: Duration,
+    /// Lockstep: wall time a node may take for one step before it is deemed hung and killed.
+    pub step_timeout: Duration,
 }
 
 impl GroupSpec {
     pub const DEFAULT_TICK: Duration = Duration::from_millis(1);
     pub const DEFAULT_GRACE: Duration = Duration::from_secs(3);
+    pub const DEFAULT_STEP_TIMEOUT: Duration = Duration::from_secs(30);
 }
 
 /// One entry of `[hosts]`.

@@ -30,6 +30,8 @@ pub struct DriverConfig {
     pub duration: Option<Duration>,
     /// Processes that must join the lockstep schedule.
     pub expected: Vec<String>,
+    /// Wall time a lockstep step may take before the node is deemed hung.
+    pub step_timeout: Duration,
 }
 
 /// What the driver reports when it ends.
@@ -78,7 +80,7 @@ fn run_lockstep(
     finish: &Receiver<()>,
 ) -> Result<u64> {
     let mut scheduler = Scheduler::new(&cfg.iceoryx, cfg.tick)?;
-    let watchdog = || {
+    let watchdog = |_: &[&str]| {
         if control.stop.load(Ordering::Relaxed) {
             return Err("the group is stopping".to_string());
         }
@@ -93,7 +95,23 @@ fn run_lockstep(
             if end_ns.is_some_and(|end| next > end) {
                 break;
             }
-            let Some(advance) = scheduler.advance(watchdog)? else {
+            // A node that does not finish its step in time is reported once, as hung; the
+            // launcher kills it and the wait ends with its death.
+            let started = Instant::now();
+            let mut reported = false;
+            let hang_watch = |waiting: &[&str]| {
+                if !reported && started.elapsed() > cfg.step_timeout {
+                    reported = true;
+                    let names = waiting.iter().map(|n| n.to_string()).collect();
+                    let _ = events.send(Event::Hung {
+                        names,
+                        now_ns: next,
+                        timeout: cfg.step_timeout,
+                    });
+                }
+                watchdog(waiting)
+            };
+            let Some(advance) = scheduler.advance(hang_watch)? else {
                 break;
             };
             now_ns = advance.now_ns;

@@ -243,6 +243,7 @@ fn run_group(
             tick: lf.group.tick,
             duration: lf.group.duration,
             expected: sup.names(),
+            step_timeout: lf.group.step_timeout,
         },
         lockstep,
         control.clone(),
@@ -287,10 +288,11 @@ fn run_group(
                 generation,
                 status,
                 usage,
+                last_error,
             }) => {
                 let name = sup.names()[index].clone();
                 control.deaths.lock().unwrap().push(name);
-                match sup.on_exit(index, generation, status, usage, stopping) {
+                match sup.on_exit(index, generation, status, usage, &last_error, stopping) {
                     Ok(Some(at)) => next_restart = Some(next_restart.map_or(at, |n| n.min(at))),
                     Ok(None) => {}
                     Err(why) => {
@@ -311,6 +313,19 @@ fn run_group(
                     console.say(&format!("stopping the group (signal {sig})"));
                     outcome = "interrupted";
                     begin_stop(&mut sup, &mut stopping, &mut kill_at);
+                }
+            }
+            Ok(Event::Hung {
+                names,
+                now_ns,
+                timeout,
+            }) => {
+                for name in names {
+                    console.say(&format!(
+                        "process '{name}' has not finished its step at {:.3} s after {timeout:?} (step_timeout); it looks hung, killing it",
+                        now_ns as f64 * 1e-9
+                    ));
+                    sup.kill(&name);
                 }
             }
             Ok(Event::DriverDone(result)) => {

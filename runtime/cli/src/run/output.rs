@@ -52,16 +52,33 @@ impl Console {
     }
 
     /// Copies `stream` line by line to the console and `log` on a thread of its own.
-    pub fn pump(&self, stream: impl Read + Send + 'static, prefix: String, log: Arc<Mutex<File>>) {
+    /// Returns the stream's last non-empty line (shared, updated as lines arrive) and a
+    /// receiver that disconnects when the stream ends.
+    pub fn pump(
+        &self,
+        stream: impl Read + Send + 'static,
+        prefix: String,
+        log: Arc<Mutex<File>>,
+    ) -> (Arc<Mutex<String>>, crossbeam::channel::Receiver<()>) {
         let console = self.clone();
+        let last = Arc::new(Mutex::new(String::new()));
+        let (eof_tx, eof_rx) = crossbeam::channel::bounded::<()>(0);
+        let tail = last.clone();
         std::thread::spawn(move || {
+            let _eof = eof_tx; // dropped at the end of the stream
             for line in BufReader::new(stream).lines() {
                 let Ok(line) = line else { break };
                 console.line(&prefix, &line);
                 if let Ok(mut f) = log.lock() {
                     let _ = writeln!(f, "{line}");
                 }
+                if !line.trim().is_empty()
+                    && let Ok(mut t) = tail.lock()
+                {
+                    *t = line;
+                }
             }
         });
+        (last, eof_rx)
     }
 }

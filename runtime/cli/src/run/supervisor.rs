@@ -20,8 +20,16 @@ pub enum Event {
         generation: u32,
         status: ExitStatus,
         usage: Usage,
+        /// The last line the process wrote to stderr.
+        last_error: String,
     },
     Signal(i32),
+    /// Lockstep nodes that did not finish the step at `now_ns` within `timeout`.
+    Hung {
+        names: Vec<String>,
+        now_ns: u64,
+        timeout: Duration,
+    },
     /// The lockstep schedule or the realtime recorder finished (or failed).
     DriverDone(Result<(), String>),
 }
@@ -197,8 +205,9 @@ impl Supervisor {
             prefix.clone(),
             p.log.clone(),
         );
-        self.console
-            .pump(child.stderr.take().expect("piped"), prefix, p.log.clone());
+        let (last_error, stderr_eof) =
+            self.console
+                .pump(child.stderr.take().expect("piped"), prefix, p.log.clone());
         p.pid = Some(child.id() as i32);
         p.generation += 1;
         let (events, generation) = (self.events.clone(), p.generation);
@@ -208,11 +217,16 @@ impl Supervisor {
         drop(child); // std never reaps on drop; `reap` does, with resource usage.
         std::thread::spawn(move || {
             if let Ok((status, usage)) = reap(pid) {
+                // Let the last lines of stderr arrive (a grandchild may hold the pipe open,
+                // so do not wait long): they explain the exit.
+                let _ = stderr_eof.recv_timeout(Duration::from_millis(300));
+                let last_error = last_error.lock().map(|l| l.clone()).unwrap_or_default();
                 let _ = events.send(Event::Exited {
                     index,
                     generation,
                     status,
                     usage,
+                    last_error,
                 });
             }
         });
@@ -227,6 +241,7 @@ impl Supervisor {
         generation: u32,
         status: ExitStatus,
         usage: Usage,
+        last_error: &str,
         stopping: bool,
     ) -> Result<Option<Instant>, String> {
         let p = &mut self.procs[index];
@@ -241,8 +256,12 @@ impl Supervisor {
         if stopping {
             return Ok(None);
         }
-        self.console
-            .say(&format!("process '{}' {}", spec.name, describe(&status)));
+        let why = if status.success() || last_error.is_empty() {
+            describe(&status)
+        } else {
+            format!("{}: {last_error}", describe(&status))
+        };
+        self.console.say(&format!("process '{}' {why}", spec.name));
         let wants = match spec.restart {
             Restart::Never => false,
             Restart::OnFailure => !status.success(),
@@ -264,11 +283,7 @@ impl Supervisor {
             return Ok(Some(at));
         }
         if spec.required && !status.success() {
-            return Err(format!(
-                "required process '{}' {}",
-                spec.name,
-                describe(&status)
-            ));
+            return Err(format!("required process '{}' {why}", spec.name));
         }
         Ok(None)
     }
@@ -293,6 +308,19 @@ impl Supervisor {
         self.procs
             .iter()
             .all(|p| p.pid.is_none() && p.restart_at.is_none())
+    }
+
+    /// Sends SIGKILL to the process named `name`, if it runs.
+    pub fn kill(&mut self, name: &str) {
+        if let Some(pid) = self
+            .procs
+            .iter()
+            .find(|p| p.plan.spec.name == name)
+            .and_then(|p| p.pid)
+        {
+            // SAFETY: signalling a child we spawned and have not reaped yet.
+            unsafe { libc::kill(pid, libc::SIGKILL) };
+        }
     }
 
     pub fn signal_all(&mut self, signal: i32) {

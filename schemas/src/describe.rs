@@ -1,0 +1,463 @@
+//! Layout descriptions of the message types, for other languages.
+//!
+//! [`layouts`] lists every type that crosses a process boundary (the registry's message types,
+//! the [`Header`] and the lockstep protocol's messages) with its size, alignment and fields.
+//! Offsets come from `core::mem::offset_of!`, sizes, array lengths and field types from the
+//! compiler, so a description cannot drift from the type; only the field names are listed here.
+//! `caravan schemas --python` turns them into ctypes structures and `caravan schemas --layout`
+//! prints them as JSON.
+//!
+//! [`FixedString<N>`] and [`FixedVec<T, N>`] are not types of their own in a description: a
+//! field `node: FixedString<64>` becomes `node_len: u32` and `node: [u8; 64]`, a field
+//! `poses: FixedVec<Pose2D, N>` becomes `poses_len: u32` and `poses: [Pose2D; N]`, each at the
+//! offset the compiler gave it.
+
+use crate::lockstep::{Done, Grant, Hello};
+use crate::{
+    Collision, EncoderTicks, FixedString, FixedVec, Goal, Header, Imu, LaserScan, NodeStatus,
+    OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Quaternion, Twist, Vector3, WheelSetpoint,
+    WheelState,
+};
+use core::mem::{align_of, offset_of, size_of};
+use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+
+/// A plain number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scalar {
+    F64,
+    F32,
+    U64,
+    I64,
+    U32,
+    I32,
+    U8,
+    I8,
+}
+
+impl Scalar {
+    /// Rust's name for it: `f64`, `u32`, …
+    pub fn name(self) -> &'static str {
+        match self {
+            Scalar::F64 => "f64",
+            Scalar::F32 => "f32",
+            Scalar::U64 => "u64",
+            Scalar::I64 => "i64",
+            Scalar::U32 => "u32",
+            Scalar::I32 => "i32",
+            Scalar::U8 => "u8",
+            Scalar::I8 => "i8",
+        }
+    }
+
+    pub fn size(self) -> usize {
+        match self {
+            Scalar::F64 | Scalar::U64 | Scalar::I64 => 8,
+            Scalar::F32 | Scalar::U32 | Scalar::I32 => 4,
+            Scalar::U8 | Scalar::I8 => 1,
+        }
+    }
+}
+
+/// What a field or an array element is: a number or a described struct.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Element {
+    Scalar(Scalar),
+    /// A struct by its [`TypeLayout::name`].
+    Struct(&'static str),
+}
+
+impl Element {
+    /// `f64`, or the struct's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Element::Scalar(s) => s.name(),
+            Element::Struct(name) => name,
+        }
+    }
+}
+
+/// The type of a field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Scalar(Scalar),
+    Struct(&'static str),
+    /// A fixed-length array.
+    Array(Element, usize),
+}
+
+impl Kind {
+    /// The single value, or the array's element.
+    pub fn element(self) -> Element {
+        match self {
+            Kind::Scalar(s) => Element::Scalar(s),
+            Kind::Struct(name) => Element::Struct(name),
+            Kind::Array(element, _) => element,
+        }
+    }
+
+    /// The array's length; `None` for a single value.
+    pub fn len(self) -> Option<usize> {
+        match self {
+            Kind::Array(_, len) => Some(len),
+            _ => None,
+        }
+    }
+}
+
+/// One field of a struct.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Field {
+    pub name: String,
+    /// Bytes from the start of the struct.
+    pub offset: usize,
+    /// Bytes the field occupies.
+    pub size: usize,
+    pub kind: Kind,
+}
+
+/// Size, alignment and fields of one type.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TypeLayout {
+    /// The Rust type's own name (`Pose2D`, `Hello`), also the name of its Python class.
+    pub name: &'static str,
+    /// The stable cross-language type name iceoryx2 matches (`caravan::Pose2D`).
+    pub type_name: &'static str,
+    pub size: usize,
+    pub align: usize,
+    /// In memory order.
+    pub fields: Vec<Field>,
+}
+
+/// A type that can appear as a field: it adds its field(s) to a description.
+pub trait FieldKind {
+    fn push(name: &str, offset: usize, out: &mut Vec<Field>);
+}
+
+/// A type that can be an array element: a number or a described struct.
+pub trait ElementKind: Sized {
+    const ELEMENT: Element;
+}
+
+/// A type with a layout description.
+pub trait Describe {
+    fn layout() -> TypeLayout;
+}
+
+fn kind_of(element: Element) -> Kind {
+    match element {
+        Element::Scalar(s) => Kind::Scalar(s),
+        Element::Struct(name) => Kind::Struct(name),
+    }
+}
+
+impl<T: ElementKind> FieldKind for T {
+    fn push(name: &str, offset: usize, out: &mut Vec<Field>) {
+        out.push(Field {
+            name: name.to_string(),
+            offset,
+            size: size_of::<T>(),
+            kind: kind_of(T::ELEMENT),
+        });
+    }
+}
+
+impl<T: ElementKind, const N: usize> FieldKind for [T; N] {
+    fn push(name: &str, offset: usize, out: &mut Vec<Field>) {
+        out.push(Field {
+            name: name.to_string(),
+            offset,
+            size: size_of::<[T; N]>(),
+            kind: Kind::Array(T::ELEMENT, N),
+        });
+    }
+}
+
+impl<const N: usize> FieldKind for FixedString<N> {
+    fn push(name: &str, offset: usize, out: &mut Vec<Field>) {
+        u32::push(&format!("{name}_len"), offset + Self::LEN_OFFSET, out);
+        <[u8; N]>::push(name, offset + Self::BYTES_OFFSET, out);
+    }
+}
+
+impl<T, const N: usize> FieldKind for FixedVec<T, N>
+where
+    T: ElementKind + Copy + PlacementDefault + ZeroCopySend,
+{
+    fn push(name: &str, offset: usize, out: &mut Vec<Field>) {
+        u32::push(&format!("{name}_len"), offset + Self::LEN_OFFSET, out);
+        <[T; N]>::push(name, offset + Self::ITEMS_OFFSET, out);
+    }
+}
+
+macro_rules! scalars {
+    ($($t:ty => $s:ident),* $(,)?) => {
+        $(impl ElementKind for $t {
+            const ELEMENT: Element = Element::Scalar(Scalar::$s);
+        })*
+    };
+}
+
+scalars!(f64 => F64, f32 => F32, u64 => U64, i64 => I64, u32 => U32, i32 => I32, u8 => U8, i8 => I8);
+
+/// Adds the field that `access` reaches, at `offset`; `access` only lets the compiler name the
+/// field's type.
+fn push_field<S, F: FieldKind>(
+    name: &str,
+    offset: usize,
+    _access: fn(&S) -> &F,
+    out: &mut Vec<Field>,
+) {
+    F::push(name, offset, out);
+}
+
+macro_rules! describe {
+    ($($ty:ident { $($field:ident),* $(,)? })*) => {
+        $(
+            impl ElementKind for $ty {
+                const ELEMENT: Element = Element::Struct(stringify!($ty));
+            }
+
+            impl Describe for $ty {
+                fn layout() -> TypeLayout {
+                    let mut fields = Vec::new();
+                    $(push_field(
+                        stringify!($field),
+                        offset_of!($ty, $field),
+                        |v: &$ty| &v.$field,
+                        &mut fields,
+                    );)*
+                    TypeLayout {
+                        name: stringify!($ty),
+                        // SAFETY: reading the type name has no preconditions.
+                        type_name: unsafe { <$ty as ZeroCopySend>::type_name() },
+                        size: size_of::<$ty>(),
+                        align: align_of::<$ty>(),
+                        fields,
+                    }
+                }
+            }
+        )*
+
+        /// Every described type, each after the types it contains.
+        pub fn layouts() -> Vec<TypeLayout> {
+            vec![$(<$ty as Describe>::layout()),*]
+        }
+    };
+}
+
+describe! {
+    Header { seq, stamp_ns, send_wall_ns, source_id }
+    Vector3 { x, y, z }
+    Quaternion { x, y, z, w }
+    Pose2D { x, y, theta }
+    Pose3D { position, orientation }
+    Twist { linear, angular }
+    WheelSetpoint { left_rad_s, right_rad_s }
+    WheelState { left_angle_rad, right_angle_rad, left_rad_s, right_rad_s, left_voltage, right_voltage }
+    EncoderTicks { left, right, ticks_per_rev, _reserved }
+    Odometry { pose, pose_covariance, twist, twist_covariance }
+    LaserScan {
+        angle_min, angle_max, angle_increment, time_increment, scan_time, range_min, range_max,
+        beam_count, ranges, intensities,
+    }
+    Imu {
+        orientation, orientation_covariance, angular_velocity, angular_velocity_covariance,
+        linear_acceleration, linear_acceleration_covariance,
+    }
+    OccupancyGrid { resolution, origin, width, height, data }
+    Path2D { poses }
+    Goal { index, total, pose, tolerance_m }
+    NodeStatus {
+        node, host, period_ns, steps, deadline_misses, jitter_p50_ns, jitter_p99_ns,
+        jitter_max_ns, compute_mean_ns, compute_p99_ns, compute_max_ns, messages_missed,
+        sim_time_ns, running, _reserved,
+    }
+    Collision { robot, other_robot, started, _reserved }
+    Hello { node, period_ns, triggers }
+    Grant { now_ns, tick_ns, stop, _reserved }
+    Done { node_hash, now_ns, published }
+}
+
+/// The constant topic names of [`crate::topics`], by their Rust names.
+pub const TOPIC_CONSTANTS: &[(&str, &str)] = &[
+    ("STATUS", crate::topics::STATUS),
+    ("MAP", crate::topics::MAP),
+    ("GOAL", crate::topics::GOAL),
+    ("COLLISIONS", crate::topics::COLLISIONS),
+];
+
+/// The per-robot topic helpers of [`crate::topics`], by their Rust names.
+pub const ROBOT_TOPICS: &[(&str, fn(usize) -> String)] = &[
+    ("scan", crate::topics::scan),
+    ("imu", crate::topics::imu),
+    ("pose_true", crate::topics::pose_true),
+    ("twist_true", crate::topics::twist_true),
+    ("pose", crate::topics::pose),
+    ("odometry", crate::topics::odometry),
+    ("wheel_setpoint", crate::topics::wheel_setpoint),
+    ("wheel_state", crate::topics::wheel_state),
+    ("encoder_ticks", crate::topics::encoder_ticks),
+    ("cmd_vel", crate::topics::cmd_vel),
+    ("path", crate::topics::path),
+];
+
+/// Alignment of a field's element: a scalar's size, or a described struct's alignment.
+fn element_align(element: Element, known: &[TypeLayout]) -> Option<usize> {
+    match element {
+        Element::Scalar(s) => Some(s.size()),
+        Element::Struct(name) => known.iter().find(|l| l.name == name).map(|l| l.align),
+    }
+}
+
+/// Checks that `layout` reads like its C declaration: fields in increasing order, each at the
+/// next offset its alignment allows (so no field is missing between two listed ones), all
+/// within the size; nested structs are described earlier in `known`.
+pub fn check(layout: &TypeLayout, known: &[TypeLayout]) -> Result<(), String> {
+    let mut end: usize = 0;
+    for f in &layout.fields {
+        let align = element_align(f.kind.element(), known).ok_or_else(|| {
+            format!(
+                "{}.{}: {} is not described before it",
+                layout.name,
+                f.name,
+                f.kind.element().name()
+            )
+        })?;
+        let expected = end.next_multiple_of(align);
+        if f.offset != expected {
+            return Err(format!(
+                "{}.{}: at offset {}, but the field before it ends at {end} (expected {expected}); \
+                 a field is missing from the description or out of order",
+                layout.name, f.name, f.offset
+            ));
+        }
+        end = f.offset + f.size;
+    }
+    if end > layout.size || layout.size != end.next_multiple_of(layout.align) {
+        return Err(format!(
+            "{}: fields end at {end}, size is {} with alignment {}",
+            layout.name, layout.size, layout.align
+        ));
+    }
+    Ok(())
+}
+
+/// All layouts as JSON: `[{name, type_name, size, align, fields: [{name, offset, size, type,
+/// len?}]}]`, where `type` is a scalar name (`f64`) or a struct name and `len` marks an array.
+pub fn layouts_json() -> serde_json::Value {
+    let layouts: Vec<serde_json::Value> = layouts()
+        .iter()
+        .map(|l| {
+            let fields: Vec<serde_json::Value> = l
+                .fields
+                .iter()
+                .map(|f| {
+                    let mut v = serde_json::json!({
+                        "name": f.name,
+                        "offset": f.offset,
+                        "size": f.size,
+                        "type": f.kind.element().name(),
+                    });
+                    if let Some(len) = f.kind.len() {
+                        v["len"] = len.into();
+                    }
+                    v
+                })
+                .collect();
+            serde_json::json!({
+                "name": l.name,
+                "type_name": l.type_name,
+                "size": l.size,
+                "align": l.align,
+                "fields": fields,
+            })
+        })
+        .collect();
+    serde_json::Value::Array(layouts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offsets_increase_and_end_within_the_size() {
+        let all = layouts();
+        for (i, layout) in all.iter().enumerate() {
+            check(layout, &all[..i]).unwrap();
+            for pair in layout.fields.windows(2) {
+                assert!(
+                    pair[0].offset + pair[0].size <= pair[1].offset,
+                    "{layout:?}"
+                );
+            }
+            let last = layout.fields.last().unwrap();
+            assert!(last.offset + last.size <= layout.size, "{layout:?}");
+        }
+    }
+
+    #[test]
+    fn every_registry_type_is_described() {
+        let all = layouts();
+        for name in crate::message_type_names() {
+            assert!(all.iter().any(|l| l.type_name == name), "{name}");
+        }
+        for name in [
+            "caravan::Header",
+            "caravan::lockstep::Hello",
+            "caravan::lockstep::Grant",
+            "caravan::lockstep::Done",
+        ] {
+            assert!(all.iter().any(|l| l.type_name == name), "{name}");
+        }
+        let mut names: Vec<_> = all.iter().map(|l| l.name).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), all.len(), "type names must be unique");
+    }
+
+    #[test]
+    fn fixed_containers_expand_to_length_and_array() {
+        let status = NodeStatus::layout();
+        let f = |name: &str| status.fields.iter().find(|f| f.name == name).unwrap();
+        assert_eq!(
+            (f("node_len").offset, f("node_len").kind),
+            (0, Kind::Scalar(Scalar::U32))
+        );
+        assert_eq!(
+            (f("node").offset, f("node").kind),
+            (4, Kind::Array(Element::Scalar(Scalar::U8), 64))
+        );
+        assert_eq!(f("host_len").offset, 68);
+        assert_eq!(f("period_ns").offset, 104);
+        let hello = Hello::layout();
+        let triggers = hello.fields.iter().find(|f| f.name == "triggers").unwrap();
+        assert_eq!(
+            triggers.kind,
+            Kind::Array(Element::Scalar(Scalar::U64), crate::lockstep::MAX_TOPICS)
+        );
+        let path = Path2D::layout();
+        assert_eq!(path.fields[1].offset, 8);
+        assert_eq!(
+            path.fields[1].kind,
+            Kind::Array(Element::Struct("Pose2D"), crate::PATH_MAX_POSES)
+        );
+    }
+
+    #[test]
+    fn json_names_types_and_lengths() {
+        let json = layouts_json();
+        let scan = json
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|l| l["name"] == "LaserScan")
+            .unwrap();
+        assert_eq!(scan["type_name"], "caravan::LaserScan");
+        let ranges = &scan["fields"][8];
+        assert_eq!(ranges["name"], "ranges");
+        assert_eq!(ranges["type"], "f32");
+        assert_eq!(ranges["len"], crate::SCAN_MAX_BEAMS);
+        assert_eq!(ranges["offset"], 32);
+    }
+}
