@@ -1,0 +1,49 @@
+//! A custom convoy follower: pure pursuit on the path its predecessor drove.
+//! See docs/agents.md for a walk through this file.
+
+use caravan::{Error, Node, Topic, Trigger};
+use caravan_schemas::{Pose2D, WheelSetpoint, topics};
+use caravan_world::kinematics::wheel_speeds;
+use serde::Deserialize;
+
+#[derive(Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct Params {
+    robot: usize,       // this robot's index; it follows robot - 1
+    lookahead_m: f64,   // how far ahead on the path to aim
+    speed: f64,         // cruise speed, m/s
+    keep_back_m: f64,   // centre distance to the predecessor at which to stop
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self { robot: 1, lookahead_m: 0.25, speed: 0.2, keep_back_m: 0.5 }
+    }
+}
+
+fn main() -> Result<(), Error> {
+    let mut node = Node::from_env()?;
+    let p: Params = node.params()?;
+    let me = node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(p.robot)))?;
+    let ahead = node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(p.robot - 1)))?;
+    let wheels = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(p.robot)))?;
+    let mut path = std::collections::VecDeque::new();
+    node.run(Trigger::every_hz(20.0), |_| {
+        while let Some(pose) = ahead.receive()? {
+            path.push_back(*pose);
+        }
+        let (Some(me), Some(lead)) = (me.latest()?.map(|m| *m), path.back().copied()) else { return Ok(()) };
+        let dist = |q: &Pose2D| (q.x - me.x).hypot(q.y - me.y);
+        while path.len() > 1 && dist(&path[0]) < p.lookahead_m {
+            path.pop_front(); // reached: aim further along
+        }
+        // Pure pursuit: the arc through the aim point has curvature 2·y / d² (robot frame).
+        let (s, c) = me.theta.sin_cos();
+        let (dx, dy) = (path[0].x - me.x, path[0].y - me.y);
+        let curvature = 2.0 * (-s * dx + c * dy) / (dx * dx + dy * dy).max(1e-6);
+        let v = p.speed.min(1.5 * (dist(&lead) - p.keep_back_m)).max(0.0);
+        let (left, right) = wheel_speeds(v, v * curvature, 0.067, 0.172);
+        wheels.publish(&WheelSetpoint { left_rad_s: left, right_rad_s: right })
+    })?;
+    Ok(())
+}
