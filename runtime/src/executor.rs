@@ -1,7 +1,7 @@
 //! The step loop: runs a node's step function under the realtime or the lockstep clock.
 
 use crate::lockstep::{Client, GrantOutcome};
-use crate::stats::{StatsSummary, StepStats};
+use crate::stats::StepStats;
 use crate::transport::Shared;
 use crate::{Error, Publisher, Trigger};
 use caravan_schemas::{FixedString, NodeStatus};
@@ -66,23 +66,13 @@ fn waitset() -> Result<WaitSet<ipc::Service>, Error> {
 
 impl Executor<'_> {
     fn publish_status(&self, stats: &StepStats, running: bool) -> Result<(), Error> {
-        let s: StatsSummary = stats.summary();
         self.status.publish(&NodeStatus {
             node: FixedString::new(self.name),
             host: FixedString::new(self.host),
-            period_ns: s.period_ns,
-            steps: s.steps,
-            deadline_misses: s.deadline_misses,
-            jitter_p50_ns: s.jitter_p50_ns,
-            jitter_p99_ns: s.jitter_p99_ns,
-            jitter_max_ns: s.jitter_max_ns,
-            compute_mean_ns: s.compute_mean_ns,
-            compute_p99_ns: s.compute_p99_ns,
-            compute_max_ns: s.compute_max_ns,
             messages_missed: self.shared.missed.get(),
             sim_time_ns: self.shared.now_ns.get(),
             running: running as u32,
-            _reserved: 0,
+            ..stats.summary()
         })
     }
 
@@ -110,7 +100,7 @@ impl Executor<'_> {
     }
 
     /// Wall-clock execution: the WaitSet sleeps until the period elapses or a message arrives.
-    pub fn run_realtime<F>(&self, trigger: &Trigger, mut step: F) -> Result<StatsSummary, Error>
+    pub fn run_realtime<F>(&self, trigger: &Trigger, mut step: F) -> Result<NodeStatus, Error>
     where
         F: FnMut(&mut Step) -> Result<(), Error>,
     {
@@ -182,7 +172,7 @@ impl Executor<'_> {
     }
 
     /// Lockstep execution: step exactly at the simulated times the scheduler grants.
-    pub fn run_lockstep<F>(&self, trigger: &Trigger, mut step: F) -> Result<StatsSummary, Error>
+    pub fn run_lockstep<F>(&self, trigger: &Trigger, mut step: F) -> Result<NodeStatus, Error>
     where
         F: FnMut(&mut Step) -> Result<(), Error>,
     {

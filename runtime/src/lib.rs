@@ -13,7 +13,8 @@
 //! let pose = node.publisher(&Topic::<Pose2D>::new(&topics::pose(0)))?;
 //! node.run(Trigger::every_hz(10.0), |step| {
 //!     pose.publish(&Pose2D { x: step.now().as_secs_f64(), y: 0.0, theta: 0.0 })
-//! })
+//! })?;
+//! # Ok(())
 //! # }
 //! ```
 
@@ -43,7 +44,7 @@ pub use node::{Node, NodeBuilder};
 pub use params::parse_params;
 pub use publisher::{Loan, Publisher};
 pub use rate::{Trigger, parse_duration, parse_rate};
-pub use stats::{StatsSummary, StepStats};
+pub use stats::StepStats;
 pub use subscriber::{Received, Subscriber};
 pub use topic::{Delivery, Topic};
 

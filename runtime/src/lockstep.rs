@@ -373,15 +373,7 @@ impl Scheduler {
             .filter(|&i| self.members[i].active)
             .collect();
         for &i in &due {
-            self.grant(
-                i,
-                Grant {
-                    now_ns,
-                    tick_ns: self.tick_ns,
-                    stop: 0,
-                    _reserved: 0,
-                },
-            )?;
+            self.grant(i, Grant::step(now_ns, self.tick_ns))?;
         }
         let mut waiting = due.clone();
         let mut published = BTreeSet::new();
@@ -427,15 +419,7 @@ impl Scheduler {
             if granted_at.elapsed() > REGRANT_AFTER {
                 // A grant (or its report) may have been lost; nodes answer repeats safely.
                 for &i in &waiting {
-                    self.grant(
-                        i,
-                        Grant {
-                            now_ns,
-                            tick_ns: self.tick_ns,
-                            stop: 0,
-                            _reserved: 0,
-                        },
-                    )?;
+                    self.grant(i, Grant::step(now_ns, self.tick_ns))?;
                 }
                 granted_at = std::time::Instant::now();
             }
@@ -500,15 +484,9 @@ impl Scheduler {
     /// Tells every node the run is over.
     pub fn stop_all(&mut self) -> Result<(), Error> {
         for i in 0..self.members.len() {
-            self.grant(
-                i,
-                Grant {
-                    now_ns: 0,
-                    tick_ns: self.tick_ns,
-                    stop: 1,
-                    _reserved: 0,
-                },
-            )?;
+            if self.members[i].active {
+                self.grant(i, Grant::stop(self.now_ns, self.tick_ns))?;
+            }
         }
         Ok(())
     }

@@ -2,9 +2,7 @@
 
 use crate::executor::Executor;
 use crate::transport::Shared;
-use crate::{
-    ClockMode, Error, NodeIdentity, Publisher, StatsSummary, Step, Subscriber, Topic, Trigger,
-};
+use crate::{ClockMode, Error, NodeIdentity, Publisher, Step, Subscriber, Topic, Trigger};
 use caravan_schemas::{Message, NodeStatus};
 use iceoryx2::prelude::*;
 use serde::de::DeserializeOwned;
@@ -156,7 +154,11 @@ impl Node {
     /// Runs `step` on `default_trigger` (or the launch file's) until the run ends: SIGTERM or
     /// SIGINT, the lockstep scheduler's stop, or [`Step::stop`]. A final status is published
     /// on exit. Returns the node's statistics.
-    pub fn run<F>(&mut self, default_trigger: Trigger, step: F) -> Result<StatsSummary, Error>
+    pub fn run<F>(
+        &mut self,
+        default_trigger: Trigger,
+        step: F,
+    ) -> Result<caravan_schemas::NodeStatus, Error>
     where
         F: FnMut(&mut Step) -> Result<(), Error>,
     {

@@ -1,5 +1,6 @@
 //! Per-node step statistics: steps, deadline misses, period jitter and compute time.
 
+use caravan_schemas::NodeStatus;
 use hdrhistogram::Histogram;
 use std::time::Duration;
 
@@ -12,20 +13,6 @@ pub struct StepStats {
     compute: Histogram<u64>,
     compute_sum_ns: u128,
     last_start_ns: Option<u64>,
-}
-
-/// A snapshot of [`StepStats`].
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StatsSummary {
-    pub period_ns: u64,
-    pub steps: u64,
-    pub deadline_misses: u64,
-    pub jitter_p50_ns: u64,
-    pub jitter_p99_ns: u64,
-    pub jitter_max_ns: u64,
-    pub compute_mean_ns: u64,
-    pub compute_p99_ns: u64,
-    pub compute_max_ns: u64,
 }
 
 impl StepStats {
@@ -64,10 +51,12 @@ impl StepStats {
         self.last_start_ns = Some(start_ns);
     }
 
-    pub fn summary(&self) -> StatsSummary {
+    /// The statistics as a `NodeStatus` (identity, missed messages and time left for the
+    /// caller to fill in).
+    pub fn summary(&self) -> NodeStatus {
         let pick =
             |h: &Histogram<u64>, f: fn(&Histogram<u64>) -> u64| if h.is_empty() { 0 } else { f(h) };
-        StatsSummary {
+        NodeStatus {
             period_ns: self.period_ns,
             steps: self.steps,
             deadline_misses: self.deadline_misses,
@@ -77,6 +66,7 @@ impl StepStats {
             compute_mean_ns: (self.compute_sum_ns / u128::from(self.steps.max(1))) as u64,
             compute_p99_ns: pick(&self.compute, |h| h.value_at_quantile(0.99)),
             compute_max_ns: pick(&self.compute, |h| h.max()),
+            ..NodeStatus::default()
         }
     }
 }

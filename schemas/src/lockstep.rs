@@ -58,6 +58,28 @@ pub struct Grant {
     pub _reserved: u32,
 }
 
+impl Grant {
+    /// Permission to step at `now_ns`.
+    pub fn step(now_ns: u64, tick_ns: u64) -> Self {
+        Self {
+            now_ns,
+            tick_ns,
+            stop: 0,
+            _reserved: 0,
+        }
+    }
+
+    /// The end of the run.
+    pub fn stop(now_ns: u64, tick_ns: u64) -> Self {
+        Self {
+            now_ns,
+            tick_ns,
+            stop: 1,
+            _reserved: 0,
+        }
+    }
+}
+
 /// A finished step.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
