@@ -518,7 +518,7 @@ required = false
     let err = stderr(&out);
     assert!(out.status.success(), "{err}");
     assert!(
-        err.contains("process 'stuck' has not finished its step") && err.contains("hung"),
+        err.contains("process 'stuck' has not finished a step") && err.contains("hung"),
         "{err}"
     );
     let report = s.report();
@@ -557,4 +557,35 @@ required = false
         "{err}"
     );
     assert_eq!(node(&s.report(), "ping")["exit_status"], "exited 0");
+}
+
+#[test]
+fn hung_realtime_process_is_killed_and_named() {
+    let s = Scenario::new(
+        "hang-rt",
+        r#"clock = "realtime"
+duration = "8s"
+step_timeout = "2s"
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+
+[[process]]
+name = "stuck"
+exec = "caravan-testnode hang"
+params = { count = 15 }
+required = false
+"#,
+    );
+    let out = s.run(&[]);
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("process 'stuck' has not finished a step") && err.contains("hung"),
+        "{err}"
+    );
+    let report = s.report();
+    assert_eq!(node(&report, "stuck")["exit_status"], "killed by signal 9");
+    assert_eq!(node(&report, "ping")["exit_status"], "exited 0");
 }

@@ -214,7 +214,7 @@ pub fn record(args: RecordArgs) -> Result<()> {
         &config,
         &mut recorder,
         SignalHandlingMode::HandleTerminationRequests,
-        || end.is_some_and(|e| Instant::now() >= e),
+        |_| end.is_some_and(|e| Instant::now() >= e),
     )?;
     let recording = recorder.finish()?;
     let total: u64 = recording.topics.values().map(|t| t.messages).sum();

@@ -49,6 +49,8 @@ pub struct Recorder {
     sequences: BTreeMap<u16, u32>,
     stats: BTreeMap<String, TopicStats>,
     node_status: BTreeMap<String, Value>,
+    /// When each running node's status last arrived (wall clock).
+    status_heard: BTreeMap<String, std::time::Instant>,
     buffer: Vec<(usize, Tapped)>,
 }
 
@@ -93,6 +95,7 @@ impl Recorder {
             sequences: BTreeMap::new(),
             stats: BTreeMap::new(),
             node_status: BTreeMap::new(),
+            status_heard: BTreeMap::new(),
             buffer: Vec::new(),
         })
     }
@@ -157,6 +160,12 @@ impl Recorder {
             for m in batch {
                 if let Some(node) = m.json.get("node").and_then(Value::as_str) {
                     self.node_status.insert(node.to_string(), m.json.clone());
+                    if m.json["running"] == 1 {
+                        self.status_heard
+                            .insert(node.to_string(), std::time::Instant::now());
+                    } else {
+                        self.status_heard.remove(node);
+                    }
                 }
             }
         }
@@ -220,6 +229,16 @@ impl Recorder {
             .latency
             .saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));
         Ok(())
+    }
+
+    /// Running nodes whose once-a-second status has not arrived for `timeout`: in realtime a
+    /// node whose step never returns stops publishing it.
+    pub fn silent_nodes(&self, timeout: std::time::Duration) -> Vec<String> {
+        self.status_heard
+            .iter()
+            .filter(|(_, t)| t.elapsed() > timeout)
+            .map(|(n, _)| n.clone())
+            .collect()
     }
 
     pub fn finish(mut self) -> Result<Recording> {

@@ -57,11 +57,28 @@ pub fn spawn(
             run_lockstep(&cfg, &mut recorder, &control, &events, &finish)?
         } else {
             let started = Instant::now();
+            let mut reported = BTreeSet::new();
             record_until(
                 &cfg.iceoryx,
                 &mut recorder,
                 SignalHandlingMode::Disabled,
-                || finish.try_recv().is_ok(),
+                |recorder| {
+                    // A node silent for longer than the step timeout is reported once as hung.
+                    let silent: Vec<String> = recorder
+                        .silent_nodes(cfg.step_timeout)
+                        .into_iter()
+                        .filter(|n| reported.insert(n.clone()))
+                        .collect();
+                    if !silent.is_empty() {
+                        let now_ns = started.elapsed().as_nanos() as u64;
+                        let _ = events.send(Event::Hung {
+                            names: silent,
+                            now_ns,
+                            timeout: cfg.step_timeout,
+                        });
+                    }
+                    finish.try_recv().is_ok()
+                },
             )?;
             started.elapsed().as_nanos() as u64
         };
@@ -144,7 +161,7 @@ pub fn record_until(
     iceoryx: &iceoryx2::config::Config,
     recorder: &mut Recorder,
     signals: SignalHandlingMode,
-    mut done: impl FnMut() -> bool,
+    mut done: impl FnMut(&Recorder) -> bool,
 ) -> Result<()> {
     let iox = NodeBuilder::new()
         .config(iceoryx)
@@ -203,7 +220,7 @@ pub fn record_until(
                 result,
                 iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
             );
-            if interrupted || done() {
+            if interrupted || done(recorder) {
                 return Ok(());
             }
         }

@@ -322,7 +322,7 @@ fn run_group(
             }) => {
                 for name in names {
                     console.say(&format!(
-                        "process '{name}' has not finished its step at {:.3} s after {timeout:?} (step_timeout); it looks hung, killing it",
+                        "process '{name}' has not finished a step at {:.3} s for {timeout:?} (step_timeout); it looks hung, killing it",
                         now_ns as f64 * 1e-9
                     ));
                     sup.kill(&name);
