@@ -96,7 +96,7 @@ impl Kind {
     }
 
     /// The array's length; `None` for a single value.
-    pub fn len(self) -> Option<usize> {
+    pub fn array_len(self) -> Option<usize> {
         match self {
             Kind::Array(_, len) => Some(len),
             _ => None,
@@ -286,8 +286,11 @@ pub const TOPIC_CONSTANTS: &[(&str, &str)] = &[
     ("COLLISIONS", crate::topics::COLLISIONS),
 ];
 
+/// A per-robot topic helper: robot index to topic name.
+pub type RobotTopic = fn(usize) -> String;
+
 /// The per-robot topic helpers of [`crate::topics`], by their Rust names.
-pub const ROBOT_TOPICS: &[(&str, fn(usize) -> String)] = &[
+pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = &[
     ("scan", crate::topics::scan),
     ("imu", crate::topics::imu),
     ("pose_true", crate::topics::pose_true),
@@ -358,7 +361,7 @@ pub fn layouts_json() -> serde_json::Value {
                         "size": f.size,
                         "type": f.kind.element().name(),
                     });
-                    if let Some(len) = f.kind.len() {
+                    if let Some(len) = f.kind.array_len() {
                         v["len"] = len.into();
                     }
                     v

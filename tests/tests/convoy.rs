@@ -10,17 +10,34 @@ use std::process::Command;
 fn run_convoy(file: &str) -> serde_json::Value {
     let group = TestGroup::new("convoy");
     let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
-    let launch = Path::new(env!("CARGO_MANIFEST_DIR")).join("../launch").join(file);
+    let launch = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../launch")
+        .join(file);
     let out = Command::new(workspace_bin("caravan"))
         .arg("launch")
         .arg(&launch)
-        .args(["--quiet", "--duration", "70s", "--set", &format!("group.name={}", group.name)])
+        .args([
+            "--quiet",
+            "--duration",
+            "70s",
+            "--set",
+            &format!("group.name={}", group.name),
+        ])
         .arg("--runs-dir")
         .arg(&runs)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let run = std::fs::read_dir(&runs).unwrap().flatten().next().unwrap().path();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let run = std::fs::read_dir(&runs)
+        .unwrap()
+        .flatten()
+        .next()
+        .unwrap()
+        .path();
     assert!(run.join("trajectories.svg").exists());
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(run.join("report.json")).unwrap()).unwrap();
@@ -51,5 +68,8 @@ fn custom_rust_follower_completes_the_convoy() {
     // The pure-pursuit follower (R2) stays on its predecessor's path.
     let r2 = &c["followers"][1];
     assert_eq!(r2["robot"], 2);
-    assert!(r2["cross_track_to_predecessor_m"]["mean"].as_f64().unwrap() < 0.05, "{r2}");
+    assert!(
+        r2["cross_track_to_predecessor_m"]["mean"].as_f64().unwrap() < 0.05,
+        "{r2}"
+    );
 }

@@ -9,15 +9,20 @@ use serde::Deserialize;
 #[derive(Deserialize)]
 #[serde(default, deny_unknown_fields)]
 struct Params {
-    robot: usize,       // this robot's index; it follows robot - 1
-    lookahead_m: f64,   // how far ahead on the path to aim
-    speed: f64,         // cruise speed, m/s
-    keep_back_m: f64,   // centre distance to the predecessor at which to stop
+    robot: usize,     // this robot's index; it follows robot - 1
+    lookahead_m: f64, // how far ahead on the path to aim
+    speed: f64,       // cruise speed, m/s
+    keep_back_m: f64, // centre distance to the predecessor at which to stop
 }
 
 impl Default for Params {
     fn default() -> Self {
-        Self { robot: 1, lookahead_m: 0.25, speed: 0.2, keep_back_m: 0.5 }
+        Self {
+            robot: 1,
+            lookahead_m: 0.25,
+            speed: 0.2,
+            keep_back_m: 0.5,
+        }
     }
 }
 
@@ -26,13 +31,17 @@ fn main() -> Result<(), Error> {
     let p: Params = node.params()?;
     let me = node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(p.robot)))?;
     let ahead = node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(p.robot - 1)))?;
-    let wheels = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(p.robot)))?;
+    let wheels = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(
+        p.robot,
+    )))?;
     let mut path = std::collections::VecDeque::new();
     node.run(Trigger::every_hz(20.0), |_| {
         while let Some(pose) = ahead.receive()? {
             path.push_back(*pose);
         }
-        let (Some(me), Some(lead)) = (me.latest()?.map(|m| *m), path.back().copied()) else { return Ok(()) };
+        let (Some(me), Some(lead)) = (me.latest()?.map(|m| *m), path.back().copied()) else {
+            return Ok(());
+        };
         let dist = |q: &Pose2D| (q.x - me.x).hypot(q.y - me.y);
         while path.len() > 1 && dist(&path[0]) < p.lookahead_m {
             path.pop_front(); // reached: aim further along
@@ -43,7 +52,10 @@ fn main() -> Result<(), Error> {
         let curvature = 2.0 * (-s * dx + c * dy) / (dx * dx + dy * dy).max(1e-6);
         let v = p.speed.min(1.5 * (dist(&lead) - p.keep_back_m)).max(0.0);
         let (left, right) = wheel_speeds(v, v * curvature, 0.067, 0.172);
-        wheels.publish(&WheelSetpoint { left_rad_s: left, right_rad_s: right })
+        wheels.publish(&WheelSetpoint {
+            left_rad_s: left,
+            right_rad_s: right,
+        })
     })?;
     Ok(())
 }
