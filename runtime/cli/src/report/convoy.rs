@@ -148,26 +148,29 @@ fn extended_path(t: &Trajectory) -> Polyline {
 }
 
 fn gaps_and_order(robots: &[&Trajectory], leader_path: &Polyline, fp: &Footprint) -> (f64, bool) {
-    // Physics publishes every robot at the same stamps; align by index, checking the stamps.
-    let n = robots.iter().map(|t| t.len()).min().unwrap_or(0);
+    // Physics publishes every robot at the same stamps; compare robots at the stamps where all
+    // were recorded (a realtime recording may start a robot's topic a little later).
+    let mut at_stamp: BTreeMap<u64, Vec<[f64; 3]>> = BTreeMap::new();
+    for t in robots {
+        for (stamp, pose) in t.iter() {
+            at_stamp.entry(*stamp).or_default().push(*pose);
+        }
+    }
     let mut min_gap = f64::INFINITY;
     let mut order_kept = true;
-    for k in 0..n {
-        if robots.iter().any(|t| t[k].0 != robots[0][k].0) {
-            continue;
-        }
-        let rects: Vec<_> = robots
+    for poses in at_stamp.values().filter(|p| p.len() == robots.len()) {
+        let rects: Vec<_> = poses
             .iter()
-            .map(|t| footprint(t[k].1, fp.half, fp.offset))
+            .map(|p| footprint(*p, fp.half, fp.offset))
             .collect();
         for a in 0..rects.len() {
             for b in a + 1..rects.len() {
                 min_gap = min_gap.min(rect_distance(&rects[a], &rects[b]));
             }
         }
-        let along: Vec<f64> = robots
+        let along: Vec<f64> = poses
             .iter()
-            .map(|t| leader_path.project([t[k].1[0], t[k].1[1]]).1)
+            .map(|p| leader_path.project([p[0], p[1]]).1)
             .collect();
         order_kept &= along.windows(2).all(|w| w[1] <= w[0] + 0.05);
     }

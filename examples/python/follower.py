@@ -1,0 +1,180 @@
+"""A convoy follower in Python.
+
+The reference follower law of processes/convoy-agent/src/follower.rs, with the same defaults:
+robot i drives toward where its predecessor was tau seconds ago,
+
+    v = k1 (x_p(t - tau) - x) cos(theta) + k2 (y_p(t - tau) - y) sin(theta)
+    w = k3 wrap(theta_p(t - tau) - theta)
+
+never reversing, with |w| <= 2 rad/s and v <= 0.25 m/s, holding still until the predecessor's
+history reaches back tau, easing off as the gap between the two footprints shrinks, and stopping
+before it reaches the 0.15 m safety distance. It publishes wheel set-points at 20 Hz.
+
+launch/convoy-python.toml runs it as follower-2 of the reference convoy:
+
+    caravan launch launch/convoy-python.toml
+"""
+
+import bisect
+import math
+
+from caravan import CaravanError, Node, main, topics
+from caravan.schemas import Pose2D, WheelSetpoint
+
+# Defaults; the launch file's params table overrides them (unknown keys are errors).
+PARAMS = {
+    "robot": 0,  # this robot's index: it follows robot - 1
+    "mode": "follower",
+    "pose_topic": None,  # own pose (Pose2D); default robot/<i>/pose_true
+    "predecessor_topic": None,  # the predecessor's pose; default robot/<i-1>/pose_true
+    "wheel_radius_m": 0.067,
+    "wheel_separation_m": 0.172,
+    "follower": {
+        "k1": 1.5,
+        "k2": 1.5,
+        "k3": 1.0,
+        "tau_s": 2.0,
+        "safety_distance_m": 0.15,
+        "stop_margin_m": 0.05,  # a robot rolls about 6 cm after a zero set-point
+        "k_gap": 1.5,  # speed allowed per metre of gap beyond safety distance and margin, 1/s
+        "footprint_half_m": (0.10, 0.09),
+        "footprint_offset_m": -0.02,
+        "v_max": 0.25,
+        "omega_max": 2.0,
+    },
+}
+
+TAU = 2.0 * math.pi
+
+
+def wrap(a):
+    """The angle in (-pi, pi]."""
+    w = a % TAU
+    return w - TAU if w > math.pi else w
+
+
+class PoseHistory:
+    """Time-stamped poses (x, y, theta) in arrival order, to look up where a robot was."""
+
+    def __init__(self, keep_s):
+        self.times, self.poses, self.keep_s = [], [], keep_s
+
+    def push(self, t, pose):
+        if self.times and t <= self.times[-1]:
+            return
+        self.times.append(t)
+        self.poses.append(pose)
+        old = bisect.bisect_left(self.times, t - self.keep_s)
+        if old:
+            del self.times[:old], self.poses[:old]
+
+    def latest(self):
+        return self.poses[-1] if self.poses else None
+
+    def at(self, t):
+        """The pose at time t, interpolated (heading the short way); None before the history."""
+        if not self.times or t < self.times[0]:
+            return None
+        if t >= self.times[-1]:
+            return self.poses[-1]
+        i = bisect.bisect_right(self.times, t)
+        (t0, p0), (t1, p1) = (self.times[i - 1], self.poses[i - 1]), (self.times[i], self.poses[i])
+        a = (t - t0) / (t1 - t0)
+        return (
+            p0[0] + a * (p1[0] - p0[0]),
+            p0[1] + a * (p1[1] - p0[1]),
+            wrap(p0[2] + a * wrap(p1[2] - p0[2])),
+        )
+
+
+def footprint(pose, half, offset):
+    """Corners (counter-clockwise) of a robot's rectangle at pose (x, y, theta)."""
+    s, c = math.sin(pose[2]), math.cos(pose[2])
+    cx, cy = pose[0] + c * offset, pose[1] + s * offset
+    corners = ((-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0))
+    return [
+        (cx + c * (sx * half[0]) - s * (sy * half[1]), cy + s * (sx * half[0]) + c * (sy * half[1]))
+        for sx, sy in corners
+    ]
+
+
+def _inside(p, poly):
+    return all(
+        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) >= 0.0
+        for a, b in zip(poly, poly[1:] + poly[:1], strict=True)
+    )
+
+
+def _point_segment(p, a, b):
+    ab = (b[0] - a[0], b[1] - a[1])
+    len2 = ab[0] * ab[0] + ab[1] * ab[1]
+    t = (
+        min(max(((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2, 0.0), 1.0)
+        if len2 > 0.0
+        else 0.0
+    )
+    return math.hypot(p[0] - (a[0] + t * ab[0]), p[1] - (a[1] + t * ab[1]))
+
+
+def rect_distance(a, b):
+    """Distance between two convex quadrilaterals; 0 when they overlap."""
+    if any(_inside(p, b) for p in a) or any(_inside(p, a) for p in b):
+        return 0.0
+    return min(
+        _point_segment(p, r[i], r[(i + 1) % 4])
+        for r, q in ((a, b), (b, a))
+        for i in range(4)
+        for p in q
+    )
+
+
+def command(own, history, now_s, p):
+    """(v, w) for a follower at pose ``own`` given its predecessor's history, at time now_s."""
+    target, current = history.at(now_s - p.tau_s), history.latest()
+    if target is None or current is None:
+        return 0.0, 0.0  # waiting for history that reaches back tau
+    rect = lambda q: footprint(q, p.footprint_half_m, p.footprint_offset_m)  # noqa: E731
+    room = rect_distance(rect(own), rect(current)) - p.safety_distance_m - p.stop_margin_m
+    if room <= 0.0:
+        return 0.0, 0.0  # safety stop
+    s, c = math.sin(own[2]), math.cos(own[2])
+    v = p.k1 * (target[0] - own[0]) * c + p.k2 * (target[1] - own[1]) * s
+    omega = p.k3 * wrap(target[2] - own[2])
+    v_max = min(p.v_max, p.k_gap * room)  # ease off near the predecessor
+    return min(max(v, 0.0), v_max), min(max(omega, -p.omega_max), p.omega_max)
+
+
+def agent():
+    node = Node.from_env()
+    p = node.params(PARAMS)
+    if p.mode != "follower":
+        raise CaravanError(
+            "key 'mode': this Python agent is a follower; use caravan-convoy-agent to lead"
+        )
+    if p.robot == 0 and p.predecessor_topic is None:
+        raise CaravanError("key 'robot': robot 0 has no predecessor; set 'predecessor_topic'")
+    i, r, sep = p.robot, p.wheel_radius_m, p.wheel_separation_m
+    own = node.subscriber(Pose2D, p.pose_topic or topics.pose_true(i))
+    predecessor = node.subscriber(Pose2D, p.predecessor_topic or topics.pose_true(i - 1))
+    setpoint = node.publisher(WheelSetpoint, topics.wheel_setpoint(i))
+    history = PoseHistory(p.follower.tau_s + 2.0)
+    pose = None
+
+    def step(s):
+        nonlocal pose
+        for msg in predecessor.receive_all():
+            history.push(msg.stamp_s, (msg.payload.x, msg.payload.y, msg.payload.theta))
+        if (msg := own.latest()) is not None:
+            pose = (msg.payload.x, msg.payload.y, msg.payload.theta)
+        if pose is None:
+            return
+        v, omega = command(pose, history, s.now, p.follower)
+        setpoint.publish(
+            WheelSetpoint((2 * v - sep * omega) / (2 * r), (2 * v + sep * omega) / (2 * r))
+        )
+
+    node.run(step, rate="20Hz")
+
+
+if __name__ == "__main__":
+    main(agent)

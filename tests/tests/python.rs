@@ -1,0 +1,171 @@
+//! Python agents: the generated ctypes module has the Rust layouts, and a Python follower
+//! completes the lockstep convoy. Each test sets up `<workspace>/.venv` itself (python3 -m venv,
+//! pip install iceoryx2) on first use.
+
+use caravan_schemas::{lockstep, topics};
+use caravan_tests::{TestGroup, python_env, workspace_bin, workspace_root};
+use std::io::Write;
+use std::process::{Command, Output, Stdio};
+
+/// `caravan schemas --layout`, parsed.
+fn rust_layout() -> serde_json::Value {
+    let out = Command::new(workspace_bin("caravan"))
+        .args(["schemas", "--layout"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// More facts from Rust for the checker: the registry, hashes, topic names, constants.
+fn rust_facts() -> serde_json::Value {
+    serde_json::json!({
+        "registry": caravan_schemas::message_type_names(),
+        "hashes": {
+            "follower-2": lockstep::name_hash("follower-2"),
+            "robot/1/pose_true": lockstep::name_hash("robot/1/pose_true"),
+            "": lockstep::name_hash(""),
+            "ünïcode": lockstep::name_hash("ünïcode"),
+        },
+        "topics": {
+            "pose_true": [1, topics::pose_true(1)],
+            "wheel_setpoint": [3, topics::wheel_setpoint(3)],
+            "scan": [0, topics::scan(0)],
+            "odometry": [12, topics::odometry(12)],
+            "path": [2, topics::path(2)],
+        },
+        "constants": {
+            "SCAN_MAX_BEAMS": caravan_schemas::SCAN_MAX_BEAMS,
+            "MAP_MAX_CELLS": caravan_schemas::MAP_MAX_CELLS,
+            "PATH_MAX_POSES": caravan_schemas::PATH_MAX_POSES,
+            "STATUS": topics::STATUS,
+            "GOAL": topics::GOAL,
+            "MAX_TOPICS": lockstep::MAX_TOPICS,
+            "HELLO": lockstep::HELLO,
+            "DONE": lockstep::DONE,
+        },
+        "grant_service": ["follower-2", lockstep::grant_service("follower-2")],
+    })
+}
+
+/// Runs tests/python/check_layout.py on `layout` with the workspace's `caravan` package.
+fn check_layout(layout: &serde_json::Value, facts: &serde_json::Value) -> Output {
+    let root = workspace_root();
+    let mut child = Command::new(python_env())
+        .arg(root.join("tests/python/check_layout.py"))
+        .arg(facts.to_string())
+        .env("PYTHONPATH", root.join("python"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(layout.to_string().as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn text(out: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+#[test]
+fn python_schemas_have_the_rust_layouts() {
+    let layout = rust_layout();
+    let out = check_layout(&layout, &rust_facts());
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(text(&out).contains("types match"), "{}", text(&out));
+
+    // The checker catches a mismatch: move one field, rename one type.
+    let mut moved = layout.clone();
+    let scan = moved
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|l| l["name"] == "LaserScan")
+        .unwrap();
+    scan["fields"][8]["offset"] = 36.into();
+    let out = check_layout(&moved, &serde_json::json!({}));
+    assert!(!out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("LaserScan: offset of ranges is 32 in Python, 36 in Rust"),
+        "{}",
+        text(&out)
+    );
+    let mut renamed = layout;
+    renamed[0]["type_name"] = "caravan::Headr".into();
+    let out = check_layout(&renamed, &serde_json::json!({}));
+    assert!(!out.status.success(), "{}", text(&out));
+    assert!(text(&out).contains("caravan::Headr"), "{}", text(&out));
+}
+
+#[test]
+fn python_follower_completes_the_lockstep_convoy() {
+    python_env();
+    let group = TestGroup::new("pyconvoy");
+    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
+    let out = Command::new(workspace_bin("caravan"))
+        .arg("launch")
+        .arg(workspace_root().join("launch/convoy-python.toml"))
+        .args([
+            "--quiet",
+            "--duration",
+            "70s",
+            "--set",
+            &format!("group.name={}", group.name),
+            "--runs-dir",
+        ])
+        .arg(&runs)
+        .env_remove("CARAVAN_PYTHON")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let run = std::fs::read_dir(&runs)
+        .unwrap()
+        .flatten()
+        .next()
+        .unwrap()
+        .path();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("report.json")).unwrap()).unwrap();
+    let c = &report["convoy"];
+    assert_eq!(c["robots"], 5, "{c}");
+    assert_eq!(c["goals_total"], 4, "{c}");
+    assert_eq!(c["goals_reached"], 4, "{c}");
+    assert!(c["min_gap_m"].as_f64().unwrap() >= 0.15, "{c}");
+    assert_eq!(c["collisions"], 0, "{c}");
+    assert_eq!(c["order_kept"], true, "{c}");
+    // follower-2 really was the Python agent, and it reported its steps like a Rust node.
+    let log = std::fs::read_to_string(run.join("logs/follower-2.log")).unwrap_or_default();
+    let launched = std::fs::read_to_string(run.join("launch.toml")).unwrap();
+    assert!(
+        launched.contains("examples/python/follower.py"),
+        "{launched}"
+    );
+    let node = report["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "follower-2")
+        .unwrap();
+    assert_eq!(node["exit_status"], "exited 0", "{node}\n{log}");
+    assert!(node["steps"].as_u64().unwrap() >= 1400, "{node}\n{log}");
+    assert_eq!(node["period_ms"], 50.0, "{node}");
+    std::fs::remove_dir_all(runs).ok();
+}
