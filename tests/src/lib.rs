@@ -172,3 +172,70 @@ pub fn python_env() -> std::path::PathBuf {
     }
     python
 }
+
+/// A finished lockstep convoy run; its run directory is removed when this is dropped.
+pub struct ConvoyRun {
+    /// The run directory (logs, report, recording).
+    pub dir: std::path::PathBuf,
+    pub report: serde_json::Value,
+    runs: std::path::PathBuf,
+    _group: TestGroup,
+}
+
+impl Drop for ConvoyRun {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.runs);
+    }
+}
+
+/// Runs `launch/<file>` for 70 simulated seconds (the leader reaches D after about 47 s and
+/// the followers line up behind it) under a unique group name; panics if the launch fails.
+pub fn run_convoy(file: &str) -> ConvoyRun {
+    let group = TestGroup::new("convoy");
+    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
+    let out = Command::new(workspace_bin("caravan"))
+        .arg("launch")
+        .arg(workspace_root().join("launch").join(file))
+        .args([
+            "--quiet",
+            "--duration",
+            "70s",
+            "--set",
+            &format!("group.name={}", group.name),
+        ])
+        .arg("--runs-dir")
+        .arg(&runs)
+        .env_remove("CARAVAN_PYTHON")
+        .output()
+        .expect("run caravan launch");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let dir = std::fs::read_dir(&runs)
+        .unwrap()
+        .flatten()
+        .next()
+        .unwrap()
+        .path();
+    let report =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    ConvoyRun {
+        dir,
+        report,
+        runs,
+        _group: group,
+    }
+}
+
+/// The convoy succeeded: every goal reached, gaps kept, no collision, order kept.
+pub fn assert_convoy_succeeded(c: &serde_json::Value) {
+    assert_eq!(c["robots"], 5, "{c}");
+    assert_eq!(c["goals_total"], 4, "{c}");
+    assert_eq!(c["goals_reached"], 4, "{c}");
+    assert!(c["min_gap_m"].as_f64().unwrap() >= 0.15, "{c}");
+    assert_eq!(c["collisions"], 0, "{c}");
+    assert_eq!(c["order_kept"], true, "{c}");
+    assert_eq!(c["followers"].as_array().unwrap().len(), 4, "{c}");
+}

@@ -3,7 +3,9 @@
 //! pip install iceoryx2) on first use.
 
 use caravan_schemas::{lockstep, topics};
-use caravan_tests::{TestGroup, python_env, workspace_bin, workspace_root};
+use caravan_tests::{
+    assert_convoy_succeeded, python_env, run_convoy, workspace_bin, workspace_root,
+};
 use std::io::Write;
 use std::process::{Command, Output, Stdio};
 
@@ -114,46 +116,12 @@ fn python_schemas_have_the_rust_layouts() {
 #[test]
 fn python_follower_completes_the_lockstep_convoy() {
     python_env();
-    let group = TestGroup::new("pyconvoy");
-    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
-    let out = Command::new(workspace_bin("caravan"))
-        .arg("launch")
-        .arg(workspace_root().join("launch/convoy-python.toml"))
-        .args([
-            "--quiet",
-            "--duration",
-            "70s",
-            "--set",
-            &format!("group.name={}", group.name),
-            "--runs-dir",
-        ])
-        .arg(&runs)
-        .env_remove("CARAVAN_PYTHON")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let run = std::fs::read_dir(&runs)
-        .unwrap()
-        .flatten()
-        .next()
-        .unwrap()
-        .path();
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(run.join("report.json")).unwrap()).unwrap();
-    let c = &report["convoy"];
-    assert_eq!(c["robots"], 5, "{c}");
-    assert_eq!(c["goals_total"], 4, "{c}");
-    assert_eq!(c["goals_reached"], 4, "{c}");
-    assert!(c["min_gap_m"].as_f64().unwrap() >= 0.15, "{c}");
-    assert_eq!(c["collisions"], 0, "{c}");
-    assert_eq!(c["order_kept"], true, "{c}");
+    let run = run_convoy("convoy-python.toml");
+    let report = &run.report;
+    assert_convoy_succeeded(&report["convoy"]);
     // follower-2 really was the Python agent, and it reported its steps like a Rust node.
-    let log = std::fs::read_to_string(run.join("logs/follower-2.log")).unwrap_or_default();
-    let launched = std::fs::read_to_string(run.join("launch.toml")).unwrap();
+    let log = std::fs::read_to_string(run.dir.join("logs/follower-2.log")).unwrap_or_default();
+    let launched = std::fs::read_to_string(run.dir.join("launch.toml")).unwrap();
     assert!(
         launched.contains("examples/python/follower.py"),
         "{launched}"
@@ -167,5 +135,4 @@ fn python_follower_completes_the_lockstep_convoy() {
     assert_eq!(node["exit_status"], "exited 0", "{node}\n{log}");
     assert!(node["steps"].as_u64().unwrap() >= 1400, "{node}\n{log}");
     assert_eq!(node["period_ms"], 50.0, "{node}");
-    std::fs::remove_dir_all(runs).ok();
 }
