@@ -495,24 +495,17 @@ fn report_is_recomputed_from_the_run_directory() {
     assert!(Path::new(&dir.join("report.md")).exists());
 }
 
-#[test]
-fn hung_lockstep_process_is_killed_and_named() {
+/// A group of a healthy node and one that hangs in its step after `count` steps, with a 1–2 s
+/// step timeout: the launcher kills the hung one, names it, and the group goes on.
+fn assert_hang_is_handled(tag: &str, clock: &str, duration: &str, count: u32) -> serde_json::Value {
     let s = Scenario::new(
-        "hang",
-        r#"clock = "lockstep"
-duration = "5s"
-step_timeout = "1s"
-
-[[process]]
-name = "ping"
-exec = "caravan-demo ping"
-
-[[process]]
-name = "stuck"
-exec = "caravan-testnode hang"
-params = { count = 3 }
-required = false
-"#,
+        tag,
+        &format!(
+            "clock = \"{clock}\"\nduration = \"{duration}\"\nstep_timeout = \"2s\"\n\n\
+             [[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n\n\
+             [[process]]\nname = \"stuck\"\nexec = \"caravan-testnode hang\"\n\
+             params = {{ count = {count} }}\nrequired = false\n"
+        ),
     );
     let out = s.run(&[]);
     let err = stderr(&out);
@@ -523,9 +516,21 @@ required = false
     );
     let report = s.report();
     assert_eq!(node(&report, "stuck")["exit_status"], "killed by signal 9");
-    // The group went on without it.
+    assert_eq!(node(&report, "ping")["exit_status"], "exited 0");
     assert_eq!(report["run"]["outcome"], "completed");
+    report
+}
+
+#[test]
+fn hung_lockstep_process_is_killed_and_named() {
+    let report = assert_hang_is_handled("hang", "lockstep", "5s", 3);
+    // Simulated time went on without it.
     assert_eq!(node(&report, "ping")["steps"], 51);
+}
+
+#[test]
+fn hung_realtime_process_is_killed_and_named() {
+    assert_hang_is_handled("hang-rt", "realtime", "8s", 15);
 }
 
 #[test]
@@ -557,35 +562,4 @@ required = false
         "{err}"
     );
     assert_eq!(node(&s.report(), "ping")["exit_status"], "exited 0");
-}
-
-#[test]
-fn hung_realtime_process_is_killed_and_named() {
-    let s = Scenario::new(
-        "hang-rt",
-        r#"clock = "realtime"
-duration = "8s"
-step_timeout = "2s"
-
-[[process]]
-name = "ping"
-exec = "caravan-demo ping"
-
-[[process]]
-name = "stuck"
-exec = "caravan-testnode hang"
-params = { count = 15 }
-required = false
-"#,
-    );
-    let out = s.run(&[]);
-    let err = stderr(&out);
-    assert!(out.status.success(), "{err}");
-    assert!(
-        err.contains("process 'stuck' has not finished a step") && err.contains("hung"),
-        "{err}"
-    );
-    let report = s.report();
-    assert_eq!(node(&report, "stuck")["exit_status"], "killed by signal 9");
-    assert_eq!(node(&report, "ping")["exit_status"], "exited 0");
 }
