@@ -2,6 +2,7 @@
 
 mod pingpong;
 mod stats;
+mod transport;
 mod wrapper;
 
 use clap::{Args, Subcommand};
@@ -13,6 +14,11 @@ pub enum BenchCommand {
     /// Internal: the echoing side of a ping-pong pair
     #[command(hide = true)]
     Pong(pingpong::PongArgs),
+    /// One-way latency of Caravan topics against raw iceoryx2, sockets and zenoh, 16 B to 4 MiB
+    Transport(transport::TransportArgs),
+    /// Internal: the echoing side of `bench transport`
+    #[command(hide = true)]
+    TransportPong(transport::PongArgs),
 }
 
 #[derive(Args)]
@@ -32,5 +38,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
     match cmd {
         BenchCommand::Wrapper(args) => wrapper::run(&args),
         BenchCommand::Pong(args) => pingpong::pong(&args),
+        BenchCommand::Transport(args) => transport::run(&args),
+        BenchCommand::TransportPong(args) => transport::pong(&args),
     }
 }

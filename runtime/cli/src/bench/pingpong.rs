@@ -145,19 +145,28 @@ fn pong_caravan<T: Message + Default>(group: &str) -> Result<()> {
 }
 
 /// Raw iceoryx2 ports of one side: publisher + notifier out, subscriber + listener in.
-struct RawSide<T: Message> {
-    publisher: iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>,
-    notifier: iceoryx2::port::notifier::Notifier<ipc::Service>,
-    subscriber: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>,
-    listener: iceoryx2::port::listener::Listener<ipc::Service>,
+pub(super) struct RawSide<T: Message> {
+    pub(super) publisher: iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>,
+    pub(super) notifier: iceoryx2::port::notifier::Notifier<ipc::Service>,
+    pub(super) subscriber: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>,
+    pub(super) listener: iceoryx2::port::listener::Listener<ipc::Service>,
     _node: iceoryx2::node::Node<ipc::Service>,
 }
 
 impl<T: Message> RawSide<T> {
     fn open(group: &str, out: &str, input: &str) -> Result<Self> {
-        let config = caravan::group::config(group)?;
+        Self::open_with(&caravan::group::config(group)?, out, input)
+    }
+
+    /// Opens the ports with an explicit iceoryx2 config (`bench transport` shrinks the
+    /// per-service subscriber count so that 4 MiB samples fit in memory).
+    pub(super) fn open_with(
+        config: &iceoryx2::config::Config,
+        out: &str,
+        input: &str,
+    ) -> Result<Self> {
         let node = NodeBuilder::new()
-            .config(&config)
+            .config(config)
             .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
             .create::<ipc::Service>()?;
         let pubsub = |name: &str| -> Result<_> {
@@ -190,6 +199,24 @@ impl<T: Message> RawSide<T> {
     fn send(&self, value: &T) -> Result<()> {
         self.publisher.loan_uninit()?.write_payload(*value).send()?;
         self.notifier.notify()?;
+        Ok(())
+    }
+
+    /// Loans a sample, initialises it in place with `PlacementDefault` (as Caravan's
+    /// `Publisher::loan` does), lets `fill` write to it and sends it; wakes the other side if
+    /// `notify`.
+    pub(super) fn send_in_place(&self, notify: bool, fill: impl FnOnce(&mut T)) -> Result<()> {
+        let mut uninit = self.publisher.loan_uninit()?;
+        // SAFETY: placement_default initialises every field of the payload in place.
+        let mut sample = unsafe {
+            T::placement_default(uninit.payload_mut().as_mut_ptr());
+            uninit.assume_init()
+        };
+        fill(sample.payload_mut());
+        sample.send()?;
+        if notify {
+            self.notifier.notify()?;
+        }
         Ok(())
     }
 }

@@ -1,0 +1,137 @@
+//! Caravan topics: `Publisher::loan` in place, `Subscriber::receive`, header stamping and gap
+//! counting included. Woken by events through `Node::run`, or (benchmark only) spinning.
+
+use super::payload::{Bytes, STOP, copy_mark, mark, read_mark, with_blob};
+use super::{ECHO_TIMEOUT, PONG_IDLE, Pair, Recorder, ready, spin};
+use anyhow::{Result, bail};
+use caravan::{Node, NodeIdentity, Publisher, Topic, Trigger};
+use caravan_schemas::Message;
+use std::time::Instant;
+
+const PING: &str = "bench/ping";
+const PONG: &str = "bench/pong";
+
+/// A node of the pair's group, with the bench's iceoryx2 config (see `iceoryx2_raw`).
+fn node(pair: &Pair, name: &str) -> Result<Node> {
+    let mut identity = NodeIdentity::new(&pair.group, name);
+    identity.iceoryx_config = Some(pair.temp_path("toml"));
+    Ok(Node::new(identity)?)
+}
+
+/// Loans a message in shared memory, writes the 16 marker bytes and publishes it.
+fn send<T: Message + Bytes>(publisher: &Publisher<T>, seq: u64) -> Result<(), caravan::Error> {
+    let mut loan = publisher.loan()?;
+    mark(loan.bytes_mut(), seq);
+    loan.send()
+}
+
+fn mismatch(expected: u64, got: Option<u64>) -> caravan::Error {
+    caravan::Error::Step(format!("echo of round {expected} came back as {got:?}"))
+}
+
+pub fn ping_event(pair: &Pair, rec: &mut Recorder) -> Result<()> {
+    with_blob!(pair.bytes, ping_event_t(pair, rec))
+}
+
+fn ping_event_t<T: Message + Bytes>(pair: &Pair, rec: &mut Recorder) -> Result<()> {
+    let mut node = node(pair, "ping")?;
+    let ping = node.publisher(&Topic::<T>::new(PING))?;
+    let pong = node.subscriber(&Topic::<T>::new(PONG))?;
+    let total = rec.total();
+    let mut seq = 0;
+    let mut sent_at = Instant::now();
+    send(&ping, seq)?;
+    node.run(Trigger::on(PONG), |step| {
+        while let Some(msg) = pong.receive()? {
+            let rtt = sent_at.elapsed();
+            let got = read_mark(msg.bytes());
+            if got != Some(seq) {
+                return Err(mismatch(seq, got));
+            }
+            drop(msg);
+            rec.record(rtt);
+            seq += 1;
+            if seq >= total {
+                step.stop();
+                return Ok(());
+            }
+            sent_at = Instant::now();
+            send(&ping, seq)?;
+        }
+        Ok(())
+    })?;
+    send(&ping, STOP)?;
+    Ok(())
+}
+
+pub fn pong_event(pair: &Pair) -> Result<()> {
+    with_blob!(pair.bytes, pong_event_t(pair))
+}
+
+fn pong_event_t<T: Message + Bytes>(pair: &Pair) -> Result<()> {
+    let mut node = node(pair, "pong")?;
+    let ping = node.subscriber(&Topic::<T>::new(PING))?;
+    let pong = node.publisher(&Topic::<T>::new(PONG))?;
+    ready("");
+    node.run(Trigger::on(PING), |step| {
+        while let Some(msg) = ping.receive()? {
+            if read_mark(msg.bytes()) == Some(STOP) {
+                step.stop();
+                return Ok(());
+            }
+            let mut loan = pong.loan()?;
+            copy_mark(msg.bytes(), loan.bytes_mut());
+            loan.send()?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+pub fn ping_poll(pair: &Pair, rec: &mut Recorder) -> Result<()> {
+    with_blob!(pair.bytes, ping_poll_t(pair, rec))
+}
+
+/// BENCHMARK ONLY: spins on `Subscriber::receive` instead of running the node's step loop.
+/// Caravan nodes always sleep until an event or their period; this shows what the transport
+/// costs without the wake-up.
+fn ping_poll_t<T: Message + Bytes>(pair: &Pair, rec: &mut Recorder) -> Result<()> {
+    let node = node(pair, "ping")?;
+    let ping = node.publisher(&Topic::<T>::new(PING))?;
+    let pong = node.subscriber(&Topic::<T>::new(PONG))?;
+    for seq in 0..rec.total() {
+        let sent_at = Instant::now();
+        send(&ping, seq)?;
+        let msg = spin(|| Ok(pong.receive()?), ECHO_TIMEOUT)?;
+        let rtt = sent_at.elapsed();
+        let got = read_mark(msg.bytes());
+        if got != Some(seq) {
+            bail!(mismatch(seq, got));
+        }
+        drop(msg);
+        rec.record(rtt);
+    }
+    send(&ping, STOP)?;
+    Ok(())
+}
+
+pub fn pong_poll(pair: &Pair) -> Result<()> {
+    with_blob!(pair.bytes, pong_poll_t(pair))
+}
+
+/// BENCHMARK ONLY: the spinning echo side, see [`ping_poll_t`].
+fn pong_poll_t<T: Message + Bytes>(pair: &Pair) -> Result<()> {
+    let node = node(pair, "pong")?;
+    let ping = node.subscriber(&Topic::<T>::new(PING))?;
+    let pong = node.publisher(&Topic::<T>::new(PONG))?;
+    ready("");
+    loop {
+        let msg = spin(|| Ok(ping.receive()?), PONG_IDLE)?;
+        if read_mark(msg.bytes()) == Some(STOP) {
+            return Ok(());
+        }
+        let mut loan = pong.loan()?;
+        copy_mark(msg.bytes(), loan.bytes_mut());
+        loan.send()?;
+    }
+}

@@ -1,0 +1,576 @@
+//! `caravan bench transport`: one-way latency of Caravan topics side by side with raw iceoryx2,
+//! Unix domain sockets, UDP, TCP and zenoh, between two processes, in one run.
+//!
+//! For every payload size and transport the bench starts its own executable as the echoing
+//! side (`caravan bench transport-pong`), measures round trips after a warm-up and records half
+//! of each in an hdrhistogram. The sizes are interleaved (every transport at 16 B, then every
+//! transport at 2.7 KiB, …) so that a busier moment of the machine does not hit one transport
+//! only.
+
+mod caravan;
+mod iceoryx2_raw;
+mod payload;
+mod plot;
+mod report;
+mod stream;
+mod udp;
+mod zenoh_peer;
+
+use super::stats::histogram;
+use anyhow::{Context, Result, bail};
+use clap::{Args, ValueEnum};
+use hdrhistogram::Histogram;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+pub use payload::SIZES;
+
+/// The transports compared, in table order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Kind {
+    /// Caravan topics; the node sleeps until a message event wakes it (`Node::run` on message)
+    CaravanEvent,
+    /// Caravan topics, polled in a spin loop (benchmark-only; Caravan nodes do not spin)
+    CaravanPoll,
+    /// iceoryx2 publish-subscribe woken through a WaitSet, no Caravan wrapper
+    Iceoryx2Event,
+    /// iceoryx2 publish-subscribe polled in a spin loop, no events
+    Iceoryx2Poll,
+    /// Unix domain stream socket, blocking reads
+    Uds,
+    /// TCP on loopback with TCP_NODELAY, blocking reads
+    Tcp,
+    /// UDP on loopback, fragmented into datagrams of at most 60 KiB
+    Udp,
+    /// zenoh peer to peer over TCP on loopback, shared memory off
+    Zenoh,
+    /// zenoh peer to peer, payloads allocated in zenoh's shared memory
+    ZenohShm,
+}
+
+impl Kind {
+    pub const ALL: [Kind; 9] = [
+        Kind::CaravanEvent,
+        Kind::CaravanPoll,
+        Kind::Iceoryx2Event,
+        Kind::Iceoryx2Poll,
+        Kind::Uds,
+        Kind::Tcp,
+        Kind::Udp,
+        Kind::Zenoh,
+        Kind::ZenohShm,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::CaravanEvent => "caravan-event",
+            Kind::CaravanPoll => "caravan-poll",
+            Kind::Iceoryx2Event => "iceoryx2-event",
+            Kind::Iceoryx2Poll => "iceoryx2-poll",
+            Kind::Uds => "uds",
+            Kind::Tcp => "tcp",
+            Kind::Udp => "udp",
+            Kind::Zenoh => "zenoh",
+            Kind::ZenohShm => "zenoh-shm",
+        }
+    }
+
+    /// How the receiving side learns that a message is there.
+    pub fn wake_up(self) -> &'static str {
+        match self {
+            Kind::CaravanPoll | Kind::Iceoryx2Poll => "busy-poll (benchmark only)",
+            Kind::CaravanEvent | Kind::Iceoryx2Event => "event (iceoryx2 WaitSet)",
+            Kind::Uds | Kind::Tcp | Kind::Udp => "blocking read",
+            Kind::Zenoh | Kind::ZenohShm => "zenoh subscriber channel",
+        }
+    }
+
+    fn uses_iceoryx2(self) -> bool {
+        matches!(
+            self,
+            Kind::CaravanEvent | Kind::CaravanPoll | Kind::Iceoryx2Event | Kind::Iceoryx2Poll
+        )
+    }
+}
+
+#[derive(Args)]
+pub struct TransportArgs {
+    /// A short run (fewer round trips) that finishes in well under a minute
+    #[arg(long)]
+    pub quick: bool,
+    /// Directory for transport.csv and transport.svg
+    #[arg(long, default_value = "bench-results")]
+    pub out: PathBuf,
+    /// Round trips measured per transport and payload, after 10 % warm-up
+    /// [default: 10000, or 200 with --quick]
+    #[arg(long)]
+    pub rounds: Option<u64>,
+    /// Only these transports, comma-separated [default: all]
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub transports: Vec<Kind>,
+    /// Only these payload sizes in bytes, comma-separated [default: 16,2728,65536,1048576,4194304]
+    #[arg(long, value_delimiter = ',')]
+    pub sizes: Vec<usize>,
+    /// Let the scheduler place both sides (default: the measuring side on the first CPU this
+    /// process may use, the echoing side on the second)
+    #[arg(long)]
+    pub no_pin: bool,
+}
+
+#[derive(Args)]
+pub struct PongArgs {
+    #[arg(long, value_enum)]
+    transport: Kind,
+    #[arg(long)]
+    bytes: usize,
+    #[arg(long)]
+    group: String,
+    /// Where to listen (zenoh): a zenoh endpoint such as tcp/127.0.0.1:7447
+    #[arg(long)]
+    endpoint: Option<String>,
+    /// Pin the echoing process to this CPU
+    #[arg(long)]
+    cpu: Option<usize>,
+}
+
+/// What both sides of one measurement agree on.
+pub struct Pair {
+    pub kind: Kind,
+    pub bytes: usize,
+    /// Unique per measurement: iceoryx2 group, socket file name.
+    pub group: String,
+    /// What the pong side reported when ready (a port), or what it was told (zenoh endpoint).
+    pub endpoint: String,
+}
+
+impl Pair {
+    /// Path of the Unix domain socket (and of the Caravan iceoryx2 config) of this pair.
+    fn temp_path(&self, ext: &str) -> PathBuf {
+        temp_path(&self.group, ext)
+    }
+}
+
+fn temp_path(group: &str, ext: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("caravan-bench-{group}.{ext}"))
+}
+
+/// Counts round trips, records the measured ones (after warm-up) as one-way latencies.
+pub struct Recorder {
+    hist: Histogram<u64>,
+    warmup: u64,
+    total: u64,
+    done: u64,
+    progress: ProgressBar,
+    alive: Arc<AtomicU64>,
+}
+
+impl Recorder {
+    /// Round trips to make, warm-up included.
+    pub fn total(&self) -> u64 {
+        self.total
+    }
+
+    /// Records one round trip's time.
+    pub fn record(&mut self, rtt: Duration) {
+        if self.done >= self.warmup {
+            self.hist
+                .saturating_record((rtt.as_nanos() as u64 / 2).max(1));
+        }
+        self.done += 1;
+        self.alive.store(self.done, Ordering::Relaxed);
+        if self.done.is_multiple_of(64) {
+            self.progress.inc(64);
+        }
+    }
+
+    fn finish(self) -> Result<Histogram<u64>> {
+        self.progress.inc(self.done % 64);
+        if self.done < self.total {
+            bail!("stopped after {} of {} round trips", self.done, self.total);
+        }
+        Ok(self.hist)
+    }
+}
+
+/// Spins on `poll` until it yields a value. BENCHMARK ONLY: burns a core while waiting.
+///
+/// After [`SPIN_BEFORE_YIELD`] empty polls it calls `sched_yield` between polls: that returns at
+/// once when nothing else wants the core, but keeps the two spinning processes (and anything
+/// else running) from starving each other on a machine with few cores.
+pub fn spin<R>(mut poll: impl FnMut() -> Result<Option<R>>, timeout: Duration) -> Result<R> {
+    let start = Instant::now();
+    let mut n: u32 = 0;
+    loop {
+        if let Some(r) = poll()? {
+            return Ok(r);
+        }
+        n = n.wrapping_add(1);
+        if n < SPIN_BEFORE_YIELD {
+            std::hint::spin_loop();
+            continue;
+        }
+        std::thread::yield_now();
+        if n.is_multiple_of(1024) && start.elapsed() > timeout {
+            bail!("nothing received for {timeout:?}");
+        }
+    }
+}
+
+/// Empty polls before a spinning side starts yielding the core between polls.
+pub const SPIN_BEFORE_YIELD: u32 = 1_000;
+
+/// How long the echoing side waits for a message before it gives up.
+pub const PONG_IDLE: Duration = Duration::from_secs(60);
+/// How long the measuring side waits for an echo before it gives up.
+pub const ECHO_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// Tells the measuring side that the echoing side is listening, with what it should know.
+pub fn ready(info: &str) {
+    println!("ready {info}");
+}
+
+/// One result row: percentiles, or why the transport cannot carry this payload.
+pub struct Row {
+    pub kind: Kind,
+    pub bytes: usize,
+    pub rounds: u64,
+    pub result: std::result::Result<super::stats::Percentiles, String>,
+    pub mean_ns: f64,
+}
+
+pub fn run(args: &TransportArgs) -> Result<()> {
+    let kinds: Vec<Kind> = if args.transports.is_empty() {
+        Kind::ALL.to_vec()
+    } else {
+        args.transports.clone()
+    };
+    let sizes: Vec<usize> = if args.sizes.is_empty() {
+        SIZES.to_vec()
+    } else {
+        args.sizes.clone()
+    };
+    if let Some(bad) = sizes.iter().find(|s| !SIZES.contains(s)) {
+        bail!("payload size {bad} is not one of {SIZES:?}");
+    }
+    let rounds = args.rounds.unwrap_or(if args.quick { 200 } else { 10_000 });
+    let warmup = (rounds / 10).max(10);
+    let mut machine = report::Machine::detect();
+    // Both sides on fixed, different CPUs: otherwise the scheduler puts them sometimes on one
+    // core (a wake-up is a context switch) and sometimes on two (a wake-up is an inter-processor
+    // interrupt, slower in a VM), and each measurement lands in one of the two modes by chance.
+    let cpus = if args.no_pin { None } else { pin::two_cpus() };
+    if let Some((ping_cpu, pong_cpu)) = cpus {
+        pin::to(ping_cpu)?;
+        machine.placement =
+            format!("measuring side on CPU {ping_cpu}, echoing side on CPU {pong_cpu}");
+    }
+    // zenoh's shared-memory segments can outlive their processes; remove those of earlier runs.
+    zenoh_peer::cleanup();
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+
+    println!("{}", machine.describe());
+    println!(
+        "one-way latency = round trip / 2; {rounds} round trips per transport and payload after \
+         {warmup} warm-up{}",
+        if args.quick { " (--quick)" } else { "" }
+    );
+    let progress = progress_bar(kinds.len() * sizes.len(), rounds + warmup);
+    let mut rows = Vec::new();
+    for &bytes in &sizes {
+        for &kind in &kinds {
+            progress.set_message(format!("{} {}", kind.name(), payload::label(bytes)));
+            let pong_cpu = cpus.map(|(_, c)| c);
+            let result = measure(kind, bytes, rounds, warmup, pong_cpu, &progress);
+            let (result, mean_ns) = match result {
+                Ok(Some(h)) => (Ok(super::stats::percentiles(&h)), h.mean()),
+                Ok(None) => (Err(unsupported(kind, bytes)), 0.0),
+                Err(e) => (Err(format!("failed: {e:#}")), 0.0),
+            };
+            if let Err(why) = &result {
+                progress.suspend(|| eprintln!("{} {}: {why}", kind.name(), bytes));
+            }
+            rows.push(Row {
+                kind,
+                bytes,
+                rounds,
+                result,
+                mean_ns,
+            });
+        }
+    }
+    progress.finish_and_clear();
+    zenoh_peer::cleanup();
+    print!("{}", report::table(&rows));
+    print!("{}", report::ratios(&rows));
+    let csv_path = args.out.join("transport.csv");
+    std::fs::write(&csv_path, report::csv(&machine, &rows, rounds, warmup))
+        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    let svg_path = args.out.join("transport.svg");
+    std::fs::write(&svg_path, plot::svg(&machine, &rows, rounds))
+        .with_context(|| format!("cannot write {}", svg_path.display()))?;
+    println!("wrote {} and {}", csv_path.display(), svg_path.display());
+    let failed = rows
+        .iter()
+        .filter(|r| matches!(&r.result, Err(e) if e.starts_with("failed")))
+        .count();
+    if failed > 0 {
+        bail!("{failed} measurements failed (see the table)");
+    }
+    Ok(())
+}
+
+fn unsupported(kind: Kind, bytes: usize) -> String {
+    match kind {
+        Kind::Udp => format!(
+            "unsupported: the UDP receive buffer cannot hold {} (raise net.core.rmem_max)",
+            payload::label(bytes)
+        ),
+        _ => "unsupported".into(),
+    }
+}
+
+fn progress_bar(pairs: usize, rounds_per_pair: u64) -> ProgressBar {
+    // Drawn on stderr only when it is a terminal; never in tests or pipes.
+    let bar = ProgressBar::with_draw_target(
+        Some(pairs as u64 * rounds_per_pair),
+        ProgressDrawTarget::stderr(),
+    );
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {percent:>3}% {elapsed_precise} eta {eta} {msg}")
+            .expect("valid progress template"),
+    );
+    bar
+}
+
+/// Starts the echoing side, measures, stops it. `Ok(None)`: the transport cannot carry `bytes`.
+fn measure(
+    kind: Kind,
+    bytes: usize,
+    rounds: u64,
+    warmup: u64,
+    pong_cpu: Option<usize>,
+    progress: &ProgressBar,
+) -> Result<Option<Histogram<u64>>> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    // Group names are at most 40 of [A-Za-z0-9-].
+    let group = format!(
+        "bt-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    );
+    if kind == Kind::Udp && !udp::supports(bytes) {
+        progress.inc(rounds + warmup);
+        return Ok(None);
+    }
+    if kind.uses_iceoryx2() {
+        iceoryx2_raw::write_config_file(&group)?;
+    }
+    let endpoint = match kind {
+        Kind::Zenoh | Kind::ZenohShm => Some(zenoh_peer::free_endpoint()?),
+        _ => None,
+    };
+    let mut cmd = Command::new(std::env::current_exe()?);
+    cmd.args(["bench", "transport-pong", "--group", &group])
+        .args(["--transport", kind.name()])
+        .args(["--bytes", &bytes.to_string()]);
+    if let Some(e) = &endpoint {
+        cmd.args(["--endpoint", e]);
+    }
+    if let Some(cpu) = pong_cpu {
+        cmd.args(["--cpu", &cpu.to_string()]);
+    }
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .spawn()
+        .context("cannot start the echoing process")?;
+    let result = (|| {
+        let info = await_ready(child.stdout.take().expect("piped stdout"))?;
+        let pair = Pair {
+            kind,
+            bytes,
+            group: group.clone(),
+            endpoint: endpoint.clone().unwrap_or(info),
+        };
+        let alive = Arc::new(AtomicU64::new(0));
+        let mut recorder = Recorder {
+            hist: histogram(),
+            warmup,
+            total: rounds + warmup,
+            done: 0,
+            progress: progress.clone(),
+            alive: alive.clone(),
+        };
+        let watchdog = Watchdog::start(alive, child.id(), kind, bytes);
+        let outcome = ping(&pair, &mut recorder);
+        watchdog.stop();
+        outcome?;
+        recorder.finish()
+    })();
+    stop_child(&mut child);
+    cleanup(kind, &group);
+    result.map(Some)
+}
+
+/// Reads the echoing process's stdout up to its `ready` line and returns what follows `ready`.
+/// Anything else it prints (zenoh logs there when RUST_LOG is set) goes on to our stderr, by a
+/// thread that keeps draining the pipe so the echoing process never blocks on it.
+fn await_ready(stdout: std::process::ChildStdout) -> Result<String> {
+    let mut lines = BufReader::new(stdout).lines();
+    loop {
+        let Some(line) = lines.next().transpose()? else {
+            bail!("the echoing process did not start");
+        };
+        if let Some(info) = line.strip_prefix("ready") {
+            std::thread::spawn(move || {
+                for line in lines.map_while(std::result::Result::ok) {
+                    eprintln!("{line}");
+                }
+            });
+            return Ok(info.trim().to_string());
+        }
+        eprintln!("{line}");
+    }
+}
+
+fn ping(pair: &Pair, rec: &mut Recorder) -> Result<()> {
+    match pair.kind {
+        Kind::CaravanEvent => caravan::ping_event(pair, rec),
+        Kind::CaravanPoll => caravan::ping_poll(pair, rec),
+        Kind::Iceoryx2Event => iceoryx2_raw::ping(pair, rec, false),
+        Kind::Iceoryx2Poll => iceoryx2_raw::ping(pair, rec, true),
+        Kind::Uds => stream::ping_uds(pair, rec),
+        Kind::Tcp => stream::ping_tcp(pair, rec),
+        Kind::Udp => udp::ping(pair, rec),
+        Kind::Zenoh => zenoh_peer::ping(pair, rec, false),
+        Kind::ZenohShm => zenoh_peer::ping(pair, rec, true),
+    }
+}
+
+/// The echoing side (`caravan bench transport-pong`).
+pub fn pong(args: &PongArgs) -> Result<()> {
+    if let Some(cpu) = args.cpu {
+        pin::to(cpu)?;
+    }
+    let pair = Pair {
+        kind: args.transport,
+        bytes: args.bytes,
+        group: args.group.clone(),
+        endpoint: args.endpoint.clone().unwrap_or_default(),
+    };
+    match pair.kind {
+        Kind::CaravanEvent => caravan::pong_event(&pair),
+        Kind::CaravanPoll => caravan::pong_poll(&pair),
+        Kind::Iceoryx2Event => iceoryx2_raw::pong(&pair, false),
+        Kind::Iceoryx2Poll => iceoryx2_raw::pong(&pair, true),
+        Kind::Uds => stream::pong_uds(&pair),
+        Kind::Tcp => stream::pong_tcp(&pair),
+        Kind::Udp => udp::pong(&pair),
+        Kind::Zenoh => zenoh_peer::pong(&pair, false),
+        Kind::ZenohShm => zenoh_peer::pong(&pair, true),
+    }
+}
+
+/// CPU affinity of the two sides.
+mod pin {
+    use anyhow::{Result, bail};
+
+    /// The first two CPUs this process may run on, if it may run on two.
+    pub fn two_cpus() -> Option<(usize, usize)> {
+        // SAFETY: cpu_set_t is plain data; sched_getaffinity fills it.
+        let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
+        let rc = unsafe { libc::sched_getaffinity(0, size_of::<libc::cpu_set_t>(), &mut set) };
+        if rc != 0 {
+            return None;
+        }
+        let mut allowed =
+            (0..libc::CPU_SETSIZE as usize).filter(|&c| unsafe { libc::CPU_ISSET(c, &set) });
+        Some((allowed.next()?, allowed.next()?))
+    }
+
+    /// Pins the calling process (and the threads it starts later) to `cpu`.
+    pub fn to(cpu: usize) -> Result<()> {
+        // SAFETY: cpu_set_t is plain data, set up with the libc helpers.
+        let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
+        unsafe { libc::CPU_SET(cpu, &mut set) };
+        if unsafe { libc::sched_setaffinity(0, size_of::<libc::cpu_set_t>(), &set) } != 0 {
+            bail!(
+                "cannot pin to CPU {cpu}: {}",
+                std::io::Error::last_os_error()
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Waits for the echoing side to exit after the stop message; kills it if it does not.
+fn stop_child(child: &mut Child) {
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while Instant::now() < deadline {
+        if let Ok(Some(_)) = child.try_wait() {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    eprintln!("caravan: the echoing process did not stop; killing it");
+    let _ = child.kill();
+    let _ = child.wait();
+}
+
+fn cleanup(kind: Kind, group: &str) {
+    if kind.uses_iceoryx2() {
+        let _ = ::caravan::group::remove_resources(group);
+        let _ = std::fs::remove_file(temp_path(group, "toml"));
+    }
+    if kind == Kind::Uds {
+        let _ = std::fs::remove_file(temp_path(group, "sock"));
+    }
+}
+
+/// Ends the whole bench if a measurement makes no progress for a long time (a lost message on
+/// a transport that waits without a timeout), so that it never hangs a test or CI.
+struct Watchdog {
+    done: Arc<AtomicBool>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Watchdog {
+    const STALL: Duration = Duration::from_secs(60);
+
+    fn start(alive: Arc<AtomicU64>, child: u32, kind: Kind, bytes: usize) -> Self {
+        let done = Arc::new(AtomicBool::new(false));
+        let flag = done.clone();
+        let thread = std::thread::spawn(move || {
+            let mut last = (u64::MAX, Instant::now());
+            while !flag.load(Ordering::Relaxed) {
+                let now = alive.load(Ordering::Relaxed);
+                if now != last.0 {
+                    last = (now, Instant::now());
+                } else if last.1.elapsed() > Self::STALL {
+                    eprintln!(
+                        "caravan: {} {bytes} B made no progress for {:?}; giving up",
+                        kind.name(),
+                        Self::STALL
+                    );
+                    // SAFETY: signalling our own child.
+                    unsafe { libc::kill(child as i32, libc::SIGKILL) };
+                    std::process::exit(2);
+                }
+                std::thread::park_timeout(Duration::from_millis(200));
+            }
+        });
+        Self { done, thread }
+    }
+
+    fn stop(self) {
+        self.done.store(true, Ordering::Relaxed);
+        self.thread.thread().unpark();
+        let _ = self.thread.join();
+    }
+}

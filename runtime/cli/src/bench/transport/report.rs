@@ -1,0 +1,197 @@
+//! The machine, the table on stdout, the Caravan ratios and the CSV.
+
+use super::payload::label;
+use super::{Kind, Row};
+use std::fmt::Write;
+
+/// What the numbers were measured on.
+pub struct Machine {
+    pub cpu: String,
+    pub cores: usize,
+    pub kernel: String,
+    /// Where the two sides ran.
+    pub placement: String,
+}
+
+impl Machine {
+    pub fn detect() -> Self {
+        let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+        let cpu = cpuinfo
+            .lines()
+            .find_map(|l| {
+                let (key, value) = l.split_once(':')?;
+                (key.trim() == "model name").then(|| value.trim().to_string())
+            })
+            .unwrap_or_else(|| "unknown CPU".into());
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        Self {
+            cpu,
+            cores,
+            kernel: kernel(),
+            placement: "placed by the scheduler".into(),
+        }
+    }
+
+    pub fn describe(&self) -> String {
+        format!(
+            "CPU: {} ({} cores available), kernel: {}; {}",
+            self.cpu, self.cores, self.kernel, self.placement
+        )
+    }
+}
+
+/// `sysname release`, e.g. `Linux 6.18.2`.
+fn kernel() -> String {
+    // SAFETY: uname fills a plain-data struct of fixed-size C strings.
+    let mut u: libc::utsname = unsafe { std::mem::zeroed() };
+    if unsafe { libc::uname(&mut u) } != 0 {
+        return "unknown kernel".into();
+    }
+    let field = |f: &[libc::c_char]| {
+        let bytes: Vec<u8> = f
+            .iter()
+            .take_while(|&&c| c != 0)
+            .map(|&c| c as u8)
+            .collect();
+        String::from_utf8_lossy(&bytes).into_owned()
+    };
+    format!("{} {}", field(&u.sysname), field(&u.release))
+}
+
+fn us(ns: u64) -> String {
+    let us = ns as f64 / 1e3;
+    if us >= 1000.0 {
+        format!("{us:.0}")
+    } else if us >= 10.0 {
+        format!("{us:.1}")
+    } else {
+        format!("{us:.2}")
+    }
+}
+
+pub fn table(rows: &[Row]) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "\n{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}   wake-up",
+        "transport", "payload", "p50 µs", "p90 µs", "p99 µs", "p99.9 µs", "max µs"
+    );
+    let mut last = None;
+    for r in rows {
+        if last.is_some_and(|b| b != r.bytes) {
+            out.push('\n');
+        }
+        last = Some(r.bytes);
+        let _ = match &r.result {
+            Ok(p) => writeln!(
+                out,
+                "{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}   {}",
+                r.kind.name(),
+                label(r.bytes),
+                us(p.p50_ns),
+                us(p.p90_ns),
+                us(p.p99_ns),
+                us(p.p999_ns),
+                us(p.max_ns),
+                r.kind.wake_up()
+            ),
+            Err(why) => writeln!(out, "{:<15} {:>9}   {why}", r.kind.name(), label(r.bytes)),
+        };
+    }
+    out
+}
+
+fn p50(rows: &[Row], kind: Kind, bytes: usize) -> Option<u64> {
+    rows.iter()
+        .find(|r| r.kind == kind && r.bytes == bytes)
+        .and_then(|r| r.result.as_ref().ok())
+        .map(|p| p.p50_ns)
+}
+
+/// Caravan's p50 divided by each baseline's, per payload size.
+pub fn ratios(rows: &[Row]) -> String {
+    let pairs = [
+        (Kind::CaravanEvent, Kind::Iceoryx2Event),
+        (Kind::CaravanPoll, Kind::Iceoryx2Poll),
+        (Kind::CaravanEvent, Kind::Uds),
+        (Kind::CaravanEvent, Kind::Zenoh),
+        (Kind::CaravanEvent, Kind::ZenohShm),
+    ];
+    let mut sizes: Vec<usize> = rows.iter().map(|r| r.bytes).collect();
+    sizes.dedup();
+    let mut out = String::new();
+    let _ = write!(out, "\np50 ratios (< 1: Caravan faster)\n{:<32}", "");
+    for &b in &sizes {
+        let _ = write!(out, " {:>9}", label(b));
+    }
+    out.push('\n');
+    for (caravan, base) in pairs {
+        let mut line = format!("{:<32}", format!("{} / {}", caravan.name(), base.name()));
+        let mut any = false;
+        for &b in &sizes {
+            let cell = match (p50(rows, caravan, b), p50(rows, base, b)) {
+                (Some(c), Some(r)) if r > 0 => {
+                    any = true;
+                    let ratio = c as f64 / r as f64;
+                    if ratio < 0.1 {
+                        format!("{ratio:.3}")
+                    } else {
+                        format!("{ratio:.2}")
+                    }
+                }
+                _ => "-".into(),
+            };
+            let _ = write!(line, " {cell:>9}");
+        }
+        if any {
+            out.push_str(&line);
+            out.push('\n');
+        }
+    }
+    out
+}
+
+pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "# caravan bench transport");
+    let _ = writeln!(out, "# cpu: {}", machine.cpu);
+    let _ = writeln!(out, "# cores: {}", machine.cores);
+    let _ = writeln!(out, "# kernel: {}", machine.kernel);
+    let _ = writeln!(out, "# placement: {}", machine.placement);
+    let _ = writeln!(
+        out,
+        "# one-way latency = round trip / 2 in ns; {rounds} round trips after {warmup} warm-up"
+    );
+    let _ = writeln!(
+        out,
+        "transport,wake_up,payload_bytes,rounds,p50_ns,p90_ns,p99_ns,p999_ns,max_ns,mean_ns,status"
+    );
+    for r in rows {
+        let _ = match &r.result {
+            Ok(p) => writeln!(
+                out,
+                "{},{},{},{},{},{},{},{},{},{:.0},ok",
+                r.kind.name(),
+                r.kind.wake_up(),
+                r.bytes,
+                r.rounds,
+                p.p50_ns,
+                p.p90_ns,
+                p.p99_ns,
+                p.p999_ns,
+                p.max_ns,
+                r.mean_ns
+            ),
+            Err(why) => writeln!(
+                out,
+                "{},{},{},{},,,,,,,{}",
+                r.kind.name(),
+                r.kind.wake_up(),
+                r.bytes,
+                r.rounds,
+                why.replace(',', ";")
+            ),
+        };
+    }
+    out
+}
