@@ -120,11 +120,11 @@ pub fn ratios(rows: &[Row]) -> String {
     let mut sizes: Vec<usize> = rows.iter().map(|r| r.bytes).collect();
     sizes.dedup();
     let mut out = String::new();
-    let _ = write!(out, "\np50 ratios (< 1: Caravan faster)\n{:<32}", "");
+    let mut header = format!("\np50 ratios (< 1: Caravan faster)\n{:<32}", "");
     for &b in &sizes {
-        let _ = write!(out, " {:>9}", label(b));
+        let _ = write!(header, " {:>9}", label(b));
     }
-    out.push('\n');
+    header.push('\n');
     for (caravan, base) in pairs {
         let mut line = format!("{:<32}", format!("{} / {}", caravan.name(), base.name()));
         let mut any = false;
@@ -148,7 +148,10 @@ pub fn ratios(rows: &[Row]) -> String {
             out.push('\n');
         }
     }
-    out
+    if out.is_empty() {
+        return out;
+    }
+    header + &out
 }
 
 pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64) -> String {
