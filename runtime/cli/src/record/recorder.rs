@@ -149,37 +149,41 @@ impl Recorder {
     /// Reads every waiting message and writes it.
     pub fn drain(&mut self) -> Result<()> {
         let now_wall = caravan::wall_clock_ns();
+        let mut batch = Vec::new();
         for (i, tap) in self.taps.iter().enumerate() {
-            let mut batch = Vec::new();
             tap.drain(&mut batch)?;
-            self.buffer.extend(batch.into_iter().map(|m| (i, m)));
+            self.buffer.extend(batch.drain(..).map(|m| (i, m)));
         }
         if let Some(tap) = &self.status_tap {
-            let mut batch = Vec::new();
             tap.drain(&mut batch)?;
-            for m in batch {
-                if let Some(node) = m.json.get("node").and_then(Value::as_str) {
-                    self.node_status.insert(node.to_string(), m.json.clone());
-                    if m.json["running"] == 1 {
-                        self.status_heard
-                            .insert(node.to_string(), std::time::Instant::now());
-                    } else {
-                        self.status_heard.remove(node);
-                    }
+            for m in batch.drain(..) {
+                let Some(node) = m
+                    .json
+                    .get("node")
+                    .and_then(Value::as_str)
+                    .map(str::to_string)
+                else {
+                    continue;
+                };
+                if m.json["running"] == 1 {
+                    self.status_heard
+                        .insert(node.clone(), std::time::Instant::now());
+                } else {
+                    self.status_heard.remove(&node);
                 }
+                self.node_status.insert(node, m.json);
             }
         }
         let mut buffer = std::mem::take(&mut self.buffer);
         buffer.sort_by_key(|(i, m)| (m.header.stamp_ns, *i, m.header.source_id, m.header.seq));
-        for (i, msg) in &buffer {
-            self.write(*i, msg, now_wall)?;
+        for (i, msg) in buffer.drain(..) {
+            self.write(i, msg, now_wall)?;
         }
-        buffer.clear();
         self.buffer = buffer;
         Ok(())
     }
 
-    fn write(&mut self, tap_index: usize, msg: &Tapped, now_wall: u64) -> Result<()> {
+    fn write(&mut self, tap_index: usize, msg: Tapped, now_wall: u64) -> Result<()> {
         let tap = &self.taps[tap_index];
         let topic = tap.topic().to_string();
         let type_name = tap.type_name();
@@ -203,7 +207,7 @@ impl Recorder {
         if !self.lockstep {
             header["send_wall_ns"] = json!(msg.header.send_wall_ns);
         }
-        let mut record = msg.json.clone();
+        let mut record = msg.json;
         if let Value::Object(fields) = &mut record {
             fields.insert("header".into(), header);
         }
