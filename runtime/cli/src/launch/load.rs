@@ -2,6 +2,7 @@
 //! problem found so the user can fix them in one go. Nothing is started on any error.
 
 use super::model::*;
+use super::args;
 use super::overrides::{self, Applied, Seg};
 use super::suggest;
 use caravan::ClockMode;
@@ -11,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 use toml_edit::{Document, Item, TableLike, Value};
 
-const TOP_KEYS: &[&str] = &["group", "hosts", "links", "process"];
+const TOP_KEYS: &[&str] = &["args", "group", "hosts", "links", "process"];
 const GROUP_KEYS: &[&str] = &[
     "name",
     "clock",
@@ -91,6 +92,7 @@ pub fn load(
     let original = Document::parse(text.as_str()).map_err(|e| syntax_error(path, &text, &e))?;
     let mut doc = original.clone().into_mut();
     let (applied, rejected) = overrides::apply(&mut doc, overrides);
+    let unresolved = args::substitute(&mut doc);
     let mut check = Checker {
         file: path,
         original: &original,
@@ -104,12 +106,18 @@ pub fn load(
                 message: r.message,
             })
             .collect(),
+        silenced: Vec::new(),
     };
     let root = Scope {
         table: doc.as_table(),
         path: Vec::new(),
         label: String::new(),
     };
+    for u in unresolved {
+        check.problem(&u.path, u.message);
+        // The unresolved reference is the problem; its value's own errors would only echo it.
+        check.silenced.push(u.path);
+    }
     check.unknown_keys(&root, TOP_KEYS);
     let group = check.group(&root);
     let hosts = check.hosts(&root);
@@ -175,6 +183,8 @@ struct Checker<'a> {
     applied: &'a [Applied],
     resolve_exec: &'a dyn Fn(&str) -> Option<PathBuf>,
     problems: Vec<Problem>,
+    /// Paths whose further problems are not reported.
+    silenced: Vec<Vec<Seg>>,
 }
 
 impl Checker<'_> {
@@ -183,6 +193,9 @@ impl Checker<'_> {
     /// Records a problem at `path`: blamed on the override that set it, else on its line in
     /// the file as written (looked up there, so added override lines never shift numbers).
     fn problem(&mut self, path: &[Seg], message: String) {
+        if self.silenced.iter().any(|s| path.starts_with(s)) {
+            return;
+        }
         let blamed = self
             .applied
             .iter()
@@ -1146,6 +1159,27 @@ env = { RUST_LOG = "info" }
             lf.resolved_toml
         );
         assert!(lf.resolved_toml.contains("rate = \"250Hz\""));
+    }
+
+    #[test]
+    fn launch_args_substitute_and_unknown_args_are_named() {
+        let text = format!("[args]\nk = 4\nrate = \"250Hz\"\n{BASE}")
+            .replace("rate = \"500Hz\"", "rate = \"$(arg rate)\"");
+        let lf = load_text(&text, &["process.planner.params.k=\"$(arg k)\""]).unwrap();
+        assert_eq!(lf.processes[0].rate.as_deref(), Some("250Hz"));
+        assert_eq!(lf.processes[1].params, serde_json::json!({"k": 4}));
+        let lf = load_text(&text, &["args.rate=20Hz"]).unwrap();
+        assert_eq!(lf.processes[0].rate.as_deref(), Some("20Hz"));
+        let lines = errors(&text.replace("$(arg rate)", "$(arg rte)"), &[]);
+        assert_eq!(
+            lines,
+            ["FILE:20: '$(arg rte)' names no argument in [args]; did you mean 'rate'?"]
+        );
+        let lines = errors(&text, &["args.rat=1Hz"]);
+        assert_eq!(
+            lines,
+            ["--set args.rat=1Hz: 'args' has no key 'rat'; did you mean 'rate'?"]
+        );
     }
 
     #[test]

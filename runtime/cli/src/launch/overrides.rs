@@ -104,6 +104,10 @@ fn apply_one(doc: &mut DocumentMut, text: &str) -> Result<Vec<Seg>, String> {
             i += 1;
         }
     }
+    // An argument must be declared in the file, so a misspelt one is not silently ignored.
+    if path.len() == 1 && path[0].is_key(super::args::TABLE) && !table.contains_key(last) {
+        return Err(missing(parents, last, table));
+    }
     match table.get_mut(last) {
         // Keep the old value's spacing and trailing comment.
         Some(Item::Value(old)) => {
