@@ -1,6 +1,6 @@
-//! The leader's goal-to-goal driver (ground-truth pose for now; the autonomy issue replaces
-//! pose and path without changing this interface). It turns toward the current goal and
-//! drives within the reference limits (heading gain 0.7 s⁻¹: the wheels' slow, overshooting
+//! The leader's goal sequence and its simplest driver. With a planner (`cmd_vel_topic`), the
+//! leader only tracks goal progress and passes the planner's command on within the limits;
+//! without one it turns toward the current goal and drives within the reference limits (heading gain 0.7 s⁻¹: the wheels' slow, overshooting
 //! speed loop makes higher gains weave) v ∈ [0.1, 0.2] m/s, ω ∈ [−1.5, 2.0] rad/s, advancing
 //! to the next goal within the tolerance and stopping at the last.
 
@@ -49,15 +49,32 @@ impl Progress {
     }
 }
 
-/// Updates `progress` for the pose and returns the command (v, ω).
-pub fn command(pose: Pose2D, progress: &mut Progress, p: &LeaderParams) -> (f64, f64) {
+/// Moves `progress` past every goal within the tolerance of `pose`; returns the goal to drive
+/// to, or `None` once all were reached.
+pub fn advance(pose: Pose2D, progress: &mut Progress, p: &LeaderParams) -> Option<[f64; 2]> {
     while let Some(goal) = p.goals.get(progress.current) {
         if (goal[0] - pose.x).hypot(goal[1] - pose.y) > p.tolerance_m {
-            break;
+            return Some(*goal);
         }
         progress.current += 1;
     }
-    let Some(goal) = p.goals.get(progress.current) else {
+    None
+}
+
+/// A planner's command held to the leader's limits; `None` (no fresh command) stops.
+pub fn limit(cmd: Option<(f64, f64)>, p: &LeaderParams) -> (f64, f64) {
+    match cmd {
+        Some((v, omega)) => (
+            v.clamp(p.v_min, p.v_max),
+            omega.clamp(p.omega_min, p.omega_max),
+        ),
+        None => (0.0, 0.0),
+    }
+}
+
+/// Updates `progress` for the pose and returns the straight-to-goal command (v, ω).
+pub fn command(pose: Pose2D, progress: &mut Progress, p: &LeaderParams) -> (f64, f64) {
+    let Some(goal) = advance(pose, progress, p) else {
         return (0.0, 0.0);
     };
     let heading_error = wrap((goal[1] - pose.y).atan2(goal[0] - pose.x) - pose.theta);
@@ -107,6 +124,14 @@ mod tests {
         );
         assert_eq!(v, 0.1);
         assert!(w == -1.5 || w == 2.0, "{w}");
+    }
+
+    #[test]
+    fn planner_commands_are_held_to_the_limits_and_a_missing_one_stops() {
+        let p = params();
+        assert_eq!(limit(Some((0.5, -3.0)), &p), (0.2, -1.5));
+        assert_eq!(limit(Some((0.0, 3.0)), &p), (0.1, 2.0));
+        assert_eq!(limit(None, &p), (0.0, 0.0));
     }
 
     #[test]

@@ -6,7 +6,7 @@ use caravan::{Error, Node, Topic, Trigger};
 use caravan_convoy_agent::history::PoseHistory;
 use caravan_convoy_agent::params::{Mode, Params};
 use caravan_convoy_agent::{follower, leader};
-use caravan_schemas::{Goal, Pose2D, WheelSetpoint, topics};
+use caravan_schemas::{Goal, Pose2D, Twist, WheelSetpoint, topics};
 use caravan_world::kinematics::wheel_speeds;
 
 fn main() -> std::process::ExitCode {
@@ -42,14 +42,35 @@ fn run() -> Result<(), Error> {
     match p.mode {
         Mode::Leader => {
             let goal_pub = node.publisher(&Topic::<Goal>::new(topics::GOAL))?;
+            let planner = match &p.cmd_vel_topic {
+                Some(topic) => Some(node.subscriber(&Topic::<Twist>::new(topic))?),
+                None => None,
+            };
+            let mut planned: Option<(f64, (f64, f64))> = None;
             let mut progress = leader::Progress::default();
             let mut announced = None;
             node.run(Trigger::every_hz(20.0), |step| {
                 if let Some(msg) = own.latest()? {
                     pose = Some(*msg);
                 }
+                let now = step.now().as_secs_f64();
                 let Some(current) = pose else { return Ok(()) };
-                let cmd = leader::command(current, &mut progress, &p.leader);
+                let cmd = match &planner {
+                    None => leader::command(current, &mut progress, &p.leader),
+                    Some(sub) => {
+                        if let Some(msg) = sub.latest()? {
+                            let t = msg.header().stamp_ns as f64 * 1e-9;
+                            planned = Some((t, (msg.linear.x, msg.angular.z)));
+                        }
+                        let fresh = planned
+                            .filter(|(t, _)| now - t <= p.cmd_vel_timeout_s)
+                            .map(|(_, c)| c);
+                        match leader::advance(current, &mut progress, &p.leader) {
+                            Some(_) => leader::limit(fresh, &p.leader),
+                            None => (0.0, 0.0),
+                        }
+                    }
+                };
                 // Announce goal changes, and once a second for late subscribers.
                 if announced != Some(progress.current) || step.index() % 20 == 0 {
                     announced = Some(progress.current);

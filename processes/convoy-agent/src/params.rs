@@ -22,6 +22,11 @@ pub struct Params {
     pub pose_topic: Option<String>,
     /// Where a follower learns its predecessor's pose; default `robot/<i−1>/pose_true`.
     pub predecessor_topic: Option<String>,
+    /// Leader: drive the planner's velocity commands (Twist) from this topic instead of
+    /// straight at the goals, e.g. `robot/0/cmd_vel`.
+    pub cmd_vel_topic: Option<String>,
+    /// Leader: a planner command older than this is stale and the leader stops, s.
+    pub cmd_vel_timeout_s: f64,
     pub wheel_radius_m: f64,
     pub wheel_separation_m: f64,
     pub follower: FollowerParams,
@@ -35,6 +40,8 @@ impl Default for Params {
             mode: Mode::default(),
             pose_topic: None,
             predecessor_topic: None,
+            cmd_vel_topic: None,
+            cmd_vel_timeout_s: 0.5,
             wheel_radius_m: 0.067,
             wheel_separation_m: 0.172,
             follower: FollowerParams::default(),

@@ -81,6 +81,7 @@ pub fn empty_world() -> World {
         name: "empty".into(),
         size: [10.0, 10.0],
         obstacles: Vec::new(),
+        surveys: Vec::new(),
     }
 }
 

@@ -20,6 +20,11 @@
 //! [[cylinder]]
 //! center = [4.0, 2.5]
 //! radius = 0.15
+//!
+//! [[survey]]               # a distance the run report measures on the SLAM map
+//! name = "south wall to bench"
+//! at = [3.5, 1.0]          # a free point between the two surfaces
+//! direction = [0.0, 1.0]   # the line through it; the surfaces are the first hits either way
 //! ```
 
 use serde::Deserialize;
@@ -61,6 +66,25 @@ pub struct World {
     /// Floor extent from the origin, m.
     pub size: [f64; 2],
     pub obstacles: Vec<Obstacle>,
+    /// Surface-to-surface distances to check maps against (the reference's map-scale test).
+    pub surveys: Vec<Survey>,
+}
+
+/// A line between two surfaces through a free point; its true length comes from the world.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Survey {
+    pub name: String,
+    pub at: [f64; 2],
+    pub direction: [f64; 2],
+}
+
+impl Survey {
+    /// The direction scaled to unit length.
+    pub fn unit(&self) -> [f64; 2] {
+        let n = self.direction[0].hypot(self.direction[1]);
+        [self.direction[0] / n, self.direction[1] / n]
+    }
 }
 
 #[derive(Deserialize)]
@@ -73,6 +97,8 @@ struct File {
     boxes: Vec<BoxSpec>,
     #[serde(default)]
     cylinder: Vec<Cylinder>,
+    #[serde(default)]
+    survey: Vec<Survey>,
 }
 
 #[derive(Deserialize)]
@@ -186,14 +212,62 @@ pub fn parse_world(text: &str) -> Result<World, String> {
             shape: Shape::Cylinder { radius: c.radius },
         });
     }
-    Ok(World {
+    let mut world = World {
         name: f.world.name,
         size: f.world.size,
         obstacles,
-    })
+        surveys: Vec::new(),
+    };
+    for (i, s) in f.survey.iter().enumerate() {
+        positive(
+            format!("survey[{i}].direction length"),
+            s.direction[0].hypot(s.direction[1]),
+        )?;
+        if world.clearance(s.at) <= 0.0 {
+            return Err(format!(
+                "survey[{i}] ('{}'): 'at' lies inside an obstacle",
+                s.name
+            ));
+        }
+        if world.survey_length(s).is_none() {
+            return Err(format!(
+                "survey[{i}] ('{}'): the line through 'at' must hit a surface both ways",
+                s.name
+            ));
+        }
+    }
+    world.surveys = f.survey;
+    Ok(world)
 }
 
 impl World {
+    /// Distance along the unit vector `dir` from the free point `from` to the first surface,
+    /// if one lies within `max` (sphere tracing on the exact distance field).
+    pub fn ray_distance(&self, from: [f64; 2], dir: [f64; 2], max: f64) -> Option<f64> {
+        let mut s = 0.0;
+        for _ in 0..10_000 {
+            let d = self.clearance([from[0] + s * dir[0], from[1] + s * dir[1]]);
+            if d < 1e-9 {
+                return Some(s);
+            }
+            s += d;
+            if s > max {
+                return None;
+            }
+        }
+        None
+    }
+
+    /// The true surface-to-surface length of a survey line.
+    pub fn survey_length(&self, survey: &Survey) -> Option<f64> {
+        let [dx, dy] = survey.unit();
+        let max = self.size[0].hypot(self.size[1]) + 1.0;
+        Some(
+            self.ray_distance(survey.at, [dx, dy], max)?
+                + self.ray_distance(survey.at, [-dx, -dy], max)?,
+        )
+    }
+
     /// Distance from point `p` to the nearest obstacle surface (negative inside one), m.
     pub fn clearance(&self, p: [f64; 2]) -> f64 {
         self.obstacles
@@ -273,6 +347,24 @@ radius = 0.1
         assert!((w.clearance([2.0, 1.0]) - 0.4).abs() < 1e-9); // box edge at y = 1.4
         assert!((w.obstacles[0].distance([1.0, 0.5]) - 0.475).abs() < 1e-9);
         assert!(w.obstacles[1].distance([2.0, 1.5]) < 0.0);
+    }
+
+    #[test]
+    fn surveys_measure_between_surfaces() {
+        let text = format!(
+            "{LAB}\n[[survey]]\nname = \"wall to box\"\nat = [2.0, 1.0]\ndirection = [0.0, 2.0]\n"
+        );
+        let w = parse_world(&text).unwrap();
+        // Wall face at y = 0.025, box face at y = 1.4.
+        let length = w.survey_length(&w.surveys[0]).unwrap();
+        assert!((length - 1.375).abs() < 1e-6, "{length}");
+        let e = parse_world(&text.replace("[2.0, 1.0]", "[2.0, 1.5]")).unwrap_err();
+        assert!(
+            e.contains("survey[0]") && e.contains("inside an obstacle"),
+            "{e}"
+        );
+        let e = parse_world(&text.replace("[0.0, 2.0]", "[1.0, 0.0]")).unwrap_err();
+        assert!(e.contains("hit a surface both ways"), "{e}");
     }
 
     #[test]

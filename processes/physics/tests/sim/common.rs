@@ -36,6 +36,7 @@ pub fn room(wall_x: Option<f64>) -> World {
         name: "room".into(),
         size: [4.0, 4.0],
         obstacles,
+        surveys: Vec::new(),
     }
 }
 

@@ -178,8 +178,15 @@ mod tests {
         assert_eq!(unknown.len(), 1);
         assert_eq!(
             unknown[0].path,
-            vec![Seg::Key("process".into()), Seg::Index(0), Seg::Key("x".into())]
+            vec![
+                Seg::Key("process".into()),
+                Seg::Index(0),
+                Seg::Key("x".into())
+            ]
         );
-        assert!(unknown[0].message.contains("did you mean 'world'"), "{unknown:?}");
+        assert!(
+            unknown[0].message.contains("did you mean 'world'"),
+            "{unknown:?}"
+        );
     }
 }

@@ -1,8 +1,8 @@
 //! Reads a launch file, applies `--set` overrides and validates everything, collecting every
 //! problem found so the user can fix them in one go. Nothing is started on any error.
 
-use super::model::*;
 use super::args;
+use super::model::*;
 use super::overrides::{self, Applied, Seg};
 use super::suggest;
 use caravan::ClockMode;
