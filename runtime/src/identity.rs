@@ -24,6 +24,8 @@ pub mod env_vars {
     pub const SEED: &str = "CARAVAN_SEED";
     /// Directory of the launch file; relative paths in params are relative to it.
     pub const LAUNCH_DIR: &str = "CARAVAN_LAUNCH_DIR";
+    /// The run's output directory (logs, recording, report); nodes may write artefacts there.
+    pub const RUN_DIR: &str = "CARAVAN_RUN_DIR";
 }
 
 /// Identity and settings of one node.
@@ -44,6 +46,8 @@ pub struct NodeIdentity {
     pub seed: u64,
     /// Directory relative paths in params are resolved against.
     pub launch_dir: PathBuf,
+    /// Where the run's outputs go; `None` outside `caravan launch`.
+    pub run_dir: Option<PathBuf>,
 }
 
 impl NodeIdentity {
@@ -60,6 +64,7 @@ impl NodeIdentity {
             epoch_ns: None,
             seed: 0,
             launch_dir: PathBuf::from("."),
+            run_dir: None,
         }
     }
 
@@ -93,6 +98,7 @@ impl NodeIdentity {
         if let Some(dir) = optional(env_vars::LAUNCH_DIR) {
             id.launch_dir = PathBuf::from(dir);
         }
+        id.run_dir = optional(env_vars::RUN_DIR).map(PathBuf::from);
         id.rate_override = optional(env_vars::RATE);
         id.on_override = optional(env_vars::ON);
         if let Some(seed) = optional(env_vars::SEED) {

@@ -1,6 +1,7 @@
 //! `caravan bench`: latency measured side by side against baselines in one run.
 
 mod pingpong;
+mod scale;
 mod stats;
 mod transport;
 mod wrapper;
@@ -19,6 +20,8 @@ pub enum BenchCommand {
     /// Internal: the echoing side of `bench transport`
     #[command(hide = true)]
     TransportPong(transport::PongArgs),
+    /// A leader and N followers in lockstep and realtime: real-time factor, CPU, latency
+    Scale(scale::ScaleArgs),
 }
 
 #[derive(Args)]
@@ -40,5 +43,6 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Pong(args) => pingpong::pong(&args),
         BenchCommand::Transport(args) => transport::run(&args),
         BenchCommand::TransportPong(args) => transport::pong(&args),
+        BenchCommand::Scale(args) => scale::run(&args),
     }
 }

@@ -224,6 +224,10 @@ fn run_group(
         std::path::absolute(parent)?.display().to_string(),
     );
     env.insert(
+        caravan::env_vars::RUN_DIR.to_string(),
+        std::path::absolute(&dir)?.display().to_string(),
+    );
+    env.insert(
         caravan::env_vars::EPOCH_NS.to_string(),
         caravan::wall_clock_ns().to_string(),
     );

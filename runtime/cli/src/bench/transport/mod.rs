@@ -11,7 +11,7 @@ mod caravan;
 mod iceoryx2_raw;
 mod payload;
 mod plot;
-mod report;
+pub mod report;
 mod stream;
 mod udp;
 mod zenoh_peer;
