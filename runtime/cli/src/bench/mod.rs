@@ -1,6 +1,7 @@
 //! `caravan bench`: latency measured side by side against baselines in one run.
 
 mod pingpong;
+mod pipeline;
 mod scale;
 mod stats;
 mod transport;
@@ -22,6 +23,8 @@ pub enum BenchCommand {
     TransportPong(transport::PongArgs),
     /// A leader and N followers in lockstep and realtime: real-time factor, CPU, latency
     Scale(scale::ScaleArgs),
+    /// Realtime convoy: latency from a laser scan to the wheel set-point it caused, per hop
+    Pipeline(pipeline::PipelineArgs),
 }
 
 #[derive(Args)]
@@ -44,5 +47,6 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Transport(args) => transport::run(&args),
         BenchCommand::TransportPong(args) => transport::pong(&args),
         BenchCommand::Scale(args) => scale::run(&args),
+        BenchCommand::Pipeline(args) => pipeline::run(&args),
     }
 }
