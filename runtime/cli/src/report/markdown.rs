@@ -78,7 +78,37 @@ pub fn render(r: &Value) -> String {
     if let Some(c) = r.get("convoy") {
         convoy(&mut md, c);
     }
+    if let Some(s) = r.get("slam") {
+        slam(&mut md, s);
+    }
     md
+}
+
+fn slam(md: &mut String, s: &Value) {
+    let e = &s["pose_error_m"];
+    let _ = writeln!(
+        md,
+        "\n## SLAM\n\nLeader pose error: mean {} m, max {} m over {} estimates.\n",
+        num(&e["mean"], 3),
+        num(&e["max"], 3),
+        e["samples"]
+    );
+    if let Some(surveys) = s["surveys"].as_array() {
+        md.push_str("| survey | true m | on the map m | error % |\n|---|---|---|---|\n");
+        for v in surveys {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} |",
+                v["name"].as_str().unwrap_or(""),
+                num(&v["true_m"], 3),
+                num(&v["map_m"], 3),
+                num(&v["error_pct"], 2)
+            );
+        }
+    }
+    if let Some(plot) = s["plot"].as_str() {
+        let _ = writeln!(md, "\n![map with the true obstacles]({plot})");
+    }
 }
 
 fn convoy(md: &mut String, c: &Value) {

@@ -19,10 +19,15 @@
 //!   (each {mean, p95, max}), plot}`; definitions in `report/convoy.rs`. The plot is
 //!   `trajectories.svg` in the run directory.
 //!
-//! Further scenario sections (`slam`, `links`) are added by later scenarios.
+//! - `slam` (when the run left a map or recorded `robot/0/pose`): `{pose_error_m: {mean, max,
+//!   samples}, map_scale_error_pct[], surveys[]: {name, true_m, map_m, error_pct}, plot}`;
+//!   definitions in `report/slam.rs`. The plot is `map.svg`.
+//!
+//! Further scenario sections (`links`) are added by later scenarios.
 
 mod convoy;
 mod markdown;
+mod slam;
 mod svg;
 
 use crate::record::reader::read_all;
@@ -107,6 +112,9 @@ pub fn compute(run_dir: &Path) -> Result<Value> {
     });
     if let Some(section) = convoy::section(&messages, &scene, run_dir) {
         report["convoy"] = section;
+    }
+    if let Some(section) = slam::section(&messages, scene.world.as_ref(), run_dir) {
+        report["slam"] = section;
     }
     Ok(report)
 }

@@ -36,6 +36,27 @@ impl Plot {
     }
 
     pub fn world(&mut self, world: &World) {
+        self.obstacles(world, "#888", "#444");
+    }
+
+    /// The obstacles' outlines only, over an image of a map.
+    pub fn world_outline(&mut self, world: &World) {
+        self.obstacles(world, "none", "#d62728");
+    }
+
+    /// A raster image (e.g. `data:image/png;base64,…`) covering `[min, max]` in metres.
+    pub fn image(&mut self, href: &str, min: [f64; 2], max: [f64; 2]) {
+        let (x0, y0) = self.xy([min[0], max[1]]);
+        let (x1, y1) = self.xy([max[0], min[1]]);
+        let _ = writeln!(
+            self.body,
+            r#"<image x="{x0:.2}" y="{y0:.2}" width="{:.2}" height="{:.2}" preserveAspectRatio="none" style="image-rendering:pixelated" href="{href}"/>"#,
+            x1 - x0,
+            y1 - y0
+        );
+    }
+
+    fn obstacles(&mut self, world: &World, fill: &str, stroke: &str) {
         for o in &world.obstacles {
             match o.shape {
                 Shape::Box { .. } => {
@@ -47,7 +68,7 @@ impl Plot {
                         .collect();
                     let _ = writeln!(
                         self.body,
-                        r##"<polygon points="{}" fill="#888" stroke="#444"/>"##,
+                        r#"<polygon points="{}" fill="{fill}" stroke="{stroke}"/>"#,
                         pts.join(" ")
                     );
                 }
@@ -55,7 +76,7 @@ impl Plot {
                     let (x, y) = self.xy(o.center);
                     let _ = writeln!(
                         self.body,
-                        r##"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="#888" stroke="#444"/>"##,
+                        r#"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="{fill}" stroke="{stroke}"/>"#,
                         radius * self.scale
                     );
                 }

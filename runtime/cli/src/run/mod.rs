@@ -225,7 +225,7 @@ fn run_group(
     );
     env.insert(
         caravan::env_vars::RUN_DIR.to_string(),
-        std::path::absolute(&dir)?.display().to_string(),
+        std::path::absolute(dir)?.display().to_string(),
     );
     env.insert(
         caravan::env_vars::EPOCH_NS.to_string(),

@@ -1,0 +1,230 @@
+//! `caravan-perception`: a robot's localisation, as a node.
+//!
+//! - `mode = "slam"` (the leader): laser-only SLAM. In: `robot/i/scan`. Out: `robot/i/pose`
+//!   for every scan and `map` once a second; on exit the final map is saved in the run
+//!   directory as `map.yaml` + `map.pgm` (ROS map_server format) for the run report.
+//! - `mode = "odometry"` (a follower): dead reckoning from `robot/i/encoder_ticks`, in the map
+//!   frame from the robot's known initial pose. Out: `robot/i/odometry` and `robot/i/pose`.
+//!
+//! `localisation = "ideal"` replaces the estimate on `robot/i/pose` by the true pose (from
+//! `robot/i/pose_true`), for ablations; SLAM then still maps, from the true poses.
+
+use caravan::{Error, Node, NodeIdentity, Topic, Trigger, parse_params};
+use caravan_perception::{Slam, SlamParams, WheelOdometry, map_file};
+use caravan_schemas::{
+    EncoderTicks, LaserScan, OccupancyGrid, Odometry, Pose2D, Pose3D, Quaternion, Twist, Vector3,
+    topics,
+};
+use serde::Deserialize;
+use std::process::ExitCode;
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum Mode {
+    Slam,
+    Odometry,
+}
+
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum Localisation {
+    #[default]
+    Estimated,
+    Ideal,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Params {
+    mode: Mode,
+    robot: usize,
+    /// The robot's start pose [x, y, θ] in the map frame: SLAM's map origin is laid so that
+    /// map and world frames agree, and odometry counts from it.
+    initial_pose: [f64; 3],
+    #[serde(default)]
+    localisation: Localisation,
+    #[serde(default)]
+    slam: SlamParams,
+    /// How often SLAM publishes the map, Hz.
+    #[serde(default = "default_map_rate")]
+    map_rate_hz: f64,
+    /// Base name of the map saved in the run directory on exit; empty saves nothing.
+    #[serde(default = "default_save_map")]
+    save_map: String,
+    #[serde(default = "default_wheel_radius")]
+    wheel_radius_m: f64,
+    #[serde(default = "default_wheel_separation")]
+    wheel_separation_m: f64,
+}
+
+fn default_map_rate() -> f64 {
+    1.0
+}
+fn default_save_map() -> String {
+    "map".into()
+}
+fn default_wheel_radius() -> f64 {
+    0.067
+}
+fn default_wheel_separation() -> f64 {
+    0.172
+}
+
+impl Params {
+    fn validate(&self) -> Result<(), String> {
+        if !self.initial_pose.iter().all(|v| v.is_finite()) {
+            return Err("key 'initial_pose': must be three finite numbers [x, y, theta]".into());
+        }
+        if !(self.map_rate_hz > 0.0 && self.map_rate_hz.is_finite()) {
+            return Err(format!(
+                "key 'map_rate_hz': must be positive, got {}",
+                self.map_rate_hz
+            ));
+        }
+        if self.wheel_radius_m <= 0.0 || self.wheel_separation_m <= 0.0 {
+            return Err("keys 'wheel_radius_m' and 'wheel_separation_m' must be positive".into());
+        }
+        if self.mode == Mode::Slam {
+            self.slam
+                .validate()
+                .map_err(|e| format!("key 'slam': {e}"))?;
+        }
+        Ok(())
+    }
+
+    fn initial(&self) -> Pose2D {
+        let [x, y, theta] = self.initial_pose;
+        Pose2D { x, y, theta }
+    }
+}
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("caravan-perception: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), String> {
+    // Bad params are reported before the node joins the group.
+    let identity = NodeIdentity::from_env().map_err(|e| e.to_string())?;
+    let p: Params = parse_params(&identity.name, &identity.params).map_err(|e| e.to_string())?;
+    p.validate()
+        .map_err(|e| format!("params of node '{}': {e}", identity.name))?;
+    let node = Node::new(identity).map_err(|e| e.to_string())?;
+    match p.mode {
+        Mode::Slam => slam(node, &p),
+        Mode::Odometry => odometry(node, &p),
+    }
+    .map_err(|e| e.to_string())
+}
+
+fn slam(mut node: Node, p: &Params) -> Result<(), Error> {
+    let i = p.robot;
+    let mut slam = Slam::new(p.slam.clone(), p.initial()).map_err(|message| Error::Params {
+        node: node.name().to_string(),
+        message: format!("key 'slam': {message}"),
+    })?;
+    let scan_topic = topics::scan(i);
+    let scans = node.subscriber(&Topic::<LaserScan>::new(&scan_topic))?;
+    let truth = match p.localisation {
+        Localisation::Ideal => Some(node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(i)))?),
+        Localisation::Estimated => None,
+    };
+    let pose_pub = node.publisher(&Topic::<Pose2D>::new(&topics::pose(i)))?;
+    let map_pub = node.publisher(&Topic::<OccupancyGrid>::new(topics::MAP))?;
+    let map_period = 1.0 / p.map_rate_hz;
+    let mut next_map = 0.0;
+    node.run(Trigger::on(&scan_topic), |step| {
+        let Some(scan) = scans.latest()? else {
+            return Ok(());
+        };
+        let pose = match &truth {
+            Some(sub) => match sub.latest()? {
+                Some(t) => slam.update_with_pose(&scan, *t),
+                None => return Ok(()),
+            },
+            None => slam.update(&scan),
+        };
+        pose_pub.publish(&pose)?;
+        let now = step.now().as_secs_f64();
+        if now >= next_map {
+            next_map = now + map_period;
+            let mut map = map_pub.loan()?;
+            slam.write_grid(&mut map);
+            map.send()?;
+        }
+        Ok(())
+    })?;
+    if let (Some(dir), false) = (&node.identity().run_dir, p.save_map.is_empty()) {
+        let mut grid = caravan_schemas::boxed_placement_new::<OccupancyGrid>();
+        slam.write_grid(&mut grid);
+        if let Err(e) = map_file::save_map(&grid, &dir.join(&p.save_map)) {
+            eprintln!("caravan-perception: cannot save the map: {e}");
+        }
+    }
+    Ok(())
+}
+
+fn odometry(mut node: Node, p: &Params) -> Result<(), Error> {
+    let i = p.robot;
+    let ticks_topic = topics::encoder_ticks(i);
+    let ticks = node.subscriber(&Topic::<EncoderTicks>::new(&ticks_topic))?;
+    let truth = match p.localisation {
+        Localisation::Ideal => Some(node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(i)))?),
+        Localisation::Estimated => None,
+    };
+    let odom_pub = node.publisher(&Topic::<Odometry>::new(&topics::odometry(i)))?;
+    let pose_pub = node.publisher(&Topic::<Pose2D>::new(&topics::pose(i)))?;
+    let mut odometry = WheelOdometry::new(p.initial(), p.wheel_radius_m, p.wheel_separation_m);
+    node.run(Trigger::on(&ticks_topic), |_| {
+        while let Some(msg) = ticks.receive()? {
+            let t = msg.header().stamp_ns as f64 * 1e-9;
+            let Some(estimate) = odometry.update(t, &msg) else {
+                continue;
+            };
+            odom_pub.publish(&odometry_message(estimate.pose, estimate.v, estimate.omega))?;
+            let pose = match &truth {
+                Some(sub) => match sub.latest()? {
+                    Some(t) => *t,
+                    None => continue,
+                },
+                None => estimate.pose,
+            };
+            pose_pub.publish(&pose)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// nav_msgs/Odometry for a planar pose and body velocity; covariances are not estimated.
+fn odometry_message(pose: Pose2D, v: f64, omega: f64) -> Odometry {
+    Odometry {
+        pose: Pose3D {
+            position: Vector3 {
+                x: pose.x,
+                y: pose.y,
+                z: 0.0,
+            },
+            orientation: Quaternion::from_yaw(pose.theta),
+        },
+        pose_covariance: [0.0; 36],
+        twist: Twist {
+            linear: Vector3 {
+                x: v,
+                y: 0.0,
+                z: 0.0,
+            },
+            angular: Vector3 {
+                x: 0.0,
+                y: 0.0,
+                z: omega,
+            },
+        },
+        twist_covariance: [0.0; 36],
+    }
+}

@@ -1,0 +1,88 @@
+//! The autonomous convoy: the leader maps an unknown world with laser SLAM and plans to its
+//! goals; followers localise by wheel odometry. Real processes in lockstep, checked from the
+//! run report.
+
+use caravan_tests::{ConvoyRun, assert_convoy_succeeded, run_convoy, run_convoy_with};
+use serde_json::Value;
+
+/// Every survey of the world was measured on the map, each within `limit_pct`.
+fn assert_map_scale(slam: &Value, limit_pct: f64) {
+    let errors = slam["map_scale_error_pct"]
+        .as_array()
+        .expect("map_scale_error_pct");
+    assert!(errors.len() >= 2, "{slam}");
+    for e in errors {
+        let e = e
+            .as_f64()
+            .unwrap_or_else(|| panic!("a survey was not measured: {slam}"));
+        assert!(
+            e <= limit_pct,
+            "map scale error {e} % > {limit_pct} %: {slam}"
+        );
+    }
+}
+
+fn assert_map_files(run: &ConvoyRun) {
+    for file in ["map.yaml", "map.pgm", "map.svg", "trajectories.svg"] {
+        assert!(run.dir.join(file).is_file(), "{file} missing");
+    }
+}
+
+#[test]
+fn autonomous_convoy_maps_the_lab_and_reaches_every_goal() {
+    let run = run_convoy("convoy.toml");
+    assert_convoy_succeeded(&run.report["convoy"]);
+    let slam = &run.report["slam"];
+    assert_map_scale(slam, 1.0);
+    // Localised from the laser alone to within a few centimetres.
+    assert!(
+        slam["pose_error_m"]["mean"].as_f64().unwrap() < 0.03,
+        "{slam}"
+    );
+    assert!(
+        slam["pose_error_m"]["samples"].as_u64().unwrap() > 600,
+        "{slam}"
+    );
+    assert_map_files(&run);
+}
+
+#[test]
+fn autonomous_convoy_reaches_every_goal_in_a_second_world() {
+    // The hall's leader reaches D after about 67 s.
+    let run = run_convoy_with("convoy-hall.toml", "80s", &[]);
+    let c = &run.report["convoy"];
+    assert_eq!(c["goals_reached"], 4, "{c}");
+    assert_eq!(c["collisions"], 0, "{c}");
+    assert_eq!(c["order_kept"], true, "{c}");
+    assert_map_scale(&run.report["slam"], 1.0);
+    assert_map_files(&run);
+}
+
+#[test]
+fn ideal_localisation_switches_every_robot_to_its_true_pose() {
+    let run = run_convoy_with("convoy.toml", "70s", &["args.localisation=ideal"]);
+    assert_convoy_succeeded(&run.report["convoy"]);
+    // The leader's estimate is the true pose at the scan's time, exactly.
+    let error = &run.report["slam"]["pose_error_m"];
+    assert!(error["max"].as_f64().unwrap() < 1e-9, "{error}");
+    // The leader still maps, from its true poses.
+    assert_map_scale(&run.report["slam"], 1.0);
+}
+
+#[test]
+fn an_unreachable_goal_is_reported_and_the_leader_does_not_move() {
+    // A goal far outside the lab and the leader's map.
+    let run = run_convoy_with(
+        "convoy.toml",
+        "10s",
+        &["process.leader.params.leader.goals=[[20.0, 1.0]]"],
+    );
+    let log = std::fs::read_to_string(run.dir.join("logs/planner.log")).unwrap();
+    assert!(
+        log.contains("cannot plan to goal 1 of 1: goal (20.00, 1.00) is outside the map"),
+        "{log}"
+    );
+    let c = &run.report["convoy"];
+    assert_eq!(c["goals_reached"], 0, "{c}");
+    assert_eq!(c["collisions"], 0, "{c}");
+}
