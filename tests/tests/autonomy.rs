@@ -86,3 +86,38 @@ fn an_unreachable_goal_is_reported_and_the_leader_does_not_move() {
     assert_eq!(c["goals_reached"], 0, "{c}");
     assert_eq!(c["collisions"], 0, "{c}");
 }
+
+/// A bad param of a perception or planning node stops the launch before the group runs, with
+/// the node and key named.
+#[test]
+fn bad_perception_and_planning_params_are_named() {
+    for (set, expected) in [
+        ("process.slam.params.mode=mapping", ["slam", "mode"]),
+        (
+            "process.odometry-2.params.initial_pose=[1.0, 2.0]",
+            ["odometry-2", "initial_pose"],
+        ),
+        (
+            "process.planner.params.local.v_maxx=0.3",
+            ["planner", "v_maxx"],
+        ),
+    ] {
+        let group = caravan_tests::TestGroup::new("autonomy-bad");
+        let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
+        let out = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
+            .arg("launch")
+            .arg(caravan_tests::workspace_root().join("launch/convoy.toml"))
+            .args(["--quiet", "--duration", "5s", "--set", set, "--set"])
+            .arg(format!("group.name={}", group.name))
+            .arg("--runs-dir")
+            .arg(&runs)
+            .output()
+            .unwrap();
+        let _ = std::fs::remove_dir_all(&runs);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{set}: launch succeeded\n{stderr}");
+        for word in expected {
+            assert!(stderr.contains(word), "{set}: '{word}' not in\n{stderr}");
+        }
+    }
+}
