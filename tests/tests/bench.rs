@@ -74,3 +74,85 @@ fn bench_transport_quick_writes_csv_and_plot() {
     assert!(stdout.contains("kernel"), "{stdout}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+fn run_bench(args: &[&str], out: &std::path::Path) -> String {
+    let _ = std::fs::remove_dir_all(out);
+    let run = Command::new(workspace_bin("caravan"))
+        .arg("bench")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("cannot run caravan bench");
+    let stdout = String::from_utf8_lossy(&run.stdout).into_owned();
+    assert!(
+        run.status.success(),
+        "bench {args:?} failed\nstdout:\n{stdout}\nstderr:\n{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    stdout
+}
+
+/// The data rows of a bench CSV (comment lines and the header left out), split at commas.
+fn csv_rows(path: &std::path::Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert!(text.lines().any(|l| l.starts_with("# cpu: ")), "{text}");
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+#[test]
+fn bench_scale_runs_each_clock_and_writes_its_table() {
+    let out = std::env::temp_dir().join(format!("caravan-bench-scale-{}", std::process::id()));
+    run_bench(&["scale", "--followers", "1,2", "--seconds", "2"], &out);
+    let rows = csv_rows(&out.join("scale.csv"));
+    let runs: BTreeSet<(String, String)> =
+        rows.iter().map(|r| (r[0].clone(), r[1].clone())).collect();
+    let expected: BTreeSet<(String, String)> = ["lockstep", "realtime"]
+        .iter()
+        .flat_map(|c| ["1", "2"].map(|n| (c.to_string(), n.to_string())))
+        .collect();
+    assert_eq!(runs, expected);
+    for r in &rows {
+        // Simulated time ran and every process was measured (physics, leader, followers).
+        assert!(r[3].parse::<f64>().unwrap() > 1.0, "{r:?}");
+        let followers: usize = r[1].parse().unwrap();
+        assert_eq!(r[2].parse::<usize>().unwrap(), followers + 2, "{r:?}");
+    }
+    assert!(out.join("scale.md").is_file());
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn bench_pipeline_measures_every_hop_of_a_realtime_convoy() {
+    let out = std::env::temp_dir().join(format!("caravan-bench-pipe-{}", std::process::id()));
+    let launch = caravan_tests::workspace_root().join("launch/convoy.toml");
+    run_bench(
+        &[
+            "pipeline",
+            "--seconds",
+            "6",
+            "--launch",
+            launch.to_str().unwrap(),
+        ],
+        &out,
+    );
+    let rows = csv_rows(&out.join("pipeline.csv"));
+    let hops: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
+    assert_eq!(
+        hops,
+        [
+            "scan → pose",
+            "pose → cmd_vel",
+            "cmd_vel → wheel_setpoint",
+            "scan → wheel_setpoint (total)"
+        ]
+    );
+    for r in &rows {
+        assert!(r[1].parse::<u64>().unwrap() > 0, "no samples: {r:?}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
