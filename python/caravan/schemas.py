@@ -485,17 +485,18 @@ class Grant(ctypes.Structure):
 
 
 class Done(ctypes.Structure):
-    """``caravan::lockstep::Done``: 4120 bytes, aligned to 8."""
+    """``caravan::lockstep::Done``: 4128 bytes, aligned to 8."""
 
     _fields_ = [
         ("node_hash", ctypes.c_uint64),
         ("now_ns", ctypes.c_uint64),
+        ("wake_ns", ctypes.c_uint64),
         ("published_len", ctypes.c_uint32),
         ("published", ctypes.c_uint64 * 512),
     ]
-    SIZE = 4120
+    SIZE = 4128
     ALIGN = 8
-    OFFSETS = {"node_hash": 0, "now_ns": 8, "published_len": 16, "published": 24}
+    OFFSETS = {"node_hash": 0, "now_ns": 8, "wake_ns": 16, "published_len": 24, "published": 32}
 
     @classmethod
     def type_name(cls) -> str:

@@ -89,6 +89,9 @@ impl Executor<'_> {
         F: FnMut(&mut Step) -> Result<(), Error>,
     {
         let started = Instant::now();
+        self.shared.step_started.set(Some(started));
+        // Subscribers note what they still hold while the step reads them.
+        self.shared.next_arrival_ns.set(u64::MAX);
         step(state)?;
         stats.record(start_ns, due_ns, started.elapsed().as_nanos() as u64);
         state.index += 1;
@@ -133,14 +136,25 @@ impl Executor<'_> {
         let mut next_due_ns = self.since_epoch_ns() + period_ns;
         let outcome = loop {
             let (mut fired, mut status_due) = (false, false);
-            let result = ws
-                .wait_and_process_once(|id| {
-                    fired |= period_guard.as_ref().is_some_and(|g| id.has_event_from(g))
-                        || message_guard.as_ref().is_some_and(|g| id.has_event_from(g));
-                    status_due |= id.has_event_from(&status_guard);
-                    CallbackProgression::Continue
-                })
-                .map_err(|e| Error::transport("waitset wait", e))?;
+            let on_event = |id: WaitSetAttachmentId<ipc::Service>| {
+                fired |= period_guard.as_ref().is_some_and(|g| id.has_event_from(g))
+                    || message_guard.as_ref().is_some_and(|g| id.has_event_from(g));
+                status_due |= id.has_event_from(&status_guard);
+                CallbackProgression::Continue
+            };
+            // A node stepped by messages also wakes when a message delayed by a link arrives.
+            let arrival = self.shared.next_arrival_ns.get();
+            let result = if listener.is_some() && arrival != u64::MAX {
+                let timeout = Duration::from_nanos(arrival.saturating_sub(crate::wall_clock_ns()));
+                let result = ws
+                    .wait_and_process_once_with_timeout(on_event, timeout)
+                    .map_err(|e| Error::transport("waitset wait", e))?;
+                fired |= crate::wall_clock_ns() >= arrival;
+                result
+            } else {
+                ws.wait_and_process_once(on_event)
+                    .map_err(|e| Error::transport("waitset wait", e))?
+            };
             if interrupted(result) {
                 break Ok(());
             }
@@ -210,7 +224,13 @@ impl Executor<'_> {
                 self.publish_status(&stats, true)?;
                 next_status_ns = grant.now_ns + STATUS_PERIOD_NS;
             }
-            client.report_done(grant.now_ns)?;
+            // A node stepped by messages asks to step again when a held message arrives.
+            let arrival = self.shared.next_arrival_ns.get();
+            let wake_ns = match trigger {
+                Trigger::OnMessage(_) if arrival != u64::MAX => arrival,
+                _ => 0,
+            };
+            client.report_done(grant.now_ns, wake_ns)?;
             if state.stop {
                 break Ok(());
             }

@@ -26,6 +26,8 @@ pub mod env_vars {
     pub const LAUNCH_DIR: &str = "CARAVAN_LAUNCH_DIR";
     /// The run's output directory (logs, recording, report); nodes may write artefacts there.
     pub const RUN_DIR: &str = "CARAVAN_RUN_DIR";
+    /// The group's hosts, links and CPU slowdowns, as JSON (`caravan::network::Network`).
+    pub const NETWORK: &str = "CARAVAN_NETWORK";
 }
 
 /// Identity and settings of one node.
@@ -48,6 +50,8 @@ pub struct NodeIdentity {
     pub launch_dir: PathBuf,
     /// Where the run's outputs go; `None` outside `caravan launch`.
     pub run_dir: Option<PathBuf>,
+    /// The emulated network; `None` when the group declares no links or CPU slowdowns.
+    pub network: Option<crate::network::Network>,
 }
 
 impl NodeIdentity {
@@ -65,6 +69,7 @@ impl NodeIdentity {
             seed: 0,
             launch_dir: PathBuf::from("."),
             run_dir: None,
+            network: None,
         }
     }
 
@@ -99,6 +104,14 @@ impl NodeIdentity {
             id.launch_dir = PathBuf::from(dir);
         }
         id.run_dir = optional(env_vars::RUN_DIR).map(PathBuf::from);
+        if let Some(text) = optional(env_vars::NETWORK) {
+            id.network = Some(
+                crate::network::Network::from_json(&text).map_err(|message| Error::Env {
+                    var: env_vars::NETWORK,
+                    message,
+                })?,
+            );
+        }
         id.rate_override = optional(env_vars::RATE);
         id.on_override = optional(env_vars::ON);
         if let Some(seed) = optional(env_vars::SEED) {

@@ -24,6 +24,7 @@ mod executor;
 pub mod group;
 mod identity;
 pub mod lockstep;
+pub mod network;
 mod node;
 mod params;
 mod publisher;

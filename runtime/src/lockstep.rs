@@ -178,10 +178,12 @@ impl Client {
     }
 
     /// Reports the step at `now_ns` finished, with the topics it published to.
-    pub fn report_done(&self, now_ns: u64) -> Result<(), Error> {
+    /// `wake_ns` (0 for none) asks for another step when a held message becomes visible.
+    pub fn report_done(&self, now_ns: u64, wake_ns: u64) -> Result<(), Error> {
         let mut done = Done {
             node_hash: self.node_hash,
             now_ns,
+            wake_ns,
             published: FixedVec::new(),
         };
         for topic in self.shared.published.borrow_mut().drain(..) {
@@ -400,6 +402,9 @@ impl Scheduler {
                 }
                 published.extend(done.published.as_slice().iter().copied());
                 self.schedule_after(i, now_ns, done.published.as_slice());
+                if done.wake_ns > now_ns {
+                    self.queue.entry(done.wake_ns).or_default().insert(i);
+                }
             }
             if waiting.is_empty() {
                 break;

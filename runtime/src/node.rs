@@ -1,6 +1,7 @@
 //! A node: one process of a group, with its identity, params, ports and step loop.
 
 use crate::executor::Executor;
+use crate::network::NodeNet;
 use crate::transport::Shared;
 use crate::{ClockMode, Error, NodeIdentity, Publisher, Step, Subscriber, Topic, Trigger};
 use caravan_schemas::{Message, NodeStatus};
@@ -87,6 +88,12 @@ impl Node {
             published: RefCell::new(Vec::with_capacity(caravan_schemas::lockstep::MAX_TOPICS)),
             missed: Cell::new(0),
             listeners: RefCell::new(Vec::new()),
+            net: identity
+                .network
+                .as_ref()
+                .and_then(|n| NodeNet::new(n, &identity.name, &identity.host)),
+            next_arrival_ns: Cell::new(u64::MAX),
+            step_started: Cell::new(None),
         });
         let status = Publisher::new(
             shared.clone(),
@@ -171,9 +178,31 @@ impl Node {
             epoch: self.started,
             epoch_offset_ns: self.epoch_offset_ns,
         };
-        match self.identity.clock {
+        let result = match self.identity.clock {
             ClockMode::Realtime => executor.run_realtime(&trigger, step),
             ClockMode::Lockstep => executor.run_lockstep(&trigger, step),
+        };
+        self.write_link_stats();
+        result
+    }
+
+    /// What this node received over emulated links, as `links/<node>.json` in the run
+    /// directory, for the run report.
+    fn write_link_stats(&self) {
+        let (Some(net), Some(dir)) = (&self.shared.net, &self.identity.run_dir) else {
+            return;
+        };
+        let stats = net.stats.borrow();
+        if stats.iter().all(|s| s.delivered + s.dropped == 0) {
+            return;
+        }
+        let dir = dir.join(crate::network::LINK_STATS_DIR);
+        let written = std::fs::create_dir_all(&dir).and_then(|_| {
+            let text = serde_json::to_string(&*stats).map_err(std::io::Error::other)?;
+            std::fs::write(dir.join(format!("{}.json", self.identity.name)), text)
+        });
+        if let Err(e) = written {
+            eprintln!("{}: cannot write link statistics: {e}", self.identity.name);
         }
     }
 }

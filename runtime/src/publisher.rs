@@ -91,12 +91,28 @@ impl<T: Message> Publisher<T> {
         self.send(uninit.write_payload(*value))
     }
 
+    /// The message's simulated time: the step's, or in lockstep on a host with a CPU
+    /// slowdown, later by the step's compute time so far times the slowdown (rounded up to
+    /// the tick), as if this machine's computer were that much slower.
+    fn stamp_ns(&self) -> u64 {
+        let now = self.shared.now_ns.get();
+        let slowdown = self.shared.net.as_ref().and_then(|n| n.slowdown);
+        match (slowdown, self.shared.step_started.get()) {
+            (Some(factor), Some(started)) if self.shared.lockstep => {
+                let compute = (started.elapsed().as_nanos() as f64 * factor) as u64;
+                let tick = self.shared.tick_ns.get().max(1);
+                now + compute.div_ceil(tick) * tick
+            }
+            _ => now,
+        }
+    }
+
     fn send(&self, mut sample: SampleMut<ipc::Service, T, Header>) -> Result<(), Error> {
         let seq = self.seq.get() + 1;
         self.seq.set(seq);
         *sample.user_header_mut() = Header {
             seq,
-            stamp_ns: self.shared.now_ns.get(),
+            stamp_ns: self.stamp_ns(),
             send_wall_ns: crate::wall_clock_ns(),
             source_id: self.shared.node_hash,
         };

@@ -1,5 +1,6 @@
 //! Subscriber of a typed topic: every message in order, or only the latest.
 
+use crate::network::{LinkQueue, MessageId, NodeNet};
 use crate::transport::{self, Shared};
 use crate::{Error, Topic};
 use caravan_schemas::{Header, Message};
@@ -12,21 +13,40 @@ use std::rc::Rc;
 
 type IoxSubscriber<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>;
 
-/// A received message, still in shared memory. Dereferences to the payload.
+/// A received message: still in shared memory, or (after crossing an emulated network link)
+/// a copy. Dereferences to the payload.
 pub struct Received<T: Message> {
-    sample: Sample<ipc::Service, T, Header>,
+    inner: Inner<T>,
+}
+
+enum Inner<T: Message> {
+    Shared(Sample<ipc::Service, T, Header>),
+    Copied(Delayed<T>),
+}
+
+/// A message that crossed a link, held until it arrives.
+struct Delayed<T: Message> {
+    arrival_ns: u64,
+    header: Header,
+    payload: Box<T>,
 }
 
 impl<T: Message> Received<T> {
     pub fn header(&self) -> &Header {
-        self.sample.user_header()
+        match &self.inner {
+            Inner::Shared(s) => s.user_header(),
+            Inner::Copied(d) => &d.header,
+        }
     }
 }
 
 impl<T: Message> Deref for Received<T> {
     type Target = T;
     fn deref(&self) -> &T {
-        self.sample.payload()
+        match &self.inner {
+            Inner::Shared(s) => s.payload(),
+            Inner::Copied(d) => &d.payload,
+        }
     }
 }
 
@@ -40,6 +60,13 @@ pub struct Subscriber<T: Message> {
     /// Received from iceoryx2 but not yet visible (lockstep only).
     pending: RefCell<VecDeque<Sample<ipc::Service, T, Header>>>,
     pending_limit: usize,
+    /// Messages that crossed a link, in arrival order.
+    delayed: RefCell<VecDeque<Delayed<T>>>,
+    /// Per publisher, the latest arrival so far: a link keeps each publisher's order.
+    last_arrival: RefCell<Vec<(u64, u64)>>,
+    /// Per link, the queue of messages being sent to this subscriber.
+    queues: RefCell<Vec<LinkQueue>>,
+    topic_hash: u64,
     /// Last sequence number seen per source, to count gaps. Groups have few publishers per
     /// topic, so a small vector beats a map and does not allocate after the first messages.
     last_seq: RefCell<Vec<(u64, u64)>>,
@@ -66,6 +93,15 @@ impl<T: Message> Subscriber<T> {
             port,
             pending: RefCell::new(VecDeque::with_capacity(8)),
             pending_limit: topic.delivery().depth().max(8) - 1,
+            delayed: RefCell::new(VecDeque::new()),
+            last_arrival: RefCell::new(Vec::new()),
+            queues: RefCell::new(
+                shared
+                    .net
+                    .as_ref()
+                    .map_or(Vec::new(), |n| vec![LinkQueue::default(); n.links.len()]),
+            ),
+            topic_hash: caravan_schemas::lockstep::name_hash(topic.name()),
             last_seq: RefCell::new(Vec::with_capacity(4)),
             missed: Cell::new(0),
             received: Cell::new(0),
@@ -89,14 +125,15 @@ impl<T: Message> Subscriber<T> {
 
     /// The next visible message, oldest first.
     pub fn receive(&self) -> Result<Option<Received<T>>, Error> {
-        let sample = if self.shared.lockstep {
-            self.next_visible()?
-        } else {
-            self.pull()?
+        let inner = match &self.shared.net {
+            Some(net) if !net.links.is_empty() => self.next_over_links(net)?,
+            _ if self.shared.lockstep => self.next_visible()?.map(Inner::Shared),
+            _ => self.pull()?.map(Inner::Shared),
         };
-        Ok(sample.map(|sample| {
-            self.account(sample.user_header());
-            Received { sample }
+        Ok(inner.map(|inner| {
+            let received = Received { inner };
+            self.account(received.header());
+            received
         }))
     }
 
@@ -129,6 +166,118 @@ impl<T: Message> Subscriber<T> {
             .iter()
             .position(|s| self.shared.is_visible(s.user_header()));
         Ok(index.and_then(|i| pending.remove(i)))
+    }
+
+    /// The next message when links lead into this node's host: same-host messages as
+    /// usual, linked ones once they arrive.
+    fn next_over_links(&self, net: &NodeNet) -> Result<Option<Inner<T>>, Error> {
+        let lockstep = self.shared.lockstep;
+        let now = if lockstep {
+            self.shared.now_ns.get()
+        } else {
+            crate::wall_clock_ns()
+        };
+        let tick = self.shared.tick_ns.get();
+        let mut pending = self.pending.borrow_mut();
+        // Linked messages are copied out as soon as they may go on their link, which frees
+        // their shared-memory samples; the rest wait in `pending` as usual. In lockstep a
+        // message may go once every message of its time has been published, and all go in a
+        // fixed order, so that queueing on the link is reproducible.
+        let mut crossing: Vec<(usize, Header, Box<T>)> = Vec::new();
+        loop {
+            while pending.len() < self.pending_limit {
+                match self.pull()? {
+                    Some(sample) => pending.push_back(sample),
+                    None => break,
+                }
+            }
+            let before = crossing.len();
+            let mut kept = VecDeque::with_capacity(pending.len());
+            for sample in pending.drain(..) {
+                let h = *sample.user_header();
+                match net.link_of(h.source_id) {
+                    Some(link) if !lockstep || h.stamp_ns + tick <= now => {
+                        let mut payload = caravan_schemas::boxed_placement_new::<T>();
+                        *payload = *sample.payload();
+                        crossing.push((link, h, payload));
+                    }
+                    _ => kept.push_back(sample),
+                }
+            }
+            *pending = kept;
+            if crossing.len() == before {
+                break;
+            }
+        }
+        crossing.sort_by_key(|(_, h, _)| (h.stamp_ns, h.source_id, h.seq));
+        for (link, header, payload) in crossing {
+            self.cross(net, link, header, payload, lockstep);
+        }
+        let index = pending
+            .iter()
+            .position(|s| self.shared.is_visible(s.user_header()));
+        if let Some(sample) = index.and_then(|i| pending.remove(i)) {
+            return Ok(Some(Inner::Shared(sample)));
+        }
+        let mut delayed = self.delayed.borrow_mut();
+        let arrived = |d: &Delayed<T>| d.arrival_ns + if lockstep { tick } else { 0 } <= now;
+        let next = match delayed.front() {
+            Some(d) if arrived(d) => delayed.pop_front().map(Inner::Copied),
+            _ => None,
+        };
+        if let Some(d) = delayed.front() {
+            let at = d.arrival_ns + if lockstep { tick } else { 0 };
+            self.shared
+                .next_arrival_ns
+                .set(self.shared.next_arrival_ns.get().min(at));
+        }
+        Ok(next)
+    }
+
+    /// Sends one message over its link: drops it, or keeps it until its arrival.
+    fn cross(&self, net: &NodeNet, link: usize, header: Header, payload: Box<T>, lockstep: bool) {
+        let sent = if lockstep {
+            header.stamp_ns
+        } else {
+            header.send_wall_ns
+        };
+        let id = MessageId {
+            seed: net.seed,
+            source: header.source_id,
+            topic: self.topic_hash,
+            seq: header.seq,
+            subscriber: net.node_hash,
+        };
+        let bytes = caravan_schemas::wire_size(&*payload);
+        let mut queues = self.queues.borrow_mut();
+        let arrival = net.links[link].arrival(&id, bytes, sent, &mut queues[link]);
+        let arrival = arrival.map(|t| {
+            // A link delivers each publisher's messages in order.
+            let mut last = self.last_arrival.borrow_mut();
+            match last.iter_mut().find(|(s, _)| *s == header.source_id) {
+                Some((_, a)) => {
+                    *a = (*a).max(t);
+                    *a
+                }
+                None => {
+                    last.push((header.source_id, t));
+                    t
+                }
+            }
+        });
+        net.stats.borrow_mut()[link].record(arrival.map(|t| t - sent));
+        if let Some(arrival_ns) = arrival {
+            let mut delayed = self.delayed.borrow_mut();
+            let at = delayed.partition_point(|d| d.arrival_ns <= arrival_ns);
+            delayed.insert(
+                at,
+                Delayed {
+                    arrival_ns,
+                    header,
+                    payload,
+                },
+            );
+        }
     }
 
     fn account(&self, header: &Header) {

@@ -25,6 +25,14 @@ pub(crate) struct Shared {
     /// Wake-up listeners by topic, created with the first subscriber of each topic so that
     /// messages published before the step loop starts still wake it.
     pub listeners: RefCell<Vec<(String, Rc<Listener<ipc::Service>>)>>,
+    /// The emulated network around this node (links into its host, its CPU slowdown);
+    /// `None` when there is nothing to emulate.
+    pub net: Option<crate::network::NodeNet>,
+    /// Earliest time a message held by a subscriber becomes visible (simulated ns in
+    /// lockstep, wall-clock ns in realtime); `u64::MAX` when none is held.
+    pub next_arrival_ns: Cell<u64>,
+    /// When the current step started (wall clock), for compute budgets.
+    pub step_started: Cell<Option<std::time::Instant>>,
 }
 
 impl Shared {

@@ -275,7 +275,7 @@ describe! {
     Collision { robot, other_robot, started, _reserved }
     Hello { node, period_ns, triggers }
     Grant { now_ns, tick_ns, stop, _reserved }
-    Done { node_hash, now_ns, published }
+    Done { node_hash, now_ns, wake_ns, published }
 }
 
 /// The constant topic names of [`crate::topics`], by their Rust names.

@@ -81,5 +81,23 @@ pub fn boxed_placement_new<T: iceoryx2::prelude::PlacementDefault>() -> Box<T> {
     }
 }
 
+/// Bytes a message would take on a network: its fixed size, except for the containers sized
+/// for the largest case (scans, maps, paths), which count only what they hold, as a ROS
+/// message would. Used to emulate link bandwidth.
+pub fn wire_size<T: Message>(message: &T) -> usize {
+    let any = message as &dyn core::any::Any;
+    let header = core::mem::size_of::<Header>();
+    if let Some(scan) = any.downcast_ref::<LaserScan>() {
+        let beams = (scan.beam_count as usize).min(SCAN_MAX_BEAMS);
+        header + 32 + beams * 8
+    } else if let Some(map) = any.downcast_ref::<OccupancyGrid>() {
+        header + 48 + map.cells().len()
+    } else if let Some(path) = any.downcast_ref::<Path2D>() {
+        header + 8 + path.poses.len() * core::mem::size_of::<Pose2D>()
+    } else {
+        header + core::mem::size_of::<T>()
+    }
+}
+
 #[cfg(test)]
 mod layout_tests;

@@ -87,6 +87,10 @@ impl Grant {
 pub struct Done {
     pub node_hash: u64,
     pub now_ns: u64,
+    /// A node stepped by messages asks to step again at this time (a message it holds
+    /// becomes visible then: delayed by a link, or stamped later by a compute budget); 0 for
+    /// none.
+    pub wake_ns: u64,
     /// Hashes of the topics this step published to.
     pub published: FixedVec<u64, MAX_TOPICS>,
 }

@@ -248,3 +248,67 @@ pub fn assert_convoy_succeeded(c: &serde_json::Value) {
     assert_eq!(c["order_kept"], true, "{c}");
     assert_eq!(c["followers"].as_array().unwrap().len(), 4, "{c}");
 }
+
+/// A launch file written for one test, run under a unique group name, with its runs in a
+/// temporary directory removed afterwards.
+pub struct Scenario {
+    pub group: TestGroup,
+    pub dir: std::path::PathBuf,
+    pub file: std::path::PathBuf,
+}
+
+impl Scenario {
+    /// `body` is the launch file after its `[group]` header line and name.
+    pub fn new(tag: &str, body: &str) -> Self {
+        let group = TestGroup::new(tag);
+        let dir = std::env::temp_dir().join(format!("caravan-{}", group.name));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("launch.toml");
+        std::fs::write(&file, format!("[group]\nname = \"{}\"\n{body}", group.name)).unwrap();
+        Self { group, dir, file }
+    }
+
+    pub fn command(&self, extra: &[&str]) -> std::process::Command {
+        let mut cmd = std::process::Command::new(workspace_bin("caravan"));
+        cmd.arg("launch")
+            .arg(&self.file)
+            .arg("--runs-dir")
+            .arg(self.dir.join("runs"))
+            .arg("--quiet")
+            .args(extra);
+        cmd
+    }
+
+    pub fn run(&self, extra: &[&str]) -> std::process::Output {
+        self.command(extra).output().unwrap()
+    }
+
+    pub fn run_dirs(&self) -> Vec<std::path::PathBuf> {
+        let mut dirs: Vec<std::path::PathBuf> = std::fs::read_dir(self.dir.join("runs"))
+            .map(|rd| rd.flatten().map(|e| e.path()).collect())
+            .unwrap_or_default();
+        dirs.sort();
+        dirs
+    }
+
+    pub fn report(&self) -> serde_json::Value {
+        let dir = self.run_dirs().pop().expect("a run directory");
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+    }
+
+    pub fn shm_entries(&self) -> Vec<String> {
+        let prefix = caravan::group::prefix(&self.group.name);
+        std::fs::read_dir("/dev/shm")
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().to_string())
+            .filter(|n| n.starts_with(&prefix))
+            .collect()
+    }
+}
+
+impl Drop for Scenario {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}

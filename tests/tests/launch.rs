@@ -1,72 +1,9 @@
 //! `caravan launch` and the inspection commands, with real process groups.
 
-use caravan_tests::{TestGroup, workspace_bin};
-use std::path::{Path, PathBuf};
+use caravan_tests::{Scenario, workspace_bin};
+use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::Duration;
-
-/// A launch file for a fresh group in its own temp directory.
-struct Scenario {
-    group: TestGroup,
-    dir: PathBuf,
-    file: PathBuf,
-}
-
-impl Scenario {
-    /// `body` is the launch file after its `[group]` header line and name.
-    fn new(tag: &str, body: &str) -> Self {
-        let group = TestGroup::new(tag);
-        let dir = std::env::temp_dir().join(format!("caravan-{}", group.name));
-        std::fs::create_dir_all(&dir).unwrap();
-        let file = dir.join("launch.toml");
-        std::fs::write(&file, format!("[group]\nname = \"{}\"\n{body}", group.name)).unwrap();
-        Self { group, dir, file }
-    }
-
-    fn command(&self, extra: &[&str]) -> Command {
-        let mut cmd = Command::new(workspace_bin("caravan"));
-        cmd.arg("launch")
-            .arg(&self.file)
-            .arg("--runs-dir")
-            .arg(self.dir.join("runs"))
-            .arg("--quiet")
-            .args(extra);
-        cmd
-    }
-
-    fn run(&self, extra: &[&str]) -> Output {
-        self.command(extra).output().unwrap()
-    }
-
-    fn run_dirs(&self) -> Vec<PathBuf> {
-        let mut dirs: Vec<PathBuf> = std::fs::read_dir(self.dir.join("runs"))
-            .map(|rd| rd.flatten().map(|e| e.path()).collect())
-            .unwrap_or_default();
-        dirs.sort();
-        dirs
-    }
-
-    fn report(&self) -> serde_json::Value {
-        let dir = self.run_dirs().pop().expect("a run directory");
-        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
-    }
-
-    fn shm_entries(&self) -> Vec<String> {
-        let prefix = caravan::group::prefix(&self.group.name);
-        std::fs::read_dir("/dev/shm")
-            .unwrap()
-            .flatten()
-            .map(|e| e.file_name().to_string_lossy().to_string())
-            .filter(|n| n.starts_with(&prefix))
-            .collect()
-    }
-}
-
-impl Drop for Scenario {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
 
 const PINGPONG: &str = r#"clock = "lockstep"
 duration = "10s"

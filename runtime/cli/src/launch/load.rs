@@ -24,7 +24,16 @@ const GROUP_KEYS: &[&str] = &[
     "step_timeout",
 ];
 const HOST_KEYS: &[&str] = &["cpu_slowdown"];
-const LINK_KEYS: &[&str] = &["between", "latency", "jitter", "loss", "bandwidth"];
+const LINK_KEYS: &[&str] = &[
+    "between",
+    "latency",
+    "jitter",
+    "distribution",
+    "loss",
+    "spike_probability",
+    "spike",
+    "bandwidth",
+];
 const PROCESS_KEYS: &[&str] = &[
     "name",
     "exec",
@@ -424,18 +433,16 @@ impl Checker<'_> {
             {
                 self.scope_problem(&h, "host names use letters, digits, '-', '_' and '.'");
             }
-            let cpu_slowdown = self
-                .get(&h, "cpu_slowdown", |i| {
-                    let f = number(i)?;
-                    if f.is_finite() && f >= 1.0 {
-                        Ok(f)
-                    } else {
-                        Err(format!(
-                            "must be at least 1.0 (1.0 = as fast as this machine), found {f}"
-                        ))
-                    }
-                })
-                .unwrap_or(1.0);
+            let cpu_slowdown = self.get(&h, "cpu_slowdown", |i| {
+                let f = number(i)?;
+                if f.is_finite() && f >= 1.0 {
+                    Ok(f)
+                } else {
+                    Err(format!(
+                        "must be at least 1.0 (1.0 = as fast as this machine), found {f}"
+                    ))
+                }
+            });
             hosts.insert(name.to_string(), HostSpec { cpu_slowdown });
         }
         hosts
@@ -471,16 +478,34 @@ impl Checker<'_> {
                 between: between.unwrap_or_default(),
                 latency: self.get(&s, "latency", duration).unwrap_or_default(),
                 jitter: self.get(&s, "jitter", duration).unwrap_or_default(),
-                loss: self
-                    .get(&s, "loss", |i| {
-                        let f = number(i)?;
-                        if (0.0..=1.0).contains(&f) {
-                            Ok(f)
-                        } else {
-                            Err(format!("must be between 0.0 and 1.0, found {f}"))
-                        }
+                distribution: self
+                    .get(&s, "distribution", |i| match string(i)?.as_str() {
+                        "uniform" => Ok(caravan::network::Jitter::Uniform),
+                        "normal" => Ok(caravan::network::Jitter::Normal),
+                        "exponential" => Ok(caravan::network::Jitter::Exponential),
+                        other => Err(format!(
+                            "'{other}' is not a jitter distribution; use uniform, normal or exponential"
+                        )),
                     })
+                    .unwrap_or_default(),
+                loss: self.get(&s, "loss", probability).unwrap_or(0.0),
+                spike_probability: self
+                    .get(&s, "spike_probability", probability)
                     .unwrap_or(0.0),
+                spike: self
+                    .get(&s, "spike", |i| {
+                        let list = strings(i)?;
+                        let [lo, hi] = <[String; 2]>::try_from(list).map_err(|l| {
+                            format!("expected two durations [min, max], found {}", l.len())
+                        })?;
+                        let parse = |t: &str| caravan::parse_duration(t).map_err(|e| e.to_string());
+                        let (lo, hi) = (parse(&lo)?, parse(&hi)?);
+                        if lo > hi {
+                            return Err("the spike's minimum exceeds its maximum".to_string());
+                        }
+                        Ok([lo, hi])
+                    })
+                    .unwrap_or_default(),
                 bandwidth_bps: self.get(&s, "bandwidth", |i| parse_bandwidth(&string(i)?)),
             };
             links.push(link);
@@ -671,6 +696,15 @@ fn string(item: &Item) -> Result<String, String> {
     item.as_str()
         .map(str::to_string)
         .ok_or_else(|| expected("a string", item))
+}
+
+fn probability(item: &Item) -> Result<f64, String> {
+    let f = number(item)?;
+    if (0.0..=1.0).contains(&f) {
+        Ok(f)
+    } else {
+        Err(format!("must be between 0.0 and 1.0, found {f}"))
+    }
 }
 
 fn unsigned(item: &Item) -> Result<u64, String> {
@@ -913,8 +947,8 @@ on = "robot/0/scan"
         assert_eq!(lf.group.tick, Duration::from_millis(1));
         assert_eq!(lf.group.grace, Duration::from_secs(3));
         assert!(lf.group.record.is_empty());
-        assert_eq!(lf.hosts["sim"].cpu_slowdown, 1.0);
-        assert_eq!(lf.hosts["rpi-0"].cpu_slowdown, 12.0);
+        assert_eq!(lf.hosts["sim"].cpu_slowdown, None);
+        assert_eq!(lf.hosts["rpi-0"].cpu_slowdown, Some(12.0));
         let link = &lf.links[0];
         assert_eq!(link.between, ["rpi-*".to_string(), "sim".to_string()]);
         assert_eq!(
@@ -981,7 +1015,7 @@ env = { RUST_LOG = "info" }
         assert_eq!(lf.group.tick, Duration::from_millis(2));
         assert_eq!(lf.group.record, ["robot/*/pose_true", "map"]);
         assert_eq!(lf.group.grace, Duration::from_secs(1));
-        assert_eq!(lf.hosts["b"].cpu_slowdown, 2.0);
+        assert_eq!(lf.hosts["b"].cpu_slowdown, Some(2.0));
         assert_eq!(lf.links[0].bandwidth_bps, Some(54_000_000));
         assert_eq!(lf.links[0].loss, 0.005);
         let p = &lf.processes[0];

@@ -46,16 +46,12 @@ impl GroupSpec {
 }
 
 /// One entry of `[hosts]`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct HostSpec {
-    /// How many times slower than this machine the host's CPU is; 1.0 means as fast.
-    pub cpu_slowdown: f64,
-}
-
-impl Default for HostSpec {
-    fn default() -> Self {
-        HostSpec { cpu_slowdown: 1.0 }
-    }
+    /// How many times slower than this machine the host's CPU is (1.0 = as fast). When set,
+    /// lockstep delays each output of the host's nodes by their compute time times it; when
+    /// absent, computing takes no simulated time.
+    pub cpu_slowdown: Option<f64>,
 }
 
 /// One `[[links]]` entry: the network between two sets of hosts.
@@ -65,8 +61,14 @@ pub struct LinkSpec {
     pub between: [String; 2],
     pub latency: Duration,
     pub jitter: Duration,
+    /// How the jitter is distributed.
+    pub distribution: caravan::network::Jitter,
     /// Probability of losing a message, 0.0 to 1.0.
     pub loss: f64,
+    /// Probability that a message meets a delay spike, 0.0 to 1.0.
+    pub spike_probability: f64,
+    /// The extra delay of a spike, uniform between the two.
+    pub spike: [Duration; 2],
     pub bandwidth_bps: Option<u64>,
 }
 

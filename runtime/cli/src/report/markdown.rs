@@ -81,6 +81,25 @@ pub fn render(r: &Value) -> String {
     if let Some(s) = r.get("slam") {
         slam(&mut md, s);
     }
+    if let Some(links) = r["links"].as_array() {
+        md.push_str("\n## Links\n\n| from | to | delivered | dropped | loss % | latency p50 / p90 / p99 / max ms |\n|---|---|---|---|---|---|\n");
+        for l in links {
+            let q = &l["latency_ms"];
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} / {} / {} / {} |",
+                l["from"].as_str().unwrap_or(""),
+                l["to"].as_str().unwrap_or(""),
+                l["delivered"],
+                l["dropped"],
+                num(&l["loss_pct"], 2),
+                num(&q["p50"], 2),
+                num(&q["p90"], 2),
+                num(&q["p99"], 2),
+                num(&q["max"], 2)
+            );
+        }
+    }
     md
 }
 

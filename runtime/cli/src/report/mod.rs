@@ -23,9 +23,14 @@
 //!   samples}, map_scale_error_pct[], surveys[]: {name, true_m, map_m, error_pct}, plot}`;
 //!   definitions in `report/slam.rs`. The plot is `map.svg`.
 //!
-//! Further scenario sections (`links`) are added by later scenarios.
+//! - `links[]` (when messages crossed emulated network links): `{from, to, delivered, dropped,
+//!   loss_pct, latency_ms: {p50, p90, p99, max}}` per ordered host pair, merged from the
+//!   receiving nodes' `links/<node>.json`; latency is arrival − send in simulated time
+//!   (lockstep) or wall time (realtime), in 0.1 ms bins. `nodes[].emulated_compute_mean_ms`
+//!   is the mean step compute time times the host's `cpu_slowdown` (null without one).
 
 mod convoy;
+mod links;
 mod markdown;
 mod slam;
 mod svg;
@@ -107,11 +112,14 @@ pub fn compute(run_dir: &Path) -> Result<Value> {
             "wall_time_s": facts.wall_time_s,
             "real_time_factor": rtf,
         },
-        "nodes": nodes(&facts),
+        "nodes": nodes(&facts, &links::slowdowns(run_dir)),
         "topics": topics(&facts, &messages),
     });
     if let Some(section) = convoy::section(&messages, &scene, run_dir) {
         report["convoy"] = section;
+    }
+    if let Some(section) = links::section(run_dir) {
+        report["links"] = section;
     }
     if let Some(section) = slam::section(&messages, scene.world.as_ref(), run_dir) {
         report["slam"] = section;
@@ -123,7 +131,7 @@ fn ms(ns: &Value) -> Value {
     ns.as_u64().map_or(Value::Null, |n| json!(n as f64 / 1e6))
 }
 
-fn nodes(facts: &RunFacts) -> Vec<Value> {
+fn nodes(facts: &RunFacts, slowdowns: &BTreeMap<String, f64>) -> Vec<Value> {
     facts
         .processes
         .iter()
@@ -147,6 +155,10 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
                 "compute_mean_ms": ms(&s["compute_mean_ns"]),
                 "compute_p99_ms": ms(&s["compute_p99_ns"]),
                 "compute_max_ms": ms(&s["compute_max_ns"]),
+                // What the step took on its emulated host (compute × the host's slowdown).
+                "emulated_compute_mean_ms": slowdowns
+                    .get(&p.host)
+                    .and_then(|f| Some(s["compute_mean_ns"].as_u64()? as f64 * f / 1e6)),
                 "messages_missed": s["messages_missed"],
                 "cpu_s": p.cpu_s,
                 "max_rss_mib": p.max_rss_mib,

@@ -1,6 +1,7 @@
 //! `caravan launch`: start a group from a launch file, supervise it, record it, report it.
 
 pub mod driver;
+mod network;
 pub mod output;
 pub mod supervisor;
 
@@ -223,6 +224,12 @@ fn run_group(
         caravan::env_vars::LAUNCH_DIR.to_string(),
         std::path::absolute(parent)?.display().to_string(),
     );
+    if let Some(net) = network::resolve(lf) {
+        env.insert(
+            caravan::env_vars::NETWORK.to_string(),
+            serde_json::to_string(&net)?,
+        );
+    }
     env.insert(
         caravan::env_vars::RUN_DIR.to_string(),
         std::path::absolute(dir)?.display().to_string(),
