@@ -31,6 +31,8 @@ pub fn section(run_dir: &Path) -> Option<Value> {
                 .merge(&s);
         }
     }
+    // Links nothing crossed (hosts that share no topic) say nothing.
+    merged.retain(|_, s| s.delivered + s.dropped > 0);
     if merged.is_empty() {
         return None;
     }
