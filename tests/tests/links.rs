@@ -116,3 +116,38 @@ fn links_delay_and_drop_per_profile_and_same_host_stays_immediate() {
     assert!(again.status.success());
     assert_eq!(receipts(&s.dir.join("far.txt")), far);
 }
+
+/// The reference deployment over WLAN: the scan goes to the PC, SLAM's pose and the planner's
+/// commands come back, follower poses go Pi to Pi; Pi nodes show their emulated compute time.
+#[test]
+fn convoy_over_wlan_reports_its_links_and_compute_budgets() {
+    let run = caravan_tests::run_convoy_with("convoy-wlan.toml", "20s", &[]);
+    let links = run.report["links"].as_array().expect("links section");
+    let pairs: Vec<(&str, &str)> = links
+        .iter()
+        .map(|l| (l["from"].as_str().unwrap(), l["to"].as_str().unwrap()))
+        .collect();
+    for pair in [
+        ("rpi-0", "pc"),
+        ("pc", "rpi-0"),
+        ("pc", "rpi-1"),
+        ("rpi-1", "rpi-2"),
+        ("rpi-3", "rpi-4"),
+    ] {
+        assert!(pairs.contains(&pair), "{pair:?} missing from {pairs:?}");
+    }
+    for l in links {
+        assert!(l["delivered"].as_u64().unwrap() > 0, "{l}");
+        // 1 % loss: well under 5 % over hundreds of messages.
+        assert!(l["loss_pct"].as_f64().unwrap() < 5.0, "{l}");
+        assert!(l["latency_ms"]["p50"].as_f64().unwrap() >= 2.0, "{l}");
+    }
+    let nodes = run.report["nodes"].as_array().unwrap();
+    let node = |name: &str| nodes.iter().find(|n| n["name"] == name).unwrap();
+    let f = node("follower-2");
+    assert_eq!(f["host"], "rpi-2");
+    let emulated = f["emulated_compute_mean_ms"].as_f64().unwrap();
+    let measured = f["compute_mean_ms"].as_f64().unwrap();
+    assert!((emulated - 12.0 * measured).abs() < 1e-9, "{f}");
+    assert!(node("slam")["emulated_compute_mean_ms"].is_null());
+}

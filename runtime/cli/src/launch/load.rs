@@ -1217,6 +1217,27 @@ env = { RUST_LOG = "info" }
     }
 
     #[test]
+    fn launch_bad_link_profiles_are_named() {
+        let text = edited(
+            "latency = \"6ms\"\n",
+            "latency = \"6ms\"\ndistribution = \"gauss\"\nspike = [\"100ms\", \"50ms\"]\nspike_probability = 2.0\n",
+        );
+        let lines = errors(&text, &[]);
+        assert_error(
+            &lines,
+            "FILE:12: link #1, key 'distribution': 'gauss' is not a jitter distribution; use uniform, normal or exponential",
+        );
+        assert_error(
+            &lines,
+            "FILE:13: link #1, key 'spike': the spike's minimum exceeds its maximum",
+        );
+        assert_error(
+            &lines,
+            "FILE:14: link #1, key 'spike_probability': must be between 0.0 and 1.0, found 2",
+        );
+    }
+
+    #[test]
     fn launch_bad_override() {
         let lines = errors(BASE, &["process.phyiscs.rate=1Hz", "group.seed=abc"]);
         assert_eq!(
