@@ -40,6 +40,31 @@ pub fn parse_params<P: DeserializeOwned>(
     Ok(params)
 }
 
+/// The `main` of a node process whose params are `P`: reads the node's identity and params
+/// from the launcher's environment, checks them with `validate` before the node joins the
+/// group (so bad input never half-starts it), then runs `body`. Errors are printed as
+/// `program: message` and exit with status 1.
+pub fn node_main<P: DeserializeOwned>(
+    program: &str,
+    validate: impl FnOnce(&P) -> Result<(), String>,
+    body: impl FnOnce(crate::Node, P) -> Result<(), Error>,
+) -> std::process::ExitCode {
+    let result = (|| -> Result<(), String> {
+        let identity = crate::NodeIdentity::from_env().map_err(|e| e.to_string())?;
+        let p: P = parse_params(&identity.name, &identity.params).map_err(|e| e.to_string())?;
+        validate(&p).map_err(|e| format!("params of node '{}': {e}", identity.name))?;
+        let node = crate::Node::new(identity).map_err(|e| e.to_string())?;
+        body(node, p).map_err(|e| e.to_string())
+    })();
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{program}: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -78,3 +78,21 @@ pub struct Twist {
     pub linear: Vector3,
     pub angular: Vector3,
 }
+
+impl Twist {
+    /// A ground robot's velocity: `v` forward along x, turning at `omega` about z.
+    pub fn planar(v: f64, omega: f64) -> Self {
+        Self {
+            linear: Vector3 {
+                x: v,
+                y: 0.0,
+                z: 0.0,
+            },
+            angular: Vector3 {
+                x: 0.0,
+                y: 0.0,
+                z: omega,
+            },
+        }
+    }
+}

@@ -9,7 +9,7 @@
 //! `localisation = "ideal"` replaces the estimate on `robot/i/pose` by the true pose (from
 //! `robot/i/pose_true`), for ablations; SLAM then still maps, from the true poses.
 
-use caravan::{Error, Node, NodeIdentity, Topic, Trigger, parse_params};
+use caravan::{Error, Node, Topic, Trigger};
 use caravan_perception::{Slam, SlamParams, WheelOdometry, map_file};
 use caravan_schemas::{
     EncoderTicks, LaserScan, OccupancyGrid, Odometry, Pose2D, Pose3D, Quaternion, Twist, Vector3,
@@ -99,27 +99,14 @@ impl Params {
 }
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("caravan-perception: {e}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn run() -> Result<(), String> {
-    // Bad params are reported before the node joins the group.
-    let identity = NodeIdentity::from_env().map_err(|e| e.to_string())?;
-    let p: Params = parse_params(&identity.name, &identity.params).map_err(|e| e.to_string())?;
-    p.validate()
-        .map_err(|e| format!("params of node '{}': {e}", identity.name))?;
-    let node = Node::new(identity).map_err(|e| e.to_string())?;
-    match p.mode {
-        Mode::Slam => slam(node, &p),
-        Mode::Odometry => odometry(node, &p),
-    }
-    .map_err(|e| e.to_string())
+    caravan::node_main(
+        "caravan-perception",
+        Params::validate,
+        |node, p: Params| match p.mode {
+            Mode::Slam => slam(node, &p),
+            Mode::Odometry => odometry(node, &p),
+        },
+    )
 }
 
 fn slam(mut node: Node, p: &Params) -> Result<(), Error> {
@@ -213,18 +200,7 @@ fn odometry_message(pose: Pose2D, v: f64, omega: f64) -> Odometry {
             orientation: Quaternion::from_yaw(pose.theta),
         },
         pose_covariance: [0.0; 36],
-        twist: Twist {
-            linear: Vector3 {
-                x: v,
-                y: 0.0,
-                z: 0.0,
-            },
-            angular: Vector3 {
-                x: 0.0,
-                y: 0.0,
-                z: omega,
-            },
-        },
+        twist: Twist::planar(v, omega),
         twist_covariance: [0.0; 36],
     }
 }

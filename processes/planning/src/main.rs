@@ -10,12 +10,12 @@
 //! unreachable goal is reported once, with the planner's reason, and nothing is commanded:
 //! the leader stops when its commands go stale.
 
-use caravan::{Error, Node, NodeIdentity, Topic, Trigger, parse_params};
+use caravan::{Error, Node, Topic, Trigger};
 use caravan_planning::{
     Costmap, CostmapParams, GlobalParams, GlobalPlanner, LocalParams, LocalPlanner, fill_path2d,
     nearest_pose_index, path_blocked,
 };
-use caravan_schemas::{Goal, OccupancyGrid, Path2D, Pose2D, Twist, Vector3, topics};
+use caravan_schemas::{Goal, OccupancyGrid, Path2D, Pose2D, Twist, topics};
 use serde::Deserialize;
 use std::process::ExitCode;
 
@@ -64,23 +64,9 @@ impl Params {
 }
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("caravan-planning: {e}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn run() -> Result<(), String> {
-    // Bad params are reported before the node joins the group.
-    let identity = NodeIdentity::from_env().map_err(|e| e.to_string())?;
-    let p: Params = parse_params(&identity.name, &identity.params).map_err(|e| e.to_string())?;
-    p.validate()
-        .map_err(|e| format!("params of node '{}': {e}", identity.name))?;
-    let node = Node::new(identity).map_err(|e| e.to_string())?;
-    plan(node, &p).map_err(|e| e.to_string())
+    caravan::node_main("caravan-planning", Params::validate, |node, p: Params| {
+        plan(node, &p)
+    })
 }
 
 /// What the planner is working on.
@@ -168,18 +154,7 @@ fn plan(mut node: Node, p: &Params) -> Result<(), Error> {
         match local.command(costmap, pose, s.command, &s.path) {
             Some((v, omega)) => {
                 s.command = (v, omega);
-                cmd_pub.publish(&Twist {
-                    linear: Vector3 {
-                        x: v,
-                        y: 0.0,
-                        z: 0.0,
-                    },
-                    angular: Vector3 {
-                        x: 0.0,
-                        y: 0.0,
-                        z: omega,
-                    },
-                })?;
+                cmd_pub.publish(&Twist::planar(v, omega))?;
             }
             // Every rollout collides: stop (no command) and plan afresh next step.
             None => {

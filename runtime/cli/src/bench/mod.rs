@@ -50,3 +50,30 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Pipeline(args) => pipeline::run(&args),
     }
 }
+
+/// Prints a bench's table and writes `<stem>.csv` and `<stem>.md` (machine, then the table).
+fn write_results(
+    out: &std::path::Path,
+    stem: &str,
+    machine: &transport::report::Machine,
+    table: &str,
+    csv: &str,
+) -> anyhow::Result<()> {
+    println!("{table}");
+    std::fs::write(out.join(format!("{stem}.csv")), csv)?;
+    std::fs::write(
+        out.join(format!("{stem}.md")),
+        format!("{}\n\n{table}\n", machine.describe()),
+    )?;
+    println!("wrote {}", out.join(format!("{stem}.csv")).display());
+    Ok(())
+}
+
+/// The run directory the launcher left in `runs` (a bench launches one run per directory).
+fn run_dir_in(runs: &std::path::Path) -> anyhow::Result<std::path::PathBuf> {
+    use anyhow::Context;
+    std::fs::read_dir(runs)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.is_dir())
+        .context("the launcher wrote no run directory")
+}

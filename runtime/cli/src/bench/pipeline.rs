@@ -84,10 +84,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             runs.display()
         );
     }
-    let run_dir = std::fs::read_dir(&runs)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .find(|p| p.is_dir())
-        .context("the launcher wrote no run directory")?;
+    let run_dir = super::run_dir_in(&runs)?;
     let messages = read_all(&run_dir.join(crate::report::RECORDING_FILE))?;
     let hops = analyse(&messages);
     if hops.iter().any(|h| h.latencies.is_empty()) {
@@ -96,15 +93,13 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             run_dir.display()
         );
     }
-    let table = table(&hops);
-    println!("{table}");
-    std::fs::write(args.out.join("pipeline.csv"), csv(&machine, &hops, seconds))?;
-    std::fs::write(
-        args.out.join("pipeline.md"),
-        format!("{}\n\n{table}\n", machine.describe()),
-    )?;
-    println!("wrote {}", args.out.join("pipeline.csv").display());
-    Ok(())
+    super::write_results(
+        &args.out,
+        "pipeline",
+        &machine,
+        &table(&hops),
+        &csv(&machine, &hops, seconds),
+    )
 }
 
 /// Send times (wall ns) of a topic's messages, in order.

@@ -88,15 +88,13 @@ pub fn run(args: &ScaleArgs) -> Result<()> {
         }
     }
     bar.finish_and_clear();
-    let table = table(&rows);
-    println!("{table}");
-    std::fs::write(args.out.join("scale.csv"), csv(&machine, &rows, seconds))?;
-    std::fs::write(
-        args.out.join("scale.md"),
-        format!("{}\n\n{table}\n", machine.describe()),
-    )?;
-    println!("wrote {}", args.out.join("scale.csv").display());
-    Ok(())
+    super::write_results(
+        &args.out,
+        "scale",
+        &machine,
+        &table(&rows),
+        &csv(&machine, &rows, seconds),
+    )
 }
 
 fn measure(runs_dir: &Path, clock: &str, followers: usize, seconds: f64) -> Result<Row> {
@@ -122,10 +120,7 @@ fn measure(runs_dir: &Path, clock: &str, followers: usize, seconds: f64) -> Resu
             dir.join("runs").display()
         );
     }
-    let run_dir = std::fs::read_dir(dir.join("runs"))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .find(|p| p.is_dir())
-        .context("the launcher wrote no run directory")?;
+    let run_dir = super::run_dir_in(&dir.join("runs"))?;
     let report: Value =
         serde_json::from_str(&std::fs::read_to_string(run_dir.join("report.json"))?)?;
     Ok(row(&report, clock, followers, cpu_all))
@@ -241,29 +236,32 @@ fn write_scenario(
     Ok(file)
 }
 
+/// A row's values, formatted once for both the table and the CSV.
+fn values(r: &Row) -> [String; 13] {
+    [
+        r.clock.clone(),
+        r.followers.to_string(),
+        r.processes.to_string(),
+        format!("{:.2}", r.sim_s),
+        format!("{:.2}", r.wall_s),
+        format!("{:.2}", r.rtf),
+        format!("{:.4}", r.cpu_total),
+        format!("{:.4}", r.cpu_physics),
+        format!("{:.5}", r.cpu_agent_mean),
+        format!("{:.4}", r.cpu_launcher),
+        format!("{:.2}", r.jitter_p99_ms),
+        format!("{:.0}", r.latency_p99_us),
+        r.deadline_misses.to_string(),
+    ]
+}
+
 fn table(rows: &[Row]) -> String {
     let mut t = String::from(
         "| clock | followers | processes | sim s | wall s | real-time factor | CPU s per sim s: total | physics | follower agent (mean) | launcher | jitter p99 ms | set-point latency p99 µs | deadline misses |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in rows {
-        let _ = writeln!(
-            t,
-            "| {} | {} | {} | {:.1} | {:.1} | {:.2} | {:.3} | {:.3} | {:.4} | {:.3} | {:.2} | {:.0} | {} |",
-            r.clock,
-            r.followers,
-            r.processes,
-            r.sim_s,
-            r.wall_s,
-            r.rtf,
-            r.cpu_total,
-            r.cpu_physics,
-            r.cpu_agent_mean,
-            r.cpu_launcher,
-            r.jitter_p99_ms,
-            r.latency_p99_us,
-            r.deadline_misses
-        );
+        let _ = writeln!(t, "| {} |", values(r).join(" | "));
     }
     t
 }
@@ -275,23 +273,7 @@ fn csv(machine: &Machine, rows: &[Row], seconds: f64) -> String {
         machine.cpu, machine.cores, machine.kernel
     );
     for r in rows {
-        let _ = writeln!(
-            out,
-            "{},{},{},{:.3},{:.3},{:.3},{:.4},{:.4},{:.5},{:.4},{:.3},{:.1},{}",
-            r.clock,
-            r.followers,
-            r.processes,
-            r.sim_s,
-            r.wall_s,
-            r.rtf,
-            r.cpu_total,
-            r.cpu_physics,
-            r.cpu_agent_mean,
-            r.cpu_launcher,
-            r.jitter_p99_ms,
-            r.latency_p99_us,
-            r.deadline_misses
-        );
+        let _ = writeln!(out, "{}", values(r).join(","));
     }
     out
 }

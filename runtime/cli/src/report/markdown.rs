@@ -10,6 +10,13 @@ fn num(v: &Value, digits: usize) -> String {
     }
 }
 
+/// `p50 / p90 / p99 / max` of a percentiles object.
+fn quantiles(q: &Value, digits: usize) -> String {
+    ["p50", "p90", "p99", "max"]
+        .map(|k| num(&q[k], digits))
+        .join(" / ")
+}
+
 pub fn render(r: &Value) -> String {
     let mut md = String::new();
     let run = &r["run"];
@@ -64,15 +71,12 @@ pub fn render(r: &Value) -> String {
         let l = &t["latency_us"];
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} / {} / {} / {} |",
+            "| {} | {} | {} | {} | {} |",
             t["name"].as_str().unwrap_or(""),
             t["type"].as_str().unwrap_or(""),
             t["messages"],
             t["gaps"],
-            num(&l["p50"], 1),
-            num(&l["p90"], 1),
-            num(&l["p99"], 1),
-            num(&l["max"], 1)
+            quantiles(l, 1)
         );
     }
     if let Some(c) = r.get("convoy") {
@@ -87,16 +91,13 @@ pub fn render(r: &Value) -> String {
             let q = &l["latency_ms"];
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {} | {} / {} / {} / {} |",
+                "| {} | {} | {} | {} | {} | {} |",
                 l["from"].as_str().unwrap_or(""),
                 l["to"].as_str().unwrap_or(""),
                 l["delivered"],
                 l["dropped"],
                 num(&l["loss_pct"], 2),
-                num(&q["p50"], 2),
-                num(&q["p90"], 2),
-                num(&q["p99"], 2),
-                num(&q["max"], 2)
+                quantiles(q, 2)
             );
         }
     }
