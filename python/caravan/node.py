@@ -49,6 +49,7 @@ ENV_ON = "CARAVAN_ON"
 ENV_EPOCH_NS = "CARAVAN_EPOCH_NS"
 ENV_SEED = "CARAVAN_SEED"
 ENV_LAUNCH_DIR = "CARAVAN_LAUNCH_DIR"
+ENV_NETWORK = "CARAVAN_NETWORK"
 
 # Service limits of a group (``caravan::group``), used when no config file is given.
 MAX_PUBLISHERS = 80
@@ -134,6 +135,27 @@ def parse_rate(rate: Any) -> int:
 # --- identity and params -------------------------------------------------------------------
 
 
+def _warn_unemulated_network(network: Optional[str], name: str, host: str) -> None:
+    """Python nodes do not emulate links or CPU budgets yet; say so rather than let a run
+    look like it did."""
+    try:
+        net = json.loads(network) if network else {}
+    except json.JSONDecodeError:
+        return
+    linked = any(l.get("to") == host for l in net.get("links", []))
+    slowed = host in net.get("cpu_slowdown", {})
+    if linked or slowed:
+        what = " and ".join(
+            w for w, on in (("network links", linked), ("CPU budgets", slowed)) if on
+        )
+        print(
+            f"caravan (Python node '{name}'): {what} of host '{host}' are not emulated for "
+            "Python nodes; it receives messages from other hosts at once and computes in no "
+            "simulated time",
+            file=sys.stderr,
+        )
+
+
 class Identity(SimpleNamespace):
     """Who the node is, as the launcher tells it (``caravan::NodeIdentity``)."""
 
@@ -174,10 +196,12 @@ class Identity(SimpleNamespace):
             except ValueError:
                 raise CaravanError(f"{var}: '{value}' is not {what}") from None
 
+        host = optional(ENV_HOST) or "localhost"
+        _warn_unemulated_network(optional(ENV_NETWORK), required(ENV_NODE), host)
         return cls(
             group=required(ENV_GROUP),
             name=required(ENV_NODE),
-            host=optional(ENV_HOST) or "localhost",
+            host=host,
             params=params,
             iceoryx_config=optional(ENV_ICEORYX_CONFIG),
             clock=clock,

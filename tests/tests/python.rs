@@ -136,3 +136,37 @@ fn python_follower_completes_the_lockstep_convoy() {
     assert!(node["steps"].as_u64().unwrap() >= 1400, "{node}\n{log}");
     assert_eq!(node["period_ms"], 50.0, "{node}");
 }
+
+/// A Python node on a host with links or a CPU budget says that it does not emulate them,
+/// rather than let a run look emulated.
+#[test]
+fn python_node_warns_that_it_does_not_emulate_links() {
+    let root = workspace_root();
+    let network = serde_json::json!({
+        "seed": 1,
+        "hosts": {"n": "rpi-1"},
+        "cpu_slowdown": {},
+        "links": [{"from": "pc", "to": "rpi-1"}],
+    });
+    let probe = |host: &str| {
+        Command::new(python_env())
+            .args(["-c", "from caravan import node; node.Identity.from_env()"])
+            .env("PYTHONPATH", root.join("python"))
+            .env("CARAVAN_GROUP", "g")
+            .env("CARAVAN_NODE", "n")
+            .env("CARAVAN_HOST", host)
+            .env("CARAVAN_NETWORK", network.to_string())
+            .output()
+            .unwrap()
+    };
+    let linked = probe("rpi-1");
+    assert!(linked.status.success(), "{}", text(&linked));
+    assert!(
+        String::from_utf8_lossy(&linked.stderr)
+            .contains("network links of host 'rpi-1' are not emulated"),
+        "{}",
+        text(&linked)
+    );
+    let alone = probe("pc");
+    assert!(alone.stderr.is_empty(), "{}", text(&alone));
+}
