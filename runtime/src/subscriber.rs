@@ -165,7 +165,19 @@ impl<T: Message> Subscriber<T> {
         let index = pending
             .iter()
             .position(|s| self.shared.is_visible(s.user_header()));
-        Ok(index.and_then(|i| pending.remove(i)))
+        let next = index.and_then(|i| pending.remove(i));
+        // A message stamped later (a compute budget) asks its node to step when it shows.
+        let tick = self.shared.tick_ns.get();
+        if let Some(at) = pending
+            .iter()
+            .filter(|s| !self.shared.is_visible(s.user_header()))
+            .map(|s| s.user_header().stamp_ns + tick)
+            .min()
+        {
+            let next_arrival = &self.shared.next_arrival_ns;
+            next_arrival.set(next_arrival.get().min(at));
+        }
+        Ok(next)
     }
 
     /// The next message when links lead into this node's host: same-host messages as

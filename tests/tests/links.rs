@@ -151,3 +151,66 @@ fn convoy_over_wlan_reports_its_links_and_compute_budgets() {
     assert!((emulated - 12.0 * measured).abs() < 1e-9, "{f}");
     assert!(node("slam")["emulated_compute_mean_ms"].is_null());
 }
+
+/// A host with a CPU budget publishes later in simulated time by its compute time × the
+/// slowdown; a subscriber stepped by messages still sees each message, exactly when it shows.
+#[test]
+fn cpu_budgets_delay_outputs_by_emulated_compute_time() {
+    let s = Scenario::new("budget", "");
+    let sink = s.dir.join("sink.txt");
+    std::fs::write(
+        &s.file,
+        format!(
+            r#"[group]
+name = "{}"
+clock = "lockstep"
+duration = "10s"
+
+[hosts.slow]
+cpu_slowdown = 1000.0
+[hosts.fast]
+
+[[process]]
+name = "source"
+exec = "caravan-testnode lockstep-source"
+host = "slow"
+params = {{ topic = "t/x" }}
+
+[[process]]
+name = "sink"
+exec = "caravan-testnode lockstep-sink"
+host = "fast"
+params = {{ topic = "t/x", out = "{}" }}
+"#,
+            s.group.name,
+            sink.display()
+        ),
+    )
+    .unwrap();
+    let out = s.run(&[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let got = receipts(&sink);
+    assert!(got.len() >= 100, "{}", got.len());
+    let tick = 1_000_000;
+    for (now, stamp) in &got {
+        // The source steps every 100 ms; its messages are stamped at least a tick later (its
+        // compute × 1000, rounded up to the tick), and seen exactly one tick after that.
+        assert!(stamp % 100_000_000 >= tick, "stamp {stamp}");
+        assert_eq!(now - stamp, tick);
+    }
+    let report = s.report();
+    let source = report["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "source")
+        .unwrap()
+        .clone();
+    let emulated = source["emulated_compute_mean_ms"].as_f64().unwrap();
+    let measured = source["compute_mean_ms"].as_f64().unwrap();
+    assert!((emulated - 1000.0 * measured).abs() < 1e-6, "{source}");
+}
