@@ -154,12 +154,26 @@ impl<T: Message> Subscriber<T> {
 
     fn next_visible(&self) -> Result<Option<Sample<ipc::Service, T, Header>>, Error> {
         let mut pending = self.pending.borrow_mut();
+        self.fill(&mut pending)?;
+        Ok(self.take_visible(&mut pending))
+    }
+
+    /// Pulls from iceoryx2 until the queue is empty or `pending` holds its limit.
+    fn fill(&self, pending: &mut VecDeque<Sample<ipc::Service, T, Header>>) -> Result<(), Error> {
         while pending.len() < self.pending_limit {
             match self.pull()? {
                 Some(sample) => pending.push_back(sample),
                 None => break,
             }
         }
+        Ok(())
+    }
+
+    /// The first visible message of `pending`; notes when the first invisible one shows.
+    fn take_visible(
+        &self,
+        pending: &mut VecDeque<Sample<ipc::Service, T, Header>>,
+    ) -> Option<Sample<ipc::Service, T, Header>> {
         // Stamps of one publisher only grow, so taking the first visible one keeps each
         // publisher's order.
         let index = pending
@@ -174,10 +188,14 @@ impl<T: Message> Subscriber<T> {
             .map(|s| s.user_header().stamp_ns + tick)
             .min()
         {
-            let next_arrival = &self.shared.next_arrival_ns;
-            next_arrival.set(next_arrival.get().min(at));
+            self.note_arrival(at);
         }
-        Ok(next)
+        next
+    }
+
+    fn note_arrival(&self, at_ns: u64) {
+        let next = &self.shared.next_arrival_ns;
+        next.set(next.get().min(at_ns));
     }
 
     /// The next message when links lead into this node's host: same-host messages as
@@ -197,26 +215,20 @@ impl<T: Message> Subscriber<T> {
         // fixed order, so that queueing on the link is reproducible.
         let mut crossing: Vec<(usize, Header, Box<T>)> = Vec::new();
         loop {
-            while pending.len() < self.pending_limit {
-                match self.pull()? {
-                    Some(sample) => pending.push_back(sample),
-                    None => break,
-                }
-            }
+            self.fill(&mut pending)?;
             let before = crossing.len();
-            let mut kept = VecDeque::with_capacity(pending.len());
-            for sample in pending.drain(..) {
+            pending.retain(|sample| {
                 let h = *sample.user_header();
                 match net.link_of(h.source_id) {
                     Some(link) if !lockstep || h.stamp_ns + tick <= now => {
                         let mut payload = caravan_schemas::boxed_placement_new::<T>();
                         *payload = *sample.payload();
                         crossing.push((link, h, payload));
+                        false
                     }
-                    _ => kept.push_back(sample),
+                    _ => true,
                 }
-            }
-            *pending = kept;
+            });
             if crossing.len() == before {
                 break;
             }
@@ -225,10 +237,7 @@ impl<T: Message> Subscriber<T> {
         for (link, header, payload) in crossing {
             self.cross(net, link, header, payload, lockstep);
         }
-        let index = pending
-            .iter()
-            .position(|s| self.shared.is_visible(s.user_header()));
-        if let Some(sample) = index.and_then(|i| pending.remove(i)) {
+        if let Some(sample) = self.take_visible(&mut pending) {
             return Ok(Some(Inner::Shared(sample)));
         }
         let mut delayed = self.delayed.borrow_mut();
@@ -238,10 +247,7 @@ impl<T: Message> Subscriber<T> {
             _ => None,
         };
         if let Some(d) = delayed.front() {
-            let at = d.arrival_ns + if lockstep { tick } else { 0 };
-            self.shared
-                .next_arrival_ns
-                .set(self.shared.next_arrival_ns.get().min(at));
+            self.note_arrival(d.arrival_ns + if lockstep { tick } else { 0 });
         }
         Ok(next)
     }

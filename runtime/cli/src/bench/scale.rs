@@ -183,8 +183,7 @@ fn children_cpu_s() -> f64 {
     // SAFETY: getrusage fills a plain-data struct.
     let mut u: libc::rusage = unsafe { std::mem::zeroed() };
     unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) };
-    let t = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
-    t(u.ru_utime) + t(u.ru_stime)
+    crate::run::supervisor::cpu_seconds(&u)
 }
 
 /// Writes the world, the robot and the launch file of one run; returns the launch file.

@@ -59,12 +59,17 @@ fn reap(pid: i32) -> std::io::Result<(ExitStatus, Usage)> {
             return Err(e);
         }
     }
-    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
     let usage = Usage {
-        cpu_s: secs(ru.ru_utime) + secs(ru.ru_stime),
+        cpu_s: cpu_seconds(&ru),
         max_rss_mib: ru.ru_maxrss as f64 / 1024.0,
     };
     Ok((ExitStatus::from_raw(status), usage))
+}
+
+/// User plus system CPU time of a resource usage record, s.
+pub fn cpu_seconds(ru: &libc::rusage) -> f64 {
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    secs(ru.ru_utime) + secs(ru.ru_stime)
 }
 
 /// How a process ended, for the report.
