@@ -10,9 +10,9 @@ never reversing, with |w| <= 2 rad/s and v <= 0.25 m/s, holding still until the 
 history reaches back tau, easing off as the gap between the two footprints shrinks, and stopping
 before it reaches the 0.15 m safety distance. It publishes wheel set-points at 20 Hz.
 
-launch/convoy-python.toml runs it as follower-2 of the reference convoy:
+launch/convoy/convoy-python.toml runs it as follower-2 of the reference convoy:
 
-    caravan launch launch/convoy-python.toml
+    caravan launch launch/convoy/convoy-python.toml
 """
 
 import bisect

@@ -8,6 +8,10 @@ pub enum Error {
     Env { var: &'static str, message: String },
     #[error("{0}")]
     Config(String),
+    /// A bad input file or value the node found after reading its params (a world file, a
+    /// robot description…); the message names the key and file.
+    #[error("{0}")]
+    Input(String),
     #[error("topic '{topic}': {message}")]
     Topic { topic: String, message: String },
     #[error("lockstep: {0}")]

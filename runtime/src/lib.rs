@@ -42,7 +42,7 @@ pub use error::Error;
 pub use executor::Step;
 pub use identity::{NodeIdentity, env_vars};
 pub use node::{Node, NodeBuilder};
-pub use params::{node_main, parse_params};
+pub use params::{EXIT_BAD_INPUT, EXIT_FAILURE, node_main, parse_params};
 pub use publisher::{Loan, Publisher};
 pub use rate::{Trigger, parse_duration, parse_rate};
 pub use stats::StepStats;

@@ -188,19 +188,19 @@ impl Drop for ConvoyRun {
     }
 }
 
-/// Runs `launch/<file>` for 70 simulated seconds (the leader reaches D after about 47 s and
+/// Runs `launch/convoy/<file>` for 70 simulated seconds (the leader reaches D after about 47 s and
 /// the followers line up behind it) under a unique group name; panics if the launch fails.
 pub fn run_convoy(file: &str) -> ConvoyRun {
     run_convoy_with(file, "70s", &[])
 }
 
-/// Runs `launch/<file>` for `duration` of simulated time with extra `--set` overrides.
+/// Runs `launch/convoy/<file>` for `duration` of simulated time with extra `--set` overrides.
 pub fn run_convoy_with(file: &str, duration: &str, sets: &[&str]) -> ConvoyRun {
     let group = TestGroup::new("convoy");
     let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
     let mut cmd = Command::new(workspace_bin("caravan"));
     cmd.arg("launch")
-        .arg(workspace_root().join("launch").join(file));
+        .arg(workspace_root().join("launch/convoy").join(file));
     for set in sets {
         cmd.args(["--set", set]);
     }

@@ -106,7 +106,7 @@ fn bad_perception_and_planning_params_are_named() {
         let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
         let out = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
             .arg("launch")
-            .arg(caravan_tests::workspace_root().join("launch/convoy.toml"))
+            .arg(caravan_tests::workspace_root().join("launch/convoy/convoy.toml"))
             .args(["--quiet", "--duration", "5s", "--set", set, "--set"])
             .arg(format!("group.name={}", group.name))
             .arg("--runs-dir")

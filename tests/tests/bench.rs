@@ -75,10 +75,19 @@ fn bench_transport_quick_writes_csv_and_plot() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// Runs `caravan bench ARGS` (transport, wrapper) or, for the convoy's own benches (scale,
+/// pipeline), `caravan-convoy-bench ARGS`.
 fn run_bench(args: &[&str], out: &std::path::Path) -> String {
     let _ = std::fs::remove_dir_all(out);
-    let run = Command::new(workspace_bin("caravan"))
-        .arg("bench")
+    let mut cmd = match args[0] {
+        "scale" | "pipeline" => Command::new(workspace_bin("caravan-convoy-bench")),
+        _ => {
+            let mut cmd = Command::new(workspace_bin("caravan"));
+            cmd.arg("bench");
+            cmd
+        }
+    };
+    let run = cmd
         .args(args)
         .arg("--out")
         .arg(out)
@@ -129,7 +138,7 @@ fn bench_scale_runs_each_clock_and_writes_its_table() {
 #[test]
 fn bench_pipeline_measures_every_hop_of_a_realtime_convoy() {
     let out = std::env::temp_dir().join(format!("caravan-bench-pipe-{}", std::process::id()));
-    let launch = caravan_tests::workspace_root().join("launch/convoy.toml");
+    let launch = caravan_tests::workspace_root().join("launch/convoy/convoy.toml");
     run_bench(
         &[
             "pipeline",

@@ -82,7 +82,7 @@ impl Default for LocalParams {
             acc_lim_v: 0.3,
             // The convoy's wheels settle in 2.5 s with overshoot: faster turn-rate changes
             // than this make the leader weave, and the followers copy and amplify the weave
-            // (measured on launch/convoy.toml: 3 rad/s² weaves, 0.5 rad/s² does not).
+            // (measured on launch/convoy/convoy.toml: 3 rad/s² weaves, 0.5 rad/s² does not).
             acc_lim_omega: 0.5,
             control_period: 0.1,
             sim_time: 2.5,

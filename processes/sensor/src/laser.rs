@@ -306,7 +306,7 @@ radius = 0.2
 
     fn robot() -> RobotModel {
         let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../launch/robots/convoy_bot.urdf");
+            .join("../../launch/convoy/robots/convoy_bot.urdf");
         caravan_world::load_robot(&urdf).unwrap()
     }
 

@@ -191,7 +191,7 @@ mod tests {
     use super::*;
 
     fn convoy_bot() -> std::path::PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch/robots/convoy_bot.urdf")
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch/convoy/robots/convoy_bot.urdf")
     }
 
     #[test]

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 fn world(name: &str) -> caravan_world::World {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../launch/worlds")
+        .join("../../launch/convoy/worlds")
         .join(name);
     caravan_world::load_world(&path).unwrap()
 }

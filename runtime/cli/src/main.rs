@@ -56,9 +56,16 @@ fn main() -> ExitCode {
         Command::Topic(cmd) => inspect::topic(cmd).map(|_| ExitCode::SUCCESS),
         Command::Node(cmd) => inspect::node(cmd).map(|_| ExitCode::SUCCESS),
         Command::Record(args) => inspect::record(args).map(|_| ExitCode::SUCCESS),
-        Command::Report { run_dir } => report::write(&run_dir).map(|r| {
-            println!("{}", report_summary(&r));
-            ExitCode::SUCCESS
+        Command::Report { run_dir } => report::write(&run_dir).map(|w| {
+            println!("{}", report_summary(&w.report));
+            for failure in &w.failures {
+                eprintln!("caravan: {failure}");
+            }
+            if w.failures.is_empty() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            }
         }),
         Command::Clean => clean::clean().map(|_| ExitCode::SUCCESS),
         Command::Bench(cmd) => bench::run(cmd).map(|_| ExitCode::SUCCESS),

@@ -2,9 +2,9 @@ use caravan_physics::{SimConfig, Simulation};
 use caravan_world::{Obstacle, ObstacleKind, RobotModel, Shape, World};
 use std::path::{Path, PathBuf};
 
-/// The repository's `launch/` directory, against which params paths resolve.
+/// The convoy scenario's launch directory, against which params paths resolve.
 pub fn launch_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch/convoy")
 }
 
 pub fn convoy_bot() -> RobotModel {

@@ -3,9 +3,9 @@
 //! The pinging side measures the round trip; one-way latency is half of it. Both variants wake
 //! through an iceoryx2 WaitSet on a listener, so the comparison isolates Caravan's wrapper.
 
-use super::stats::histogram;
 use anyhow::{Context, Result, bail};
 use caravan::{Node, Topic, Trigger};
+use caravan_report::bench::histogram;
 use caravan_schemas::{LaserScan, Message, WheelSetpoint};
 use clap::{Args, ValueEnum};
 use hdrhistogram::Histogram;

@@ -2,8 +2,8 @@
 
 use super::WrapperArgs;
 use super::pingpong::{Payload, Variant, measure};
-use super::stats::{median, percentiles};
 use anyhow::Result;
+use caravan_report::bench::{median, percentiles};
 use std::fmt::Write;
 
 pub fn run(args: &WrapperArgs) -> Result<()> {

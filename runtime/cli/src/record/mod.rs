@@ -1,6 +1,5 @@
-//! Recording topics to MCAP, and reading recordings back.
+//! Recording topics to MCAP (`caravan-report` reads recordings back).
 
-pub mod reader;
 pub mod recorder;
 pub mod schema;
 

@@ -1,6 +1,6 @@
 //! The `links` section: what crossed each emulated network link, from the statistics every
 //! receiving node leaves in `links/<node>.json` (see `caravan::network`), merged per ordered
-//! host pair; and each node's emulated compute time on a host with a CPU slowdown.
+//! host pair.
 
 use caravan::network::{LINK_STATS_DIR, LinkStats};
 use serde_json::{Value, json};
@@ -52,25 +52,4 @@ pub fn section(run_dir: &Path) -> Option<Value> {
             })
             .collect(),
     )
-}
-
-/// CPU slowdown per host, from the run's resolved launch file.
-pub fn slowdowns(run_dir: &Path) -> BTreeMap<String, f64> {
-    let text = std::fs::read_to_string(run_dir.join("launch.toml")).unwrap_or_default();
-    let doc: toml::Table = toml::from_str(&text).unwrap_or_default();
-    doc.get("hosts")
-        .and_then(|h| h.as_table())
-        .map(|hosts| {
-            hosts
-                .iter()
-                .filter_map(|(name, h)| {
-                    let f = h.get("cpu_slowdown")?;
-                    Some((
-                        name.clone(),
-                        f.as_float().or(f.as_integer().map(|i| i as f64))?,
-                    ))
-                })
-                .collect()
-        })
-        .unwrap_or_default()
 }

@@ -1,21 +1,8 @@
-//! `report.md`: the report as tables for people.
+//! `report.md`: the generic report as tables for people (plugins append their sections).
 
+use caravan_report::format::{num, quantiles};
 use serde_json::Value;
 use std::fmt::Write;
-
-fn num(v: &Value, digits: usize) -> String {
-    match v.as_f64() {
-        Some(x) => format!("{x:.digits$}"),
-        None => "–".into(),
-    }
-}
-
-/// `p50 / p90 / p99 / max` of a percentiles object.
-fn quantiles(q: &Value, digits: usize) -> String {
-    ["p50", "p90", "p99", "max"]
-        .map(|k| num(&q[k], digits))
-        .join(" / ")
-}
 
 pub fn render(r: &Value) -> String {
     let mut md = String::new();
@@ -79,12 +66,6 @@ pub fn render(r: &Value) -> String {
             quantiles(l, 1)
         );
     }
-    if let Some(c) = r.get("convoy") {
-        convoy(&mut md, c);
-    }
-    if let Some(s) = r.get("slam") {
-        slam(&mut md, s);
-    }
     if let Some(links) = r["links"].as_array() {
         md.push_str("\n## Links\n\n| from | to | delivered | dropped | loss % | latency p50 / p90 / p99 / max ms |\n|---|---|---|---|---|---|\n");
         for l in links {
@@ -102,67 +83,4 @@ pub fn render(r: &Value) -> String {
         }
     }
     md
-}
-
-fn slam(md: &mut String, s: &Value) {
-    let e = &s["pose_error_m"];
-    let _ = writeln!(
-        md,
-        "\n## SLAM\n\nLeader pose error: mean {} m, max {} m over {} estimates.\n",
-        num(&e["mean"], 3),
-        num(&e["max"], 3),
-        e["samples"]
-    );
-    if let Some(surveys) = s["surveys"].as_array() {
-        md.push_str("| survey | true m | on the map m | error % |\n|---|---|---|---|\n");
-        for v in surveys {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} |",
-                v["name"].as_str().unwrap_or(""),
-                num(&v["true_m"], 3),
-                num(&v["map_m"], 3),
-                num(&v["error_pct"], 2)
-            );
-        }
-    }
-    if let Some(plot) = s["plot"].as_str() {
-        let _ = writeln!(md, "\n![map with the true obstacles]({plot})");
-    }
-}
-
-fn convoy(md: &mut String, c: &Value) {
-    let _ = writeln!(
-        md,
-        "\n## Convoy\n\nGoals reached {} of {} at {} s; minimum gap {} m; collisions {}; order kept: {}.\n\n![trajectories]({})\n",
-        c["goals_reached"],
-        c["goals_total"],
-        c["goal_times_s"]
-            .as_array()
-            .map(|t| t.iter().map(|x| num(x, 1)).collect::<Vec<_>>().join(", "))
-            .unwrap_or_default(),
-        num(&c["min_gap_m"], 3),
-        c["collisions"],
-        c["order_kept"],
-        c["plot"].as_str().unwrap_or("")
-    );
-    md.push_str("| follower | cross-track to predecessor mean / p95 / max m | to leader mean / p95 / max m |\n|---|---|---|\n");
-    for f in c["followers"].as_array().into_iter().flatten() {
-        let e = |k: &str| {
-            let v = &f[k];
-            format!(
-                "{} / {} / {}",
-                num(&v["mean"], 3),
-                num(&v["p95"], 3),
-                num(&v["max"], 3)
-            )
-        };
-        let _ = writeln!(
-            md,
-            "| R{} | {} | {} |",
-            f["robot"],
-            e("cross_track_to_predecessor_m"),
-            e("cross_track_to_leader_m")
-        );
-    }
 }

@@ -6,9 +6,10 @@ pub mod output;
 pub mod supervisor;
 
 use crate::launch::model::{Exec, LaunchFile};
-use crate::report::{self, Latency, RunFacts};
+use crate::report;
 use anyhow::{Context, Result};
 use caravan::ClockMode;
+use caravan_report::{HostFacts, Latency, RunFacts};
 use clap::Args;
 use crossbeam::channel::{RecvTimeoutError, unbounded};
 use driver::{Control, DriverConfig};
@@ -162,20 +163,24 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     let _ = caravan::group::remove_resources(&group);
     let facts = result?;
     let failed = facts.outcome == "failed";
-    std::fs::write(
-        dir.join(report::FACTS_FILE),
-        serde_json::to_string_pretty(&facts)? + "\n",
-    )?;
-    let r = report::write(&dir)?;
+    facts.save(&dir)?;
+    let written = report::write(&dir)?;
+    for failure in &written.failures {
+        console.say(failure);
+    }
     console.say(&format!(
         "{}: simulated {:.1} s in {:.1} s (real-time factor {:.2}); report in {}",
         facts.outcome,
         facts.sim_time_s,
         facts.wall_time_s,
-        r["run"]["real_time_factor"].as_f64().unwrap_or(0.0),
+        facts.real_time_factor(),
         dir.join("report.md").display()
     ));
-    Ok(if failed { 1 } else { 0 })
+    Ok(if failed || !written.failures.is_empty() {
+        1
+    } else {
+        0
+    })
 }
 
 fn run_group(
@@ -249,7 +254,7 @@ fn run_group(
     let driver = driver::spawn(
         DriverConfig {
             iceoryx: caravan::group::load_config(config_path)?,
-            record_path: dir.join(report::RECORDING_FILE),
+            record_path: dir.join(caravan_report::RECORDING_FILE),
             patterns: lf.group.record.clone(),
             tick: lf.group.tick,
             duration: lf.group.duration,
@@ -410,5 +415,16 @@ fn run_group(
         node_status: recording.node_status,
         topic_latency,
         topic_types,
+        hosts: lf
+            .hosts
+            .iter()
+            .map(|(name, h)| {
+                let facts = HostFacts {
+                    cpu_slowdown: h.cpu_slowdown,
+                };
+                (name.clone(), facts)
+            })
+            .collect(),
+        reports: Vec::new(),
     })
 }

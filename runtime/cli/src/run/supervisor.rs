@@ -3,6 +3,7 @@
 
 use super::output::Console;
 use crate::launch::model::{ProcessSpec, Restart};
+use caravan_report::ProcessRecord;
 use crossbeam::channel::Sender;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -60,34 +61,10 @@ fn reap(pid: i32) -> std::io::Result<(ExitStatus, Usage)> {
         }
     }
     let usage = Usage {
-        cpu_s: cpu_seconds(&ru),
+        cpu_s: caravan_report::bench::cpu_seconds(&ru),
         max_rss_mib: ru.ru_maxrss as f64 / 1024.0,
     };
     Ok((ExitStatus::from_raw(status), usage))
-}
-
-/// User plus system CPU time of a resource usage record, s.
-pub fn cpu_seconds(ru: &libc::rusage) -> f64 {
-    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    secs(ru.ru_utime) + secs(ru.ru_stime)
-}
-
-/// How a process ended, for the report.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct ProcessRecord {
-    pub name: String,
-    pub host: String,
-    pub required: bool,
-    pub restarts: u32,
-    /// "exited 0", "exited 3", "killed by signal 9", "running", "never started"
-    pub exit_status: String,
-    pub success: bool,
-    /// CPU time summed over all its runs (restarts included), s.
-    #[serde(default)]
-    pub cpu_s: f64,
-    /// Largest peak resident set of its runs, MiB.
-    #[serde(default)]
-    pub max_rss_mib: f64,
 }
 
 /// One process to run: its spec and the resolved program and arguments.

@@ -16,8 +16,8 @@ mod stream;
 mod udp;
 mod zenoh_peer;
 
-use super::stats::histogram;
 use anyhow::{Context, Result, bail};
+use caravan_report::bench::{Percentiles, histogram, percentiles};
 use clap::{Args, ValueEnum};
 use hdrhistogram::Histogram;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -239,7 +239,7 @@ pub struct Row {
     pub kind: Kind,
     pub bytes: usize,
     pub rounds: u64,
-    pub result: std::result::Result<super::stats::Percentiles, String>,
+    pub result: std::result::Result<Percentiles, String>,
     pub mean_ns: f64,
 }
 
@@ -259,7 +259,7 @@ pub fn run(args: &TransportArgs) -> Result<()> {
     }
     let rounds = args.rounds.unwrap_or(if args.quick { 200 } else { 10_000 });
     let warmup = (rounds / 10).max(10);
-    let mut machine = report::Machine::detect();
+    let mut machine = caravan_report::bench::Machine::detect();
     // Both sides on fixed, different CPUs: otherwise the scheduler puts them sometimes on one
     // core (a wake-up is a context switch) and sometimes on two (a wake-up is an inter-processor
     // interrupt, slower in a VM), and each measurement lands in one of the two modes by chance.
@@ -288,7 +288,7 @@ pub fn run(args: &TransportArgs) -> Result<()> {
             let pong_cpu = cpus.map(|(_, c)| c);
             let result = measure(kind, bytes, rounds, warmup, pong_cpu, &progress);
             let (result, mean_ns) = match result {
-                Ok(Some(h)) => (Ok(super::stats::percentiles(&h)), h.mean()),
+                Ok(Some(h)) => (Ok(percentiles(&h)), h.mean()),
                 Ok(None) => (Err(unsupported(kind, bytes)), 0.0),
                 Err(e) => (Err(format!("failed: {e:#}")), 0.0),
             };

@@ -2,8 +2,8 @@
 //! both axes logarithmic. Written as plain SVG; no font or drawing library needed.
 
 use super::payload::label;
-use super::report::Machine;
 use super::{Kind, Row};
+use caravan_report::bench::{Machine, Percentiles};
 use std::fmt::Write;
 
 const WIDTH: f64 = 980.0;
@@ -25,7 +25,7 @@ fn escape(s: &str) -> String {
 }
 
 pub fn svg(machine: &Machine, rows: &[Row], rounds: u64) -> String {
-    let ok: Vec<(&Row, &super::super::stats::Percentiles)> = rows
+    let ok: Vec<(&Row, &Percentiles)> = rows
         .iter()
         .filter_map(|r| r.result.as_ref().ok().map(|p| (r, p)))
         .collect();
@@ -151,10 +151,7 @@ pub fn svg(machine: &Machine, rows: &[Row], rounds: u64) -> String {
         }
         let color = COLORS[i % COLORS.len()];
         for (dash, pick) in [
-            (
-                "",
-                (|p| p.p50_ns) as fn(&super::super::stats::Percentiles) -> u64,
-            ),
+            ("", (|p| p.p50_ns) as fn(&Percentiles) -> u64),
             (r##" stroke-dasharray="6 4""##, |p| p.p99_ns),
         ] {
             let path: Vec<String> = points

@@ -1,62 +1,9 @@
-//! The machine, the table on stdout, the Caravan ratios and the CSV.
+//! The table on stdout, the Caravan ratios and the CSV.
 
 use super::payload::label;
 use super::{Kind, Row};
+use caravan_report::bench::Machine;
 use std::fmt::Write;
-
-/// What the numbers were measured on.
-pub struct Machine {
-    pub cpu: String,
-    pub cores: usize,
-    pub kernel: String,
-    /// Where the two sides ran.
-    pub placement: String,
-}
-
-impl Machine {
-    pub fn detect() -> Self {
-        let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
-        let cpu = cpuinfo
-            .lines()
-            .find_map(|l| {
-                let (key, value) = l.split_once(':')?;
-                (key.trim() == "model name").then(|| value.trim().to_string())
-            })
-            .unwrap_or_else(|| "unknown CPU".into());
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        Self {
-            cpu,
-            cores,
-            kernel: kernel(),
-            placement: "placed by the scheduler".into(),
-        }
-    }
-
-    pub fn describe(&self) -> String {
-        format!(
-            "CPU: {} ({} cores available), kernel: {}; {}",
-            self.cpu, self.cores, self.kernel, self.placement
-        )
-    }
-}
-
-/// `sysname release`, e.g. `Linux 6.18.2`.
-fn kernel() -> String {
-    // SAFETY: uname fills a plain-data struct of fixed-size C strings.
-    let mut u: libc::utsname = unsafe { std::mem::zeroed() };
-    if unsafe { libc::uname(&mut u) } != 0 {
-        return "unknown kernel".into();
-    }
-    let field = |f: &[libc::c_char]| {
-        let bytes: Vec<u8> = f
-            .iter()
-            .take_while(|&&c| c != 0)
-            .map(|&c| c as u8)
-            .collect();
-        String::from_utf8_lossy(&bytes).into_owned()
-    };
-    format!("{} {}", field(&u.sysname), field(&u.release))
-}
 
 fn us(ns: u64) -> String {
     let us = ns as f64 / 1e3;

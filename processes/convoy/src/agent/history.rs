@@ -1,6 +1,6 @@
 //! A robot's recent poses, to look up where it was τ seconds ago.
 
-use crate::angle::wrap;
+use crate::agent::angle::wrap;
 use caravan_schemas::Pose2D;
 use std::collections::VecDeque;
 

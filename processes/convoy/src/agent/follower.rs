@@ -12,8 +12,8 @@
 //! eases to a stop before the gap between the two footprints reaches the 0.15 m safety
 //! distance (a robot rolls about 6 cm after a zero set-point).
 
-use crate::angle::wrap;
-use crate::history::PoseHistory;
+use crate::agent::angle::wrap;
+use crate::agent::history::PoseHistory;
 use caravan_schemas::Pose2D;
 use caravan_world::geometry::{footprint, rect_distance};
 use serde::Deserialize;

@@ -3,57 +3,39 @@
 //!
 //! Definitions (Caravan's, documented in report.json's doc):
 //! - gap: distance between two robots' footprint rectangles (0.20 × 0.18 m, centred 0.02 m
-//!   behind base_link, from the URDF when found), at every recorded physics stamp;
+//!   behind base_link, from the URDF), at every recorded physics stamp;
 //! - order kept: along the leader's path (extended 5 m backwards along its start heading, so
 //!   the followers' start line counts), every robot stays behind its predecessor, within 5 cm;
 //! - cross-track error: distance from a follower's position to the other robot's whole path
 //!   (extended the same way), over all recorded samples.
 
-use super::svg::Plot;
-use crate::record::reader::RecordedMessage;
+use super::plot::Plot;
+use caravan_report::RecordedMessage;
 use caravan_world::geometry::{Polyline, footprint, rect_distance};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// Footprint of the robot, from its URDF if the launch file names one.
-struct Footprint {
-    half: [f64; 2],
-    offset: f64,
+/// The robot's footprint rectangle: half extents and the offset of its centre along x from
+/// base_link, m (from the URDF's chassis box).
+pub struct Footprint {
+    pub half: [f64; 2],
+    pub offset: f64,
 }
 
-/// Where the run's world and robot description are, from the resolved launch file.
-pub struct Scene {
-    pub world: Option<caravan_world::World>,
-    footprint: Footprint,
-}
-
-impl Scene {
-    /// Reads `launch.toml` of the run; paths are relative to `launch_dir`.
-    pub fn from_run(run_dir: &Path, launch_dir: &Path) -> Self {
-        let text = std::fs::read_to_string(run_dir.join("launch.toml")).unwrap_or_default();
-        let doc: toml::Table = toml::from_str(&text).unwrap_or_default();
-        let param = |key: &str| -> Option<std::path::PathBuf> {
-            doc.get("process")?.as_array()?.iter().find_map(|p| {
-                p.get("params")?
-                    .get(key)?
-                    .as_str()
-                    .map(|s| launch_dir.join(s))
-            })
-        };
-        let world = param("world").and_then(|p| caravan_world::load_world(&p).ok());
-        let footprint = param("robot")
-            .and_then(|p| caravan_world::load_robot(&p).ok())
-            .map(|m| Footprint {
-                half: [m.chassis_half_extents[0], m.chassis_half_extents[1]],
-                offset: m.chassis_center[0],
-            })
-            .unwrap_or(Footprint {
-                half: [0.10, 0.09],
-                offset: -0.02,
-            });
-        Self { world, footprint }
+impl Footprint {
+    pub fn of(robot: &caravan_world::RobotModel) -> Self {
+        Self {
+            half: [robot.chassis_half_extents[0], robot.chassis_half_extents[1]],
+            offset: robot.chassis_center[0],
+        }
     }
+}
+
+/// What the convoy section measures against: the world (for the plot) and the footprint.
+pub struct Scene {
+    pub world: caravan_world::World,
+    pub footprint: Footprint,
 }
 
 type Trajectory = Vec<(u64, [f64; 3])>;
@@ -192,11 +174,8 @@ fn plot(
     robots: &BTreeMap<usize, Trajectory>,
     goals: &[(u64, u64, u64, [f64; 2])],
 ) -> String {
-    let size = scene.world.as_ref().map_or([6.0, 4.0], |w| w.size);
-    let mut plot = Plot::new(size, 120.0);
-    if let Some(w) = &scene.world {
-        plot.world(w);
-    }
+    let mut plot = Plot::new(scene.world.size, 120.0);
+    plot.world(&scene.world);
     for (i, t) in robots {
         let points: Vec<[f64; 2]> = t.iter().step_by(10).map(|(_, p)| [p[0], p[1]]).collect();
         plot.path(*i, &format!("R{i}"), &points);

@@ -1,4 +1,4 @@
-//! `caravan bench pipeline`: end-to-end latency of the leader's autonomy in realtime, from a
+//! `caravan-convoy-bench pipeline`: end-to-end latency of the leader's autonomy in realtime, from a
 //! laser scan to the wheel set-point it caused, per hop and in total.
 //!
 //! The bench runs the convoy launch file with the real launcher in realtime mode and reads the
@@ -10,10 +10,11 @@
 //! send to the set-point's send. The simulated laser's own ray casting happens before the
 //! scan is sent and is not part of the pipeline.
 
-use super::stats::{histogram, percentiles};
-use super::transport::report::Machine;
-use crate::record::reader::{RecordedMessage, read_all};
 use anyhow::{Context, Result, bail};
+use caravan_report::bench::{
+    Machine, Percentiles, histogram, percentiles, run_dir_in, write_results,
+};
+use caravan_report::{RECORDING_FILE, RecordedMessage, read_all};
 use caravan_schemas::topics;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -31,7 +32,7 @@ pub struct PipelineArgs {
     #[arg(long, default_value = "bench-results")]
     pub out: PathBuf,
     /// The convoy launch file
-    #[arg(long, default_value = "launch/convoy.toml")]
+    #[arg(long, default_value = "launch/convoy/convoy.toml")]
     pub launch: PathBuf,
     /// Wall seconds to run [default: 60, or 10 with --quick]
     #[arg(long)]
@@ -58,7 +59,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
         ProgressStyle::with_template("{bar:30} {pos}/{len} s realtime convoy")
             .expect("valid template"),
     );
-    let mut child = Command::new(std::env::current_exe()?)
+    let mut child = Command::new(super::caravan()?)
         .arg("launch")
         .arg(&args.launch)
         .args(["--clock", "realtime", "--quiet", "--duration"])
@@ -84,8 +85,8 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             runs.display()
         );
     }
-    let run_dir = super::run_dir_in(&runs)?;
-    let messages = read_all(&run_dir.join(crate::report::RECORDING_FILE))?;
+    let run_dir = run_dir_in(&runs)?;
+    let messages = read_all(&run_dir.join(RECORDING_FILE))?;
     let hops = analyse(&messages);
     if hops.iter().any(|h| h.latencies.is_empty()) {
         bail!(
@@ -93,7 +94,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             run_dir.display()
         );
     }
-    super::write_results(
+    write_results(
         &args.out,
         "pipeline",
         &machine,
@@ -189,7 +190,7 @@ fn table(hops: &[Hop]) -> String {
     t
 }
 
-fn summary(h: &Hop) -> super::stats::Percentiles {
+fn summary(h: &Hop) -> Percentiles {
     let mut hist = histogram();
     for &l in &h.latencies {
         hist.saturating_record(l.max(1));

@@ -10,9 +10,9 @@
 //!   estimate (the SLAM node publishes a tick after the scan), else the estimate's own stamp.
 //! - **Plot.** `map.svg`: the map as an image with the true obstacles outlined over it.
 
-use super::svg::Plot;
-use crate::record::reader::RecordedMessage;
+use super::plot::Plot;
 use base64::Engine;
+use caravan_report::RecordedMessage;
 use caravan_schemas::{OccupancyGrid, topics};
 use caravan_world::World;
 use serde_json::{Value, json};

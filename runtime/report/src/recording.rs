@@ -1,4 +1,4 @@
-//! Reading a recording back.
+//! Reading a run's recording back: every message as its topic and its JSON value.
 
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -6,7 +6,20 @@ use std::path::Path;
 /// One recorded message.
 pub struct RecordedMessage {
     pub topic: String,
+    /// The message as JSON, with its `header` (`seq`, `stamp_ns`, `source_id`).
     pub json: serde_json::Value,
+}
+
+impl RecordedMessage {
+    /// The message's simulated stamp, ns (0 if it has none).
+    pub fn stamp_ns(&self) -> u64 {
+        self.json["header"]["stamp_ns"].as_u64().unwrap_or(0)
+    }
+
+    /// A numeric field of the message (0 when missing).
+    pub fn f64(&self, key: &str) -> f64 {
+        self.json[key].as_f64().unwrap_or(0.0)
+    }
 }
 
 /// All messages of `path`, in file order.

@@ -1,4 +1,4 @@
-//! `caravan bench scale`: how the cost of a convoy grows with its size. One leader and N
+//! `caravan-convoy-bench scale`: how the cost of a convoy grows with its size. One leader and N
 //! followers (ground-truth poses, the reference follower law) in one physics process, run by
 //! the real launcher in lockstep and in realtime, for each N. Per run: the real-time factor,
 //! CPU time per simulated second (per process kind, and the launcher's own), the wake-up
@@ -8,8 +8,8 @@
 //! the numbers include everything a user's run pays: processes, shared memory, the lockstep
 //! scheduler and the recorder.
 
-use super::transport::report::Machine;
 use anyhow::{Context, Result, bail};
+use caravan_report::bench::{Machine, cpu_seconds, run_dir_in, write_results};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::Value;
@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 /// The robot description shipped with the convoy, so the bench runs from any directory.
-const ROBOT_URDF: &str = include_str!("../../../../launch/robots/convoy_bot.urdf");
+const ROBOT_URDF: &str = include_str!("../../../../launch/convoy/robots/convoy_bot.urdf");
 /// Distance between neighbouring robots at the start, m.
 const SPACING_M: f64 = 0.45;
 
@@ -88,7 +88,7 @@ pub fn run(args: &ScaleArgs) -> Result<()> {
         }
     }
     bar.finish_and_clear();
-    super::write_results(
+    write_results(
         &args.out,
         "scale",
         &machine,
@@ -104,7 +104,7 @@ fn measure(runs_dir: &Path, clock: &str, followers: usize, seconds: f64) -> Resu
     std::fs::create_dir_all(&dir)?;
     let file = write_scenario(&dir, &name, clock, followers, seconds)?;
     let before = children_cpu_s();
-    let status = Command::new(std::env::current_exe()?)
+    let status = Command::new(super::caravan()?)
         .arg("launch")
         .arg(&file)
         .arg("--quiet")
@@ -120,7 +120,7 @@ fn measure(runs_dir: &Path, clock: &str, followers: usize, seconds: f64) -> Resu
             dir.join("runs").display()
         );
     }
-    let run_dir = super::run_dir_in(&dir.join("runs"))?;
+    let run_dir = run_dir_in(&dir.join("runs"))?;
     let report: Value =
         serde_json::from_str(&std::fs::read_to_string(run_dir.join("report.json"))?)?;
     Ok(row(&report, clock, followers, cpu_all))
@@ -183,7 +183,7 @@ fn children_cpu_s() -> f64 {
     // SAFETY: getrusage fills a plain-data struct.
     let mut u: libc::rusage = unsafe { std::mem::zeroed() };
     unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) };
-    crate::run::supervisor::cpu_seconds(&u)
+    cpu_seconds(&u)
 }
 
 /// Writes the world, the robot and the launch file of one run; returns the launch file.

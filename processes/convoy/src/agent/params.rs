@@ -1,7 +1,7 @@
 //! The agent's params, from the launch file.
 
-use crate::follower::FollowerParams;
-use crate::leader::LeaderParams;
+use crate::agent::follower::FollowerParams;
+use crate::agent::leader::LeaderParams;
 use serde::Deserialize;
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]

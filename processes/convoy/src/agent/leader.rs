@@ -4,7 +4,7 @@
 //! speed loop makes higher gains weave) v ∈ [0.1, 0.2] m/s, ω ∈ [−1.5, 2.0] rad/s, advancing
 //! to the next goal within the tolerance and stopping at the last.
 
-use crate::angle::wrap;
+use crate::agent::angle::wrap;
 use caravan_schemas::Pose2D;
 use serde::Deserialize;
 

@@ -1,8 +1,10 @@
 //! Convoy agents: the follower law (`follower`), the pose history it reads from
-//! (`history`), and the leader's goal-to-goal driver (`leader`). `main.rs` is plumbing.
+//! (`history`), the leader's goal-to-goal driver (`leader`), and the node that runs either
+//! (`node`).
 
 pub mod angle;
 pub mod follower;
 pub mod history;
 pub mod leader;
+pub mod node;
 pub mod params;

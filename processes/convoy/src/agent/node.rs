@@ -1,0 +1,139 @@
+//! The agent as a node: the leader drives through its goals (straight at them, or passing a
+//! planner's commands on) and publishes the current one on `goal`; a follower runs the
+//! reference follower law on its predecessor's pose history. Both turn (v, ω) into wheel
+//! set-points.
+
+use crate::agent::history::PoseHistory;
+use crate::agent::params::{Mode, Params};
+use crate::agent::{follower, leader};
+use caravan::{Error, Node, Publisher, Subscriber, Topic, Trigger};
+use caravan_schemas::{Goal, Pose2D, Twist, WheelSetpoint, topics};
+use caravan_world::kinematics::wheel_speeds;
+
+/// Both agents step at 20 Hz unless the launch file says otherwise.
+const RATE_HZ: f64 = 20.0;
+
+/// Runs the agent `p` describes until the group stops.
+pub fn run(mut node: Node, p: Params) -> Result<(), Error> {
+    let i = p.robot;
+    let own = node.subscriber(&Topic::<Pose2D>::new(
+        &p.pose_topic.clone().unwrap_or_else(|| topics::pose_true(i)),
+    ))?;
+    let setpoint = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(i)))?;
+    let wheels = Wheels {
+        setpoint,
+        radius_m: p.wheel_radius_m,
+        separation_m: p.wheel_separation_m,
+    };
+    match p.mode {
+        Mode::Leader => run_leader(&mut node, &p, own, wheels),
+        Mode::Follower => run_follower(&mut node, &p, own, wheels),
+    }
+}
+
+/// Where (v, ω) commands go: the robot's wheel set-points.
+struct Wheels {
+    setpoint: Publisher<WheelSetpoint>,
+    radius_m: f64,
+    separation_m: f64,
+}
+
+impl Wheels {
+    fn drive(&self, (v, omega): (f64, f64)) -> Result<(), Error> {
+        let (left, right) = wheel_speeds(v, omega, self.radius_m, self.separation_m);
+        self.setpoint.publish(&WheelSetpoint {
+            left_rad_s: left,
+            right_rad_s: right,
+        })
+    }
+}
+
+fn run_leader(
+    node: &mut Node,
+    p: &Params,
+    own: Subscriber<Pose2D>,
+    wheels: Wheels,
+) -> Result<(), Error> {
+    let goal_pub = node.publisher(&Topic::<Goal>::new(topics::GOAL))?;
+    let planner = match &p.cmd_vel_topic {
+        Some(topic) => Some(node.subscriber(&Topic::<Twist>::new(topic))?),
+        None => None,
+    };
+    let mut pose = None;
+    let mut planned: Option<(f64, (f64, f64))> = None;
+    let mut progress = leader::Progress::default();
+    let mut announced = None;
+    node.run(Trigger::every_hz(RATE_HZ), |step| {
+        if let Some(msg) = own.latest()? {
+            pose = Some(*msg);
+        }
+        let now = step.now().as_secs_f64();
+        let Some(current) = pose else { return Ok(()) };
+        let cmd = match &planner {
+            None => leader::command(current, &mut progress, &p.leader),
+            Some(sub) => {
+                if let Some(msg) = sub.latest()? {
+                    let t = msg.header().stamp_ns as f64 * 1e-9;
+                    planned = Some((t, (msg.linear.x, msg.angular.z)));
+                }
+                let fresh = planned
+                    .filter(|(t, _)| now - t <= p.cmd_vel_timeout_s)
+                    .map(|(_, c)| c);
+                match leader::advance(current, &mut progress, &p.leader) {
+                    Some(_) => leader::limit(fresh, &p.leader),
+                    None => (0.0, 0.0),
+                }
+            }
+        };
+        // Announce goal changes, and once a second for late subscribers.
+        if announced != Some(progress.current) || step.index() % 20 == 0 {
+            announced = Some(progress.current);
+            let target = p
+                .leader
+                .goals
+                .get(progress.current)
+                .copied()
+                .unwrap_or([current.x, current.y]);
+            goal_pub.publish(&Goal {
+                index: progress.current as u32,
+                total: p.leader.goals.len() as u32,
+                pose: Pose2D {
+                    x: target[0],
+                    y: target[1],
+                    theta: 0.0,
+                },
+                tolerance_m: p.leader.tolerance_m,
+            })?;
+        }
+        wheels.drive(cmd)
+    })?;
+    Ok(())
+}
+
+fn run_follower(
+    node: &mut Node,
+    p: &Params,
+    own: Subscriber<Pose2D>,
+    wheels: Wheels,
+) -> Result<(), Error> {
+    let predecessor_topic = p
+        .predecessor_topic
+        .clone()
+        .unwrap_or_else(|| topics::pose_true(p.robot - 1));
+    let predecessor = node.subscriber(&Topic::<Pose2D>::new(&predecessor_topic))?;
+    let mut history = PoseHistory::new(p.follower.tau_s + 2.0);
+    let mut pose = None;
+    node.run(Trigger::every_hz(RATE_HZ), |step| {
+        while let Some(msg) = predecessor.receive()? {
+            history.push(msg.header().stamp_ns as f64 * 1e-9, *msg);
+        }
+        if let Some(msg) = own.latest()? {
+            pose = Some(*msg);
+        }
+        let Some(current) = pose else { return Ok(()) };
+        let (v, omega, _) =
+            follower::command(current, &history, step.now().as_secs_f64(), &p.follower);
+        wheels.drive((v, omega))
+    })?;
+    Ok(())
+}

@@ -1,0 +1,10 @@
+//! The convoy scenario (launch files in `launch/convoy/`):
+//! - [`agent`]: the leader's goal-to-goal driver and the reference follower law, run as the
+//!   `caravan-convoy-agent` node;
+//! - [`report`]: the `convoy` and `slam` report sections (`caravan-convoy-report`);
+//! - [`bench`]: how the convoy scales with its size and how long its autonomy pipeline takes
+//!   (`caravan-convoy-bench scale | pipeline`).
+
+pub mod agent;
+pub mod bench;
+pub mod report;

@@ -1,0 +1,106 @@
+//! Running the launch file's report plugins (`[[report]]`): `PROGRAM --check` before the
+//! group starts, `PROGRAM RUN_DIR` after it ends. See the `caravan-report` crate for the
+//! protocol a plugin follows.
+
+use caravan_report::{ReportEntry, Section};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+/// A section a plugin wrote, with its JSON text as written.
+pub struct Written {
+    pub section: Section,
+    pub text: String,
+}
+
+/// What the plugins wrote, in plugin order (each plugin's sections by name), and which
+/// failed (`(exec, message)`).
+pub struct Outcome {
+    pub sections: Vec<Written>,
+    pub failures: Vec<(String, String)>,
+}
+
+/// Checks a plugin's params before the run: `Err` holds the plugin's own message.
+pub fn check(entry: &ReportEntry) -> Result<(), String> {
+    let output = run(entry, &["--check".into()])?;
+    if output.status.success() {
+        Ok(())
+    } else {
+        Err(message(&output))
+    }
+}
+
+/// Runs every plugin on `run_dir`, after clearing the sections a previous report left.
+pub fn run_all(run_dir: &Path, entries: &[ReportEntry]) -> Outcome {
+    let _ = std::fs::remove_dir_all(run_dir.join(caravan_report::SECTIONS_DIR));
+    let mut outcome = Outcome {
+        sections: Vec::new(),
+        failures: Vec::new(),
+    };
+    for entry in entries {
+        let exec = entry.exec.join(" ");
+        let before = caravan_report::written(run_dir);
+        let arg = std::path::absolute(run_dir).unwrap_or_else(|_| run_dir.to_path_buf());
+        match run(entry, &[arg.display().to_string()]) {
+            Ok(output) if output.status.success() => {}
+            Ok(output) => {
+                outcome.failures.push((exec, message(&output)));
+                continue;
+            }
+            Err(why) => {
+                outcome.failures.push((exec, why));
+                continue;
+            }
+        }
+        for name in caravan_report::written(run_dir) {
+            if before.contains(&name) {
+                continue;
+            }
+            if outcome.sections.iter().any(|w| w.section.name == name) {
+                let why = format!("section '{name}' was already written by another plugin");
+                outcome.failures.push((exec.clone(), why));
+                continue;
+            }
+            match Section::read(run_dir, &name) {
+                Ok((section, text)) => outcome.sections.push(Written { section, text }),
+                Err(e) => outcome.failures.push((exec.clone(), format!("{e:#}"))),
+            }
+        }
+    }
+    outcome
+}
+
+fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
+    let Some((first, rest)) = entry.exec.split_first() else {
+        return Err("the command is empty".into());
+    };
+    let program = program(first, Path::new(&entry.launch_dir));
+    Command::new(&program)
+        .args(rest)
+        .args(args)
+        .env(caravan::env_vars::PARAMS, entry.params.to_string())
+        .env(caravan::env_vars::LAUNCH_DIR, &entry.launch_dir)
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", program.display()))
+}
+
+/// A program named with a '/' is a path relative to the launch file; a bare name is found
+/// like a process's executable.
+fn program(first: &str, launch_dir: &Path) -> PathBuf {
+    if first.contains('/') {
+        launch_dir.join(first)
+    } else {
+        crate::run::resolve_exec(first).unwrap_or_else(|| PathBuf::from(first))
+    }
+}
+
+/// The plugin's error: its stderr (a plugin prints one paragraph), else its exit status.
+fn message(output: &Output) -> String {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let text = stderr.trim();
+    if text.is_empty() {
+        format!("it {}", output.status)
+    } else {
+        text.to_string()
+    }
+}
