@@ -1,6 +1,6 @@
 """A convoy follower in Python.
 
-The reference follower law of processes/convoy-agent/src/follower.rs, with the same defaults:
+The reference follower law of processes/convoy/src/agent/follower.rs, with the same defaults:
 robot i drives toward where its predecessor was tau seconds ago,
 
     v = k1 (x_p(t - tau) - x) cos(theta) + k2 (y_p(t - tau) - y) sin(theta)
@@ -19,6 +19,7 @@ import bisect
 import math
 
 from caravan import CaravanError, Node, main, topics
+from caravan.robot import wheel_geometry
 from caravan.schemas import Pose2D, WheelSetpoint
 
 # Defaults; the launch file's params table overrides them (unknown keys are errors).
@@ -27,8 +28,7 @@ PARAMS = {
     "mode": "follower",
     "pose_topic": None,  # own pose (Pose2D); default robot/<i>/pose_true
     "predecessor_topic": None,  # the predecessor's pose; default robot/<i-1>/pose_true
-    "wheel_radius_m": 0.067,
-    "wheel_separation_m": 0.172,
+    "urdf": None,  # the robot's URDF (required): wheel radius and separation
     "follower": {
         "k1": 1.5,
         "k2": 1.5,
@@ -153,7 +153,10 @@ def agent():
         )
     if p.robot == 0 and p.predecessor_topic is None:
         raise CaravanError("key 'robot': robot 0 has no predecessor; set 'predecessor_topic'")
-    i, r, sep = p.robot, p.wheel_radius_m, p.wheel_separation_m
+    if p.urdf is None:
+        raise CaravanError("key 'urdf': give the robot's URDF (its wheel radius and separation)")
+    i = p.robot
+    r, sep = wheel_geometry(node.resolve_path(p.urdf))
     own = node.subscriber(Pose2D, p.pose_topic or topics.pose_true(i))
     predecessor = node.subscriber(Pose2D, p.predecessor_topic or topics.pose_true(i - 1))
     setpoint = node.publisher(WheelSetpoint, topics.wheel_setpoint(i))

@@ -19,6 +19,7 @@
 //! ```
 
 mod clock;
+mod entry;
 mod error;
 mod executor;
 pub mod group;
@@ -38,11 +39,12 @@ mod transport;
 pub use caravan_schemas as schemas;
 pub use caravan_schemas::Header;
 pub use clock::ClockMode;
+pub use entry::{EXIT_BAD_INPUT, EXIT_FAILURE, node_main};
 pub use error::Error;
 pub use executor::Step;
 pub use identity::{NodeIdentity, env_vars};
 pub use node::{Node, NodeBuilder};
-pub use params::{EXIT_BAD_INPUT, EXIT_FAILURE, node_main, parse_params};
+pub use params::parse_params;
 pub use publisher::{Loan, Publisher};
 pub use rate::{Trigger, parse_duration, parse_rate};
 pub use stats::StepStats;

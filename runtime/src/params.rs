@@ -40,45 +40,6 @@ pub fn parse_params<P: DeserializeOwned>(
     Ok(params)
 }
 
-/// Exit code of a node whose params, environment or input files are bad: nothing ran.
-pub const EXIT_BAD_INPUT: u8 = 2;
-/// Exit code of a node that failed while running.
-pub const EXIT_FAILURE: u8 = 1;
-
-/// The `main` of every node process whose params are `P`: reads the node's identity and
-/// params from the launcher's environment and checks them with `validate` before the node
-/// joins the group (so bad input never half-starts it), then runs `body`. Errors are printed
-/// as `program: message`; the exit code is [`EXIT_BAD_INPUT`] for bad params or input
-/// (`validate` failing, or `body` returning [`Error::Params`]/[`Error::Env`]/[`Error::Input`])
-/// and [`EXIT_FAILURE`] for a failure at run time.
-pub fn node_main<P: DeserializeOwned>(
-    program: &str,
-    validate: impl FnOnce(&P) -> Result<(), String>,
-    body: impl FnOnce(crate::Node, P) -> Result<(), Error>,
-) -> std::process::ExitCode {
-    let bad_input = |e: Error| match e {
-        Error::Params { .. } | Error::Env { .. } | Error::Input(_) => (EXIT_BAD_INPUT, e),
-        other => (EXIT_FAILURE, other),
-    };
-    let result = (|| -> Result<(), (u8, Error)> {
-        let identity = crate::NodeIdentity::from_env().map_err(bad_input)?;
-        let p: P = parse_params(&identity.name, &identity.params).map_err(bad_input)?;
-        validate(&p).map_err(|message| {
-            let node = identity.name.clone();
-            (EXIT_BAD_INPUT, Error::Params { node, message })
-        })?;
-        let node = crate::Node::new(identity).map_err(bad_input)?;
-        body(node, p).map_err(bad_input)
-    })();
-    match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err((code, e)) => {
-            eprintln!("{program}: {e}");
-            std::process::ExitCode::from(code)
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,7 +3,7 @@
 
 use caravan::{Error, Node, Topic, Trigger};
 use caravan_schemas::{Pose2D, WheelSetpoint, topics};
-use caravan_world::kinematics::wheel_speeds;
+use caravan_world::{RobotModel, kinematics::wheel_speeds};
 use serde::Deserialize;
 
 #[derive(Deserialize)]
@@ -13,6 +13,7 @@ struct Params {
     lookahead_m: f64, // how far ahead on the path to aim
     speed: f64,       // cruise speed, m/s
     keep_back_m: f64, // centre distance to the predecessor at which to stop
+    urdf: String,     // the robot's URDF: wheel radius and separation
 }
 
 impl Default for Params {
@@ -22,13 +23,23 @@ impl Default for Params {
             lookahead_m: 0.25,
             speed: 0.2,
             keep_back_m: 0.5,
+            urdf: String::new(),
         }
     }
 }
 
-fn main() -> Result<(), Error> {
-    let mut node = Node::from_env()?;
-    let p: Params = node.params()?;
+fn main() -> std::process::ExitCode {
+    caravan::node_main("pure-pursuit-follower", setup, run)
+}
+
+/// Before joining the group: the wheels from the robot's URDF.
+fn setup(p: Params, identity: &caravan::NodeIdentity) -> Result<(Params, RobotModel), String> {
+    let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
+        .map_err(|e| format!("key 'urdf': {e}"))?;
+    Ok((p, robot))
+}
+
+fn run(mut node: Node, (p, robot): (Params, RobotModel)) -> Result<(), Error> {
     let me = node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(p.robot)))?;
     let ahead = node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(p.robot - 1)))?;
     let wheels = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(
@@ -51,7 +62,12 @@ fn main() -> Result<(), Error> {
         let (dx, dy) = (path[0].x - me.x, path[0].y - me.y);
         let curvature = 2.0 * (-s * dx + c * dy) / (dx * dx + dy * dy).max(1e-6);
         let v = p.speed.min(1.5 * (dist(&lead) - p.keep_back_m)).max(0.0);
-        let (left, right) = wheel_speeds(v, v * curvature, 0.067, 0.172);
+        let (left, right) = wheel_speeds(
+            v,
+            v * curvature,
+            robot.wheel_radius,
+            robot.wheel_separation(),
+        );
         wheels.publish(&WheelSetpoint {
             left_rad_s: left,
             right_rad_s: right,

@@ -30,20 +30,26 @@ fn topic(name: &str) -> Topic<Pose2D> {
     Topic::new(name)
 }
 
+const ROLES: [&str; 5] = ["ping", "pong", "sum", "noise", "crash"];
+
 fn main() -> std::process::ExitCode {
     let role = std::env::args().nth(1).unwrap_or_default();
-    match run(&role) {
-        Ok(code) => std::process::ExitCode::from(code),
-        Err(e) => {
-            eprintln!("caravan-demo {role}: {e}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    caravan::node_main(
+        &format!("caravan-demo {role}"),
+        |p: Params, _| {
+            if ROLES.contains(&role.as_str()) {
+                Ok(p)
+            } else {
+                Err(format!(
+                    "unknown role '{role}'; expected ping, pong, sum, noise or crash"
+                ))
+            }
+        },
+        |node, p| run(&role, node, p),
+    )
 }
 
-fn run(role: &str) -> Result<u8, Error> {
-    let mut node = Node::from_env()?;
-    let p: Params = node.params()?;
+fn run(role: &str, mut node: Node, p: Params) -> Result<(), Error> {
     match role {
         "ping" => {
             let out = node.publisher(&topic("demo/ping"))?;
@@ -101,13 +107,11 @@ fn run(role: &str) -> Result<u8, Error> {
                 }
                 Ok(())
             })?;
-            return Ok(3);
+            // Leave the group cleanly first, then fail the way the restart tests expect.
+            drop(node);
+            std::process::exit(3);
         }
-        other => {
-            return Err(Error::Config(format!(
-                "unknown role '{other}'; expected ping, pong, sum, noise or crash"
-            )));
-        }
+        _ => {}
     }
-    Ok(0)
+    Ok(())
 }

@@ -51,10 +51,9 @@ struct Params {
     /// Base name of the map saved in the run directory on exit; empty saves nothing.
     #[serde(default = "default_save_map")]
     save_map: String,
-    #[serde(default = "default_wheel_radius")]
-    wheel_radius_m: f64,
-    #[serde(default = "default_wheel_separation")]
-    wheel_separation_m: f64,
+    /// The robot's URDF, relative to the launch file: odometry's wheel radius and separation.
+    /// Required in odometry mode.
+    urdf: Option<String>,
 }
 
 fn default_map_rate() -> f64 {
@@ -62,12 +61,6 @@ fn default_map_rate() -> f64 {
 }
 fn default_save_map() -> String {
     "map".into()
-}
-fn default_wheel_radius() -> f64 {
-    0.067
-}
-fn default_wheel_separation() -> f64 {
-    0.172
 }
 
 impl Params {
@@ -80,9 +73,6 @@ impl Params {
                 "key 'map_rate_hz': must be positive, got {}",
                 self.map_rate_hz
             ));
-        }
-        if self.wheel_radius_m <= 0.0 || self.wheel_separation_m <= 0.0 {
-            return Err("keys 'wheel_radius_m' and 'wheel_separation_m' must be positive".into());
         }
         if self.mode == Mode::Slam {
             self.slam
@@ -98,13 +88,36 @@ impl Params {
     }
 }
 
+/// Wheel radius and separation, m, from the URDF.
+struct Wheels {
+    radius_m: f64,
+    separation_m: f64,
+}
+
 fn main() -> ExitCode {
     caravan::node_main(
         "caravan-perception",
-        Params::validate,
-        |node, p: Params| match p.mode {
-            Mode::Slam => slam(node, &p),
-            Mode::Odometry => odometry(node, &p),
+        |p: Params, identity| {
+            p.validate()?;
+            let wheels = match (&p.urdf, p.mode) {
+                (Some(urdf), _) => {
+                    let robot = caravan_world::load_robot(&identity.resolve_path(urdf))
+                        .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+                    Some(Wheels {
+                        radius_m: robot.wheel_radius,
+                        separation_m: robot.wheel_separation(),
+                    })
+                }
+                (None, Mode::Odometry) => {
+                    return Err("key 'urdf': odometry needs the robot's URDF (its wheel radius and separation)".into());
+                }
+                (None, Mode::Slam) => None,
+            };
+            Ok((p, wheels))
+        },
+        |node, (p, wheels)| match (p.mode, wheels) {
+            (Mode::Odometry, Some(wheels)) => odometry(node, &p, &wheels),
+            _ => slam(node, &p),
         },
     )
 }
@@ -156,7 +169,7 @@ fn slam(mut node: Node, p: &Params) -> Result<(), Error> {
     Ok(())
 }
 
-fn odometry(mut node: Node, p: &Params) -> Result<(), Error> {
+fn odometry(mut node: Node, p: &Params, wheels: &Wheels) -> Result<(), Error> {
     let i = p.robot;
     let ticks_topic = topics::encoder_ticks(i);
     let ticks = node.subscriber(&Topic::<EncoderTicks>::new(&ticks_topic))?;
@@ -166,7 +179,7 @@ fn odometry(mut node: Node, p: &Params) -> Result<(), Error> {
     };
     let odom_pub = node.publisher(&Topic::<Odometry>::new(&topics::odometry(i)))?;
     let pose_pub = node.publisher(&Topic::<Pose2D>::new(&topics::pose(i)))?;
-    let mut odometry = WheelOdometry::new(p.initial(), p.wheel_radius_m, p.wheel_separation_m);
+    let mut odometry = WheelOdometry::new(p.initial(), wheels.radius_m, wheels.separation_m);
     node.run(Trigger::on(&ticks_topic), |_| {
         while let Some(msg) = ticks.receive()? {
             let t = msg.header().stamp_ns as f64 * 1e-9;

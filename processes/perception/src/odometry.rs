@@ -10,11 +10,6 @@
 use crate::matcher::wrap_angle;
 use caravan_schemas::{EncoderTicks, Pose2D};
 
-/// The reference robot's wheel radius, m.
-pub const WHEEL_RADIUS_M: f64 = 0.067;
-/// The reference robot's wheel separation, m.
-pub const WHEEL_SEPARATION_M: f64 = 0.172;
-
 /// A dead-reckoning pose and the mean velocities over the last interval.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OdometryEstimate {
@@ -37,7 +32,7 @@ pub struct WheelOdometry {
 
 impl WheelOdometry {
     /// Odometry starting at `initial` for wheels of radius `wheel_radius_m` spaced
-    /// `wheel_separation_m` apart (see [`WHEEL_RADIUS_M`], [`WHEEL_SEPARATION_M`]).
+    /// `wheel_separation_m` apart (the robot's URDF has both).
     pub fn new(initial: Pose2D, wheel_radius_m: f64, wheel_separation_m: f64) -> Self {
         assert!(
             wheel_radius_m > 0.0 && wheel_separation_m > 0.0,
@@ -101,8 +96,9 @@ fn sinc(x: f64) -> f64 {
 mod tests {
     use super::*;
 
-    const R: f64 = WHEEL_RADIUS_M;
-    const L: f64 = WHEEL_SEPARATION_M;
+    // The convoy robot's wheels.
+    const R: f64 = 0.067;
+    const L: f64 = 0.172;
 
     /// Drives at constant (v, ω) from `start` for `duration` s, with encoder readings at 50 Hz
     /// from the exact wheel angles; returns the last estimate.

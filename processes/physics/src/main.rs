@@ -8,7 +8,7 @@
 //! anything behind in shared memory.
 
 use caravan::{Node, NodeIdentity, Publisher, Subscriber, Topic, Trigger};
-use caravan_physics::{Params, SetupError};
+use caravan_physics::{Params, Simulation};
 use caravan_schemas::{Collision, Pose2D, Twist, WheelSetpoint, WheelState, topics};
 use std::process::ExitCode;
 use std::time::Duration;
@@ -18,55 +18,48 @@ const DEFAULT_RATE_HZ: f64 = 100.0;
 /// beyond that, simulated time slips instead of the process spiralling behind.
 const MAX_CATCH_UP_PERIODS: u64 = 4;
 
-enum Failure {
-    /// Bad params, world file or robot description: exit code 2.
-    Input(String),
-    Runtime(caravan::Error),
-}
-
-impl From<caravan::Error> for Failure {
-    fn from(e: caravan::Error) -> Self {
-        match e {
-            caravan::Error::Params { .. } | caravan::Error::Env { .. } => {
-                Failure::Input(e.to_string())
-            }
-            other => Failure::Runtime(other),
-        }
-    }
-}
-
-impl From<SetupError> for Failure {
-    fn from(e: SetupError) -> Self {
-        Failure::Input(e.0)
-    }
-}
-
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::Input(message)) => {
-            eprintln!("caravan-physics: {message}");
-            ExitCode::from(2)
-        }
-        Err(Failure::Runtime(e)) => {
-            eprintln!("caravan-physics: {e}");
-            ExitCode::FAILURE
-        }
+    caravan::node_main("caravan-physics", setup, run)
+}
+
+/// A simulation built from checked input, and the step it advances by.
+struct Ready {
+    sim: Simulation,
+    period_ns: u64,
+    dt_ns: u64,
+    max_steps: u64,
+}
+
+/// Checks the params, loads the world and robot and builds the simulation, before the node
+/// joins the group.
+fn setup(params: Params, identity: &NodeIdentity) -> Result<Ready, String> {
+    let period_ns = period(identity)?.as_nanos() as u64;
+    let dt_ns = period_ns / params.substeps.max(1) as u64;
+    if dt_ns == 0 {
+        return Err(format!(
+            "key 'substeps' = {}: more physics steps than nanoseconds in a node period",
+            params.substeps
+        ));
     }
+    let sim = caravan_physics::load(&params, &identity.launch_dir, dt_ns).map_err(|e| e.0)?;
+    Ok(Ready {
+        sim,
+        period_ns,
+        dt_ns,
+        max_steps: params.substeps as u64 * MAX_CATCH_UP_PERIODS,
+    })
 }
 
 /// The node period: the launch file's `rate`, else 100 Hz. Physics needs a fixed step, so a
 /// message trigger (`on`) is refused.
-fn period(identity: &NodeIdentity) -> Result<Duration, Failure> {
+fn period(identity: &NodeIdentity) -> Result<Duration, String> {
     if let Some(topic) = &identity.on_override {
-        return Err(Failure::Input(format!(
-            "process '{}' has `on = \"{topic}\"`, but physics steps at a fixed rate; give \
-             `rate` (e.g. \"100Hz\") instead",
-            identity.name
-        )));
+        return Err(format!(
+            "`on = \"{topic}\"`: physics steps at a fixed rate; give `rate` (e.g. \"100Hz\") instead"
+        ));
     }
     match &identity.rate_override {
-        Some(rate) => caravan::parse_rate(rate).map_err(|e| Failure::Input(e.to_string())),
+        Some(rate) => caravan::parse_rate(rate).map_err(|e| e.to_string()),
         None => Ok(Trigger::every_hz(DEFAULT_RATE_HZ)
             .period()
             .expect("periodic")),
@@ -92,26 +85,18 @@ impl RobotPorts {
     }
 }
 
-fn run() -> Result<(), Failure> {
-    let identity = NodeIdentity::from_env()?;
-    let params: Params = caravan::parse_params(&identity.name, &identity.params)?;
-    let period_ns = period(&identity)?.as_nanos() as u64;
-    let dt_ns = period_ns / params.substeps as u64;
-    if dt_ns == 0 {
-        return Err(Failure::Input(format!(
-            "key 'substeps' = {}: more physics steps than nanoseconds in a node period",
-            params.substeps
-        )));
-    }
-    let mut sim = caravan_physics::load(&params, &identity.launch_dir, dt_ns)?;
-
-    let mut node = Node::new(identity)?;
+fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
+    let Ready {
+        mut sim,
+        period_ns,
+        dt_ns,
+        max_steps,
+    } = ready;
     let ports = (0..sim.robot_count())
         .map(|i| RobotPorts::open(&node, i))
         .collect::<Result<Vec<_>, _>>()?;
     let collisions = node.publisher(&Topic::<Collision>::new(topics::COLLISIONS))?;
 
-    let max_steps = params.substeps as u64 * MAX_CATCH_UP_PERIODS;
     let mut slip_ns = 0u64;
     node.run(Trigger::Every(Duration::from_nanos(period_ns)), |step| {
         for (i, p) in ports.iter().enumerate() {

@@ -1,7 +1,7 @@
 //! The node's params, from the launch file's `params` table.
 //!
 //! ```toml
-//! params = { world = "worlds/lab.toml", robot = "robots/convoy_bot.urdf", count = 2,
+//! params = { world = "worlds/lab.toml", urdf = "robots/convoy_bot.urdf", count = 2,
 //!            poses = [[2.2, 1.0, 0.0], [1.8, 1.0, 0.0]], substeps = 5,
 //!            motor = { resistance_ohm = 20.0 }, pid = { kp = 0.2, ki = 2.0 } }
 //! ```
@@ -18,10 +18,8 @@ use serde::Deserialize;
 pub struct Params {
     /// World file, relative to the launch file's directory.
     pub world: String,
-    /// Robot description (URDF), relative to the launch file's directory. `robots` is accepted
-    /// too, as in the design sketch.
-    #[serde(alias = "robots")]
-    pub robot: String,
+    /// Robot description (URDF), relative to the launch file's directory.
+    pub urdf: String,
     /// Number of robots; robot i publishes on `robot/i/…`.
     pub count: usize,
     /// Start pose `[x, y, theta]` (m, m, rad) of each robot in the map frame, one per robot.
@@ -49,7 +47,7 @@ impl Default for Params {
     fn default() -> Self {
         Self {
             world: "worlds/lab.toml".into(),
-            robot: "robots/convoy_bot.urdf".into(),
+            urdf: "robots/convoy_bot.urdf".into(),
             count: CONVOY_START.len(),
             poses: CONVOY_START.to_vec(),
             substeps: 5,

@@ -32,11 +32,11 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
             params.world
         ))
     })?;
-    let robot_path = launch_dir.join(&params.robot);
+    let robot_path = launch_dir.join(&params.urdf);
     let robot = load_robot(&robot_path).map_err(|e| {
         SetupError(format!(
-            "robot description (key 'robot' = \"{}\"): {e}",
-            params.robot
+            "robot description (key 'urdf' = \"{}\"): {e}",
+            params.urdf
         ))
     })?;
     for (i, &[x, y, _]) in params.poses.iter().enumerate() {

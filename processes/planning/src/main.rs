@@ -64,9 +64,11 @@ impl Params {
 }
 
 fn main() -> ExitCode {
-    caravan::node_main("caravan-planning", Params::validate, |node, p: Params| {
-        plan(node, &p)
-    })
+    caravan::node_main(
+        "caravan-planning",
+        |p: Params, _| p.validate().map(|()| p),
+        |node, p| plan(node, &p),
+    )
 }
 
 /// What the planner is working on.

@@ -7,7 +7,7 @@
 //!      `robot/j/pose_true` of the other robots (for the laser to see their chassis).
 //! Out: `robot/i/encoder_ticks`, `robot/i/scan` (if `laser`), `robot/i/imu` (if `imu`).
 
-use caravan::{Node, NodeIdentity, Subscriber, Topic, Trigger, parse_params, parse_rate};
+use caravan::{Node, NodeIdentity, Subscriber, Topic, Trigger, parse_rate};
 use caravan_schemas::{EncoderTicks, Imu, LaserScan, Pose2D, Twist, WheelState, topics};
 use caravan_sensor::encoders::encoder_ticks;
 use caravan_sensor::imu::{BodyState, Mount, VirtualImu};
@@ -15,70 +15,73 @@ use caravan_sensor::laser::Laser;
 use caravan_sensor::params::Params;
 use caravan_sensor::schedule::{due, every_nth};
 use caravan_sensor::sync::Pairer;
-use std::fmt::Display;
 use std::process::ExitCode;
 use std::time::Duration;
 
 const NODE_RATE_HZ: f64 = 100.0;
 
 fn main() -> ExitCode {
-    match run() {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("caravan-sensor: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    caravan::node_main("caravan-sensor", setup, run)
 }
 
-fn text(e: impl Display) -> String {
-    e.to_string()
+/// Everything the sensors need, loaded and checked before the node joins the group.
+struct Ready {
+    p: Params,
+    world: caravan_world::World,
+    robot: caravan_world::RobotModel,
+    seed: u64,
+    period: Duration,
+    encoder_every: u64,
+    laser_every: u64,
 }
 
-fn run() -> Result<(), String> {
-    // Everything that can be wrong with the input is checked before the node joins the group.
-    let identity = NodeIdentity::from_env().map_err(text)?;
-    let node_name = identity.name.clone();
-    let p: Params = parse_params(&node_name, &identity.params).map_err(text)?;
-    let in_params = |e: &dyn Display| format!("params of node '{node_name}': {e}");
-    p.validate().map_err(|e| in_params(&e))?;
+fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
+    p.validate().map_err(|e| e.to_string())?;
     let world = caravan_world::load_world(&identity.resolve_path(&p.world))
-        .map_err(|e| in_params(&format!("key 'world': world file {e}")))?;
+        .map_err(|e| format!("key 'world': world file {e}"))?;
     let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
-        .map_err(|e| in_params(&format!("key 'urdf': robot description {e}")))?;
-    let seed = identity.node_seed();
-
-    // The launch file's `rate` overrides the default, as `Node::trigger` does; checked here so
-    // a bad rate never joins the group.
+        .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+    // The launch file's `rate` overrides the default, as `Node::trigger` does.
     let period = match (&identity.rate_override, &identity.on_override) {
-        (Some(rate), _) => {
-            parse_rate(rate).map_err(|e| format!("node '{node_name}', its `rate`: {e}"))?
-        }
+        (Some(rate), _) => parse_rate(rate).map_err(|e| format!("its `rate`: {e}"))?,
         (None, Some(_)) => {
-            return Err(format!(
-                "node '{node_name}': caravan-sensor runs at a fixed rate; give it a `rate`, not `on`"
-            ));
+            return Err("caravan-sensor runs at a fixed rate; give it a `rate`, not `on`".into());
         }
         (None, None) => Duration::from_secs_f64(1.0 / NODE_RATE_HZ),
     };
     let encoder_every =
-        every_nth(period, p.encoder_rate_hz, "encoder_rate_hz").map_err(|e| in_params(&e))?;
+        every_nth(period, p.encoder_rate_hz, "encoder_rate_hz").map_err(|e| e.to_string())?;
     let laser_every = if p.laser {
-        every_nth(period, p.laser_rate_hz, "laser_rate_hz").map_err(|e| in_params(&e))?
+        every_nth(period, p.laser_rate_hz, "laser_rate_hz").map_err(|e| e.to_string())?
     } else {
         1
     };
+    Ok(Ready {
+        seed: identity.node_seed(),
+        p,
+        world,
+        robot,
+        period,
+        encoder_every,
+        laser_every,
+    })
+}
 
-    let mut node = Node::new(identity).map_err(text)?;
+fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
+    let Ready {
+        p,
+        world,
+        robot,
+        seed,
+        period,
+        encoder_every,
+        laser_every,
+    } = ready;
     let i = p.robot;
     let sub_pose = |j: usize| node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(j)));
-    let own_pose = sub_pose(i).map_err(text)?;
-    let wheels = node
-        .subscriber(&Topic::<WheelState>::new(&topics::wheel_state(i)))
-        .map_err(text)?;
-    let ticks_out = node
-        .publisher(&Topic::<EncoderTicks>::new(&topics::encoder_ticks(i)))
-        .map_err(text)?;
+    let own_pose = sub_pose(i)?;
+    let wheels = node.subscriber(&Topic::<WheelState>::new(&topics::wheel_state(i)))?;
+    let ticks_out = node.publisher(&Topic::<EncoderTicks>::new(&topics::encoder_ticks(i)))?;
 
     // The laser sees the other robots at their latest true poses.
     let mut laser = p
@@ -88,16 +91,12 @@ fn run() -> Result<(), String> {
         (0..p.count)
             .filter(|&j| j != i)
             .map(sub_pose)
-            .collect::<Result<_, _>>()
-            .map_err(text)?
+            .collect::<Result<_, _>>()?
     } else {
         Vec::new()
     };
     let scan_out = if p.laser {
-        Some(
-            node.publisher(&Topic::<LaserScan>::new(&topics::scan(i)))
-                .map_err(text)?,
-        )
+        Some(node.publisher(&Topic::<LaserScan>::new(&topics::scan(i)))?)
     } else {
         None
     };
@@ -108,12 +107,8 @@ fn run() -> Result<(), String> {
     };
     let mut imu = p.imu.then(|| VirtualImu::new(mount, p.imu_noise(), seed));
     let (twist_in, imu_out) = if p.imu {
-        let twist_in = node
-            .subscriber(&Topic::<Twist>::new(&topics::twist_true(i)))
-            .map_err(text)?;
-        let imu_out = node
-            .publisher(&Topic::<Imu>::new(&topics::imu(i)))
-            .map_err(text)?;
+        let twist_in = node.subscriber(&Topic::<Twist>::new(&topics::twist_true(i)))?;
+        let imu_out = node.publisher(&Topic::<Imu>::new(&topics::imu(i)))?;
         (Some(twist_in), Some(imu_out))
     } else {
         (None, None)
@@ -194,7 +189,6 @@ fn run() -> Result<(), String> {
             out.publish(&imu.message(&r))?;
         }
         Ok(())
-    })
-    .map_err(text)?;
+    })?;
     Ok(())
 }

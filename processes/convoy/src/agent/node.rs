@@ -13,8 +13,27 @@ use caravan_world::kinematics::wheel_speeds;
 /// Both agents step at 20 Hz unless the launch file says otherwise.
 const RATE_HZ: f64 = 20.0;
 
+/// The robot's wheel radius and separation, m.
+#[derive(Debug, Clone, Copy)]
+pub struct Geometry {
+    pub wheel_radius_m: f64,
+    pub wheel_separation_m: f64,
+}
+
+/// Checks `p` and reads the robot's geometry from its URDF, before the node joins the group.
+pub fn setup(p: Params, identity: &caravan::NodeIdentity) -> Result<(Params, Geometry), String> {
+    p.validate()?;
+    let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
+        .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+    let geometry = Geometry {
+        wheel_radius_m: robot.wheel_radius,
+        wheel_separation_m: robot.wheel_separation(),
+    };
+    Ok((p, geometry))
+}
+
 /// Runs the agent `p` describes until the group stops.
-pub fn run(mut node: Node, p: Params) -> Result<(), Error> {
+pub fn run(mut node: Node, (p, geometry): (Params, Geometry)) -> Result<(), Error> {
     let i = p.robot;
     let own = node.subscriber(&Topic::<Pose2D>::new(
         &p.pose_topic.clone().unwrap_or_else(|| topics::pose_true(i)),
@@ -22,8 +41,8 @@ pub fn run(mut node: Node, p: Params) -> Result<(), Error> {
     let setpoint = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(i)))?;
     let wheels = Wheels {
         setpoint,
-        radius_m: p.wheel_radius_m,
-        separation_m: p.wheel_separation_m,
+        radius_m: geometry.wheel_radius_m,
+        separation_m: geometry.wheel_separation_m,
     };
     match p.mode {
         Mode::Leader => run_leader(&mut node, &p, own, wheels),

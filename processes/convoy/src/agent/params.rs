@@ -27,8 +27,8 @@ pub struct Params {
     pub cmd_vel_topic: Option<String>,
     /// Leader: a planner command older than this is stale and the leader stops, s.
     pub cmd_vel_timeout_s: f64,
-    pub wheel_radius_m: f64,
-    pub wheel_separation_m: f64,
+    /// The robot's URDF, relative to the launch file: wheel radius and separation (required).
+    pub urdf: String,
     pub follower: FollowerParams,
     pub leader: LeaderParams,
 }
@@ -42,8 +42,7 @@ impl Default for Params {
             predecessor_topic: None,
             cmd_vel_topic: None,
             cmd_vel_timeout_s: 0.5,
-            wheel_radius_m: 0.067,
-            wheel_separation_m: 0.172,
+            urdf: String::new(),
             follower: FollowerParams::default(),
             leader: LeaderParams::default(),
         }
@@ -58,9 +57,9 @@ impl Params {
                 Err("key 'robot': robot 0 has no predecessor; make it the leader (mode = \"leader\") or set 'predecessor_topic'".into())
             }
             Mode::Leader if self.leader.goals.is_empty() => Err("key 'leader.goals': a leader needs at least one goal".into()),
-            _ if self.wheel_radius_m <= 0.0 || self.wheel_separation_m <= 0.0 => {
-                Err("keys 'wheel_radius_m' and 'wheel_separation_m' must be positive".into())
-            }
+            _ if self.urdf.is_empty() => Err(
+                "key 'urdf': give the robot's URDF (its wheel radius and separation)".into(),
+            ),
             _ => Ok(()),
         }
     }

@@ -40,7 +40,7 @@ fn bad_world_file_names_file_line_and_key() {
     .unwrap();
     let params = Params {
         world: "bad.toml".into(),
-        robot: "bot.urdf".into(),
+        urdf: "bot.urdf".into(),
         ..one_robot([0.5, 0.5, 0.0])
     };
     let e = error(&params, &dir);
@@ -69,11 +69,11 @@ fn bad_urdf_is_named() {
     std::fs::copy(launch_dir().join("worlds/lab.toml"), dir.join("lab.toml")).unwrap();
     let params = Params {
         world: "lab.toml".into(),
-        robot: "bad.urdf".into(),
+        urdf: "bad.urdf".into(),
         ..one_robot([0.5, 0.5, 0.0])
     };
     let e = error(&params, &dir);
-    assert!(e.contains("key 'robot'") && e.contains("bad.urdf"), "{e}");
+    assert!(e.contains("key 'urdf'") && e.contains("bad.urdf"), "{e}");
     assert!(e.contains("not a valid URDF"), "{e}");
 }
 

@@ -1,0 +1,69 @@
+//! The one way a node process starts: [`node_main`].
+
+use crate::{Error, Node, NodeIdentity, parse_params};
+use serde::de::DeserializeOwned;
+use std::process::ExitCode;
+
+/// Exit code of a node whose params, environment or input files are bad: nothing ran.
+pub const EXIT_BAD_INPUT: u8 = 2;
+/// Exit code of a node that failed while running.
+pub const EXIT_FAILURE: u8 = 1;
+
+/// The `main` of every node process:
+///
+/// 1. reads the node's identity and params `P` from the launcher's environment;
+/// 2. `setup` checks them and loads what they name (world files, robot descriptions…) into
+///    whatever the node needs, *before* the node joins the group, so bad input never
+///    half-starts it; its error is one paragraph naming the key;
+/// 3. the node joins the group and `run` steps it until the group stops.
+///
+/// Errors are printed as `program: message`. The exit code is [`EXIT_BAD_INPUT`] (2) for bad
+/// params or input (`setup` failing, or `run` returning [`Error::Params`], [`Error::Env`] or
+/// [`Error::Input`]) and [`EXIT_FAILURE`] (1) for a failure at run time.
+///
+/// ```no_run
+/// # use serde::Deserialize;
+/// #[derive(Deserialize)]
+/// #[serde(deny_unknown_fields)]
+/// struct Params { gain: f64 }
+///
+/// fn main() -> std::process::ExitCode {
+///     caravan::node_main(
+///         "my-node",
+///         |p: Params, _identity| {
+///             if p.gain > 0.0 { Ok(p) } else { Err("key 'gain': must be positive".into()) }
+///         },
+///         |mut node, p| {
+///             node.run(caravan::Trigger::every_hz(10.0), |_step| Ok(()))?;
+///             Ok(())
+///         },
+///     )
+/// }
+/// ```
+pub fn node_main<P: DeserializeOwned, S>(
+    program: &str,
+    setup: impl FnOnce(P, &NodeIdentity) -> Result<S, String>,
+    run: impl FnOnce(Node, S) -> Result<(), Error>,
+) -> ExitCode {
+    let classify = |e: Error| match e {
+        Error::Params { .. } | Error::Env { .. } | Error::Input(_) => (EXIT_BAD_INPUT, e),
+        other => (EXIT_FAILURE, other),
+    };
+    let result = (|| -> Result<(), (u8, Error)> {
+        let identity = NodeIdentity::from_env().map_err(classify)?;
+        let p: P = parse_params(&identity.name, &identity.params).map_err(classify)?;
+        let ready = setup(p, &identity).map_err(|message| {
+            let node = identity.name.clone();
+            (EXIT_BAD_INPUT, Error::Params { node, message })
+        })?;
+        let node = Node::new(identity).map_err(classify)?;
+        run(node, ready).map_err(classify)
+    })();
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err((code, e)) => {
+            eprintln!("{program}: {e}");
+            ExitCode::from(code)
+        }
+    }
+}
