@@ -99,7 +99,7 @@ pub fn run(args: &SweepArgs) -> Result<u8> {
         for (c, cell) in plan.cells.iter().enumerate() {
             let dir = runs_root.join(&cell.id).join(format!("seed-{seed}"));
             if let Some((run_dir, report)) = runner::finished_run(&dir) {
-                results[c].push(entry(&plan.out, seed, Some(&run_dir), None, Some(&report)));
+                results[c].push(entry(&plan.out, seed, &run_dir, None, Some(&report)));
                 continue;
             }
             // Left by a killed sweep: start that run afresh.
@@ -152,30 +152,23 @@ pub fn run(args: &SweepArgs) -> Result<u8> {
         if f.interrupted {
             return;
         }
+        let id = &plan.cells[f.cell].id;
+        let seed_dir = runs_root.join(id).join(format!("seed-{}", f.seed));
         let outcome = outcome_of(f.report.as_ref());
         if outcome != "completed" {
-            let dir = runs_root
-                .join(&plan.cells[f.cell].id)
-                .join(format!("seed-{}", f.seed));
-            let log = dir.join("launch.log");
+            let log = seed_dir.join("launch.log");
             failed.push(match &f.error {
-                Some(e) => format!("cell {} seed {}: {e}", plan.cells[f.cell].id, f.seed),
+                Some(e) => format!("cell {id} seed {}: {e}", f.seed),
                 None => format!(
-                    "cell {} seed {}: {outcome}; see {}",
-                    plan.cells[f.cell].id,
+                    "cell {id} seed {}: {outcome}; see {}",
                     f.seed,
                     log.display()
                 ),
             });
             bar.set_message(format!("{} failed", failed.len()));
         }
-        let run = entry(
-            &plan.out,
-            f.seed,
-            f.run_dir.as_deref(),
-            Some(f.exit_code),
-            f.report.as_ref(),
-        );
+        let dir = f.run_dir.as_deref().unwrap_or(&seed_dir);
+        let run = entry(&plan.out, f.seed, dir, Some(f.exit_code), f.report.as_ref());
         results[f.cell].push(run);
     };
     let jobs = plan.jobs.min(tasks.len()).max(1);
@@ -231,7 +224,7 @@ fn outcome_of(report: Option<&serde_json::Value>) -> &str {
 fn entry(
     out: &Path,
     seed: u64,
-    run_dir: Option<&Path>,
+    dir: &Path,
     exit_code: Option<Option<i32>>,
     report: Option<&serde_json::Value>,
 ) -> RunEntry {
@@ -240,9 +233,7 @@ fn entry(
         "completed" => Some(0),
         _ => Some(1),
     });
-    let dir = run_dir.map_or(String::new(), |d| {
-        d.strip_prefix(out).unwrap_or(d).display().to_string()
-    });
+    let dir = dir.strip_prefix(out).unwrap_or(dir).display().to_string();
     RunEntry {
         seed,
         dir,
