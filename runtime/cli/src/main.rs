@@ -8,6 +8,7 @@ mod record;
 mod report;
 mod run;
 mod schemas_py;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -27,6 +28,8 @@ struct Cli {
 enum Command {
     /// Launch a process group from a launch file
     Launch(run::LaunchArgs),
+    /// Run a launch file over a grid of overrides × seeds, several groups at once
+    Sweep(sweep::SweepArgs),
     /// Topics of a running group
     #[command(subcommand)]
     Topic(inspect::TopicCommand),
@@ -53,6 +56,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Launch(args) => run::launch(&args).map(ExitCode::from),
+        Command::Sweep(args) => sweep::run(&args).map(ExitCode::from),
         Command::Topic(cmd) => inspect::topic(cmd).map(|_| ExitCode::SUCCESS),
         Command::Node(cmd) => inspect::node(cmd).map(|_| ExitCode::SUCCESS),
         Command::Record(args) => inspect::record(args).map(|_| ExitCode::SUCCESS),

@@ -1,0 +1,227 @@
+//! `caravan sweep`: a grid of real pingpong groups, resumption, and bad input.
+
+use caravan_tests::{unique_group, workspace_bin, workspace_root};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A temporary directory removed when dropped.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("caravan-{}", unique_group(tag)));
+        std::fs::create_dir_all(&dir).unwrap();
+        Self(dir)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn sweep(args: &[&str], out: &Path) -> Output {
+    Command::new(workspace_bin("caravan"))
+        .arg("sweep")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .output()
+        .unwrap()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+/// Every run directory: `<out>/runs/<cell>/seed-<s>/<group>-<time>`.
+fn run_dirs(out: &Path) -> Vec<PathBuf> {
+    let mut dirs = Vec::new();
+    for cell in std::fs::read_dir(out.join("runs")).into_iter().flatten() {
+        for seed in std::fs::read_dir(cell.unwrap().path()).unwrap() {
+            for run in std::fs::read_dir(seed.unwrap().path()).unwrap() {
+                let run = run.unwrap().path();
+                if run.is_dir() {
+                    dirs.push(run);
+                }
+            }
+        }
+    }
+    dirs.sort();
+    dirs
+}
+
+fn read_json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// No shared memory of any group the sweep ran is left.
+fn assert_no_resources(dirs: &[PathBuf]) {
+    let left = caravan::group::groups_with_resources();
+    for dir in dirs {
+        let report = read_json(&dir.join("report.json"));
+        let group = report["group"]["name"].as_str().unwrap();
+        assert!(
+            !left.iter().any(|g| g == group),
+            "{group} left shared memory"
+        );
+    }
+}
+
+#[test]
+fn a_grid_of_pingpong_groups_is_summarised_and_resumed() {
+    let tmp = TempDir::new("sweep");
+    let out = tmp.0.join("out");
+    let launch = workspace_root().join("launch/pingpong.toml");
+    let args = [
+        launch.to_str().unwrap(),
+        "--grid",
+        "process.pong.params.gain=1,3",
+        "--seeds",
+        "1..=2",
+        "--jobs",
+        "2",
+        "--duration",
+        "3s",
+    ];
+    let first = sweep(&args, &out);
+    assert_eq!(first.status.code(), Some(0), "{}", stderr(&first));
+    let dirs = run_dirs(&out);
+    assert_eq!(dirs.len(), 4, "{dirs:?}");
+    assert_no_resources(&dirs);
+
+    let summary = read_json(&out.join("summary.json"));
+    assert_eq!(summary["name"], "pingpong");
+    assert_eq!(summary["seeds"], serde_json::json!([1, 2]));
+    assert_eq!(summary["axes"][0]["key"], "process.pong.params.gain");
+    let cells = summary["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 2);
+    for (cell, gain) in cells.iter().zip(["1", "3"]) {
+        assert_eq!(cell["values"]["process.pong.params.gain"], gain);
+        assert_eq!(cell["sets"]["process.pong.params.gain"], gain);
+        assert_eq!(cell["runs"].as_array().unwrap().len(), 2);
+        for run in cell["runs"].as_array().unwrap() {
+            assert_eq!(run["exit_code"], 0);
+            assert_eq!(run["outcome"], "completed");
+            assert!(
+                out.join(run["dir"].as_str().unwrap())
+                    .join("report.json")
+                    .is_file()
+            );
+        }
+        // 3 s at 10 Hz: pong steps once per ping but the last.
+        let steps = &cell["metrics"]["nodes.pong.steps"];
+        assert_eq!(steps["n"], 2, "{cell}");
+        assert_eq!(steps["mean"], 30.0, "{cell}");
+        assert_eq!(steps["sd"], 0.0, "{cell}");
+        assert_eq!(cell["metrics"]["topics.demo/ping.messages"]["n"], 2);
+        let completed = &cell["flags"]["run.completed"];
+        assert_eq!(completed["n"], 2, "{cell}");
+        assert_eq!(completed["rate"], 1.0, "{cell}");
+    }
+    let csv = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    assert!(
+        csv.starts_with("process.pong.params.gain,cell,metric,kind,"),
+        "{csv}"
+    );
+    assert!(csv.contains("\n3,gain=3,run.completed,flag,2,1,"), "{csv}");
+
+    // Again: every run is already finished, so nothing runs and the summary is the same.
+    let json_before = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let again = sweep(&args, &out);
+    assert_eq!(again.status.code(), Some(0), "{}", stderr(&again));
+    assert!(
+        stderr(&again).contains("skipped 4 of 4 runs"),
+        "{}",
+        stderr(&again)
+    );
+    assert_eq!(run_dirs(&out), dirs);
+    let json_after = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert_eq!(json_before, json_after);
+}
+
+#[test]
+fn a_bad_grid_key_starts_nothing() {
+    let tmp = TempDir::new("sweep-bad");
+    let out = tmp.0.join("out");
+    let launch = workspace_root().join("launch/pingpong.toml");
+    let bad = sweep(
+        &[
+            launch.to_str().unwrap(),
+            "--grid",
+            "process.nope.rate=1Hz",
+            "--duration",
+            "3s",
+        ],
+        &out,
+    );
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(
+        stderr(&bad).contains("process.nope.rate=1Hz"),
+        "{}",
+        stderr(&bad)
+    );
+    assert!(
+        stderr(&bad).contains("no process 'nope'"),
+        "{}",
+        stderr(&bad)
+    );
+    assert!(!out.exists(), "a bad sweep created {}", out.display());
+}
+
+#[test]
+fn sweep_files_bundle_overrides_and_report_bad_keys_with_lines() {
+    let tmp = TempDir::new("sweep-file");
+    let launch = workspace_root().join("launch/pingpong.toml");
+    let file = tmp.0.join("demo.toml");
+    std::fs::write(
+        &file,
+        format!(
+            r#"[sweep]
+name = "demo"
+launch = "{}"
+seeds = [5]
+set = ["group.duration=2s"]
+
+[[sweep.axis]]
+name = "speed"
+[sweep.axis.values]
+slow = ["process.ping.rate=5Hz"]
+fast = ["process.ping.rate=20Hz", "process.pong.params.gain=4"]
+"#,
+            launch.display()
+        ),
+    )
+    .unwrap();
+    let out = tmp.0.join("out");
+    let good = sweep(&[file.to_str().unwrap()], &out);
+    assert_eq!(good.status.code(), Some(0), "{}", stderr(&good));
+    let summary = read_json(&out.join("summary.json"));
+    assert_eq!(summary["name"], "demo");
+    assert_eq!(summary["axes"][0]["name"], "speed");
+    let cells = summary["cells"].as_array().unwrap();
+    let ids: Vec<&str> = cells.iter().map(|c| c["id"].as_str().unwrap()).collect();
+    assert_eq!(ids, ["speed=slow", "speed=fast"]);
+    assert_eq!(cells[1]["sets"]["process.pong.params.gain"], "4");
+    // 2 s: ping steps 11 times at 5 Hz, 41 times at 20 Hz.
+    assert_eq!(cells[0]["metrics"]["nodes.ping.steps"]["mean"], 11.0);
+    assert_eq!(cells[1]["metrics"]["nodes.ping.steps"]["mean"], 41.0);
+    assert_eq!(cells[0]["runs"][0]["seed"], 5);
+    assert_no_resources(&run_dirs(&out));
+
+    let bad_file = tmp.0.join("bad.toml");
+    std::fs::write(
+        &bad_file,
+        format!("[sweep]\nlaunch = \"{}\"\nseed = 3\n", launch.display()),
+    )
+    .unwrap();
+    let bad_out = tmp.0.join("bad-out");
+    let bad = sweep(&[bad_file.to_str().unwrap()], &bad_out);
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    let expected = format!("{}:3: [sweep] key 'seed': unknown key", bad_file.display());
+    assert!(stderr(&bad).contains(&expected), "{}", stderr(&bad));
+    assert!(!bad_out.exists());
+}
