@@ -34,6 +34,12 @@ fn main() -> std::process::ExitCode {
 
 /// Before joining the group: the wheels from the robot's URDF.
 fn setup(p: Params, identity: &caravan::NodeIdentity) -> Result<(Params, RobotModel), String> {
+    if p.robot == 0 {
+        return Err("key 'robot': robot 0 leads; a follower is robot 1 or later".into());
+    }
+    if p.urdf.is_empty() {
+        return Err("key 'urdf': give the robot's URDF (its wheel radius and separation)".into());
+    }
     let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
         .map_err(|e| format!("key 'urdf': {e}"))?;
     Ok((p, robot))

@@ -6,8 +6,8 @@
 //!            motor = { resistance_ohm = 20.0 }, pid = { kp = 0.2, ki = 2.0 } }
 //! ```
 //!
-//! Every key is optional. The defaults are the reference convoy: five robots in a line along
-//! y = 0.7 facing +x in the lab world, and the fitted motor and PID constants.
+//! Every key is optional. The defaults are the reference convoy: five robots in the lab world
+//! at its start poses, and the fitted motor and PID constants.
 
 use crate::firmware::FirmwareParams;
 use crate::motor::MotorParams;
@@ -22,7 +22,8 @@ pub struct Params {
     pub urdf: String,
     /// Number of robots; robot i publishes on `robot/i/…`.
     pub count: usize,
-    /// Start pose `[x, y, theta]` (m, m, rad) of each robot in the map frame, one per robot.
+    /// Start pose `[x, y, theta]` (m, m, rad) of each robot in the map frame, one per robot;
+    /// empty: the world file's `[[start]]` poses.
     pub poses: Vec<[f64; 3]>,
     /// Physics steps per node step (100 Hz node × 5 = 500 Hz physics by default).
     pub substeps: u32,
@@ -34,22 +35,13 @@ pub struct Params {
     pub pid: FirmwareParams,
 }
 
-/// The reference convoy's start line: R0 (leader) in front at x = 2.2, R4 last at x = 0.6.
-pub const CONVOY_START: [[f64; 3]; 5] = [
-    [2.2, 1.0, 0.0],
-    [1.8, 1.0, 0.0],
-    [1.4, 1.0, 0.0],
-    [1.0, 1.0, 0.0],
-    [0.6, 1.0, 0.0],
-];
-
 impl Default for Params {
     fn default() -> Self {
         Self {
             world: "worlds/lab.toml".into(),
             urdf: "robots/convoy_bot.urdf".into(),
-            count: CONVOY_START.len(),
-            poses: CONVOY_START.to_vec(),
+            count: 5,
+            poses: Vec::new(),
             substeps: 5,
             lifted: false,
             wheel_friction: 1.0,
@@ -72,15 +64,10 @@ impl Params {
                 self.count
             ));
         }
-        if self.poses.len() != self.count {
-            let default = if self.poses == CONVOY_START {
-                " (the default poses, the five-robot convoy line)"
-            } else {
-                ""
-            };
+        if !self.poses.is_empty() && self.poses.len() != self.count {
             return Err(format!(
-                "key 'poses': {} start pose(s){default} for count = {}; give one \
-                 [x, y, theta] per robot",
+                "key 'poses': {} start pose(s) for count = {}; give one [x, y, theta] per \
+                 robot, or none to use the world file's [[start]] poses",
                 self.poses.len(),
                 self.count
             ));
@@ -125,17 +112,17 @@ mod tests {
     fn defaults_are_the_convoy() {
         let p = parse(json!({})).unwrap();
         assert_eq!(p.count, 5);
-        assert_eq!(p.poses[0], [2.2, 1.0, 0.0]);
+        assert!(p.poses.is_empty(), "the world's start poses");
     }
 
     #[test]
-    fn nested_motor_keys_and_alias() {
+    fn nested_motor_keys() {
         let p = parse(
-            json!({"robots": "r.urdf", "count": 1, "poses": [[1.0, 1.0, 0.0]],
+            json!({"urdf": "r.urdf", "count": 1, "poses": [[1.0, 1.0, 0.0]],
                              "motor": {"gear_ratio": 50.0}, "pid": {"kp": 1.0}}),
         )
         .unwrap();
-        assert_eq!(p.robot, "r.urdf");
+        assert_eq!(p.urdf, "r.urdf");
         assert_eq!(p.motor.gear_ratio, 50.0);
         assert_eq!(p.motor.supply_v, MotorParams::default().supply_v);
         assert_eq!(p.pid.kp, 1.0);

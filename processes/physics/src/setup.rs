@@ -39,12 +39,27 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
             params.urdf
         ))
     })?;
-    for (i, &[x, y, _]) in params.poses.iter().enumerate() {
+    // Without `poses`, the robots start where the world file says.
+    let poses: Vec<[f64; 3]> = if params.poses.is_empty() {
+        if world.starts.len() < params.count {
+            return Err(SetupError(format!(
+                "key 'poses': not given, and world file {} has {} [[start]] pose(s) for \
+                 count = {}; give one [x, y, theta] per robot in either",
+                world_path.display(),
+                world.starts.len(),
+                params.count
+            )));
+        }
+        world.starts[..params.count].to_vec()
+    } else {
+        params.poses.clone()
+    };
+    for (i, &[x, y, _]) in poses.iter().enumerate() {
         if !(0.0..=world.size[0]).contains(&x) || !(0.0..=world.size[1]).contains(&y) {
             return Err(SetupError(format!(
                 "key 'poses[{i}]' = {:?}: robot {i} would start off the floor of world '{}' \
                  ({}), which spans x ∈ [0, {}] and y ∈ [0, {}] m",
-                params.poses[i],
+                poses[i],
                 world.name,
                 world_path.display(),
                 world.size[0],
@@ -59,7 +74,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
         wheel_friction: params.wheel_friction,
         lifted: params.lifted,
     };
-    let sim = Simulation::new(&world, &robot, &params.poses, cfg);
+    let sim = Simulation::new(&world, &robot, &poses, cfg);
     match scene::first_overlap(sim.scene()) {
         None => Ok(sim),
         Some(Overlap::Obstacle { robot: i, obstacle }) => {
@@ -67,7 +82,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
             Err(SetupError(format!(
                 "key 'poses[{i}]' = {:?}: robot {i} would start inside the {} centred at \
                  ({}, {}) of world file {}; move it to free floor",
-                params.poses[i],
+                poses[i],
                 scene::kind_name(o.kind),
                 o.center[0],
                 o.center[1],
@@ -77,7 +92,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
         Some(Overlap::Robot { robot: i, other: j }) => Err(SetupError(format!(
             "keys 'poses[{i}]' = {:?} and 'poses[{j}]' = {:?}: robots {i} and {j} would \
              start inside each other; space them further apart",
-            params.poses[i], params.poses[j]
+            poses[i], poses[j]
         ))),
     }
 }

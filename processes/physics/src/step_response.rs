@@ -82,6 +82,8 @@ pub fn empty_world() -> World {
         size: [10.0, 10.0],
         obstacles: Vec::new(),
         surveys: Vec::new(),
+        starts: Vec::new(),
+        goals: Vec::new(),
     }
 }
 

@@ -8,4 +8,4 @@ pub mod robot;
 pub mod world;
 
 pub use robot::{RobotError, RobotModel, load_robot};
-pub use world::{Obstacle, ObstacleKind, Shape, Survey, World, WorldError, load_world};
+pub use world::{Obstacle, ObstacleKind, Shape, Survey, Waypoint, World, WorldError, load_world};

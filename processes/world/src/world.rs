@@ -25,7 +25,17 @@
 //! name = "south wall to bench"
 //! at = [3.5, 1.0]          # a free point between the two surfaces
 //! direction = [0.0, 1.0]   # the line through it; the surfaces are the first hits either way
+//!
+//! [[start]]                # where robot 0, 1, … start: [x, y, yaw] (m, m, rad)
+//! pose = [2.2, 1.0, 0.0]
+//!
+//! [[goal]]                 # waypoints a scenario drives to, in order
+//! name = "A"
+//! at = [5.0, 1.1]
 //! ```
+//!
+//! Starts and goals belong to the world because they are designed with it (a free start line,
+//! a route clear of obstacles): changing the world changes them too.
 
 use serde::Deserialize;
 use std::path::Path;
@@ -68,6 +78,25 @@ pub struct World {
     pub obstacles: Vec<Obstacle>,
     /// Surface-to-surface distances to check maps against (the reference's map-scale test).
     pub surveys: Vec<Survey>,
+    /// Start poses `[x, y, yaw]` of robot 0, 1, …
+    pub starts: Vec<[f64; 3]>,
+    /// Waypoints, in order.
+    pub goals: Vec<Waypoint>,
+}
+
+/// A named point a scenario drives to.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Waypoint {
+    pub name: String,
+    /// Position in the map frame, m.
+    pub at: [f64; 2],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Start {
+    pose: [f64; 3],
 }
 
 /// A line between two surfaces through a free point; its true length comes from the world.
@@ -99,6 +128,10 @@ struct File {
     cylinder: Vec<Cylinder>,
     #[serde(default)]
     survey: Vec<Survey>,
+    #[serde(default)]
+    start: Vec<Start>,
+    #[serde(default)]
+    goal: Vec<Waypoint>,
 }
 
 #[derive(Deserialize)]
@@ -217,7 +250,29 @@ pub fn parse_world(text: &str) -> Result<World, String> {
         size: f.world.size,
         obstacles,
         surveys: Vec::new(),
+        starts: f.start.iter().map(|s| s.pose).collect(),
+        goals: f.goal,
     };
+    let on_floor = |p: [f64; 2]| {
+        p.iter().all(|v| v.is_finite())
+            && (0.0..=f.world.size[0]).contains(&p[0])
+            && (0.0..=f.world.size[1]).contains(&p[1])
+    };
+    for (i, p) in world.starts.iter().enumerate() {
+        if !on_floor([p[0], p[1]]) || !p[2].is_finite() {
+            return Err(format!(
+                "start[{i}].pose {p:?} must lie on the floor with a finite yaw"
+            ));
+        }
+    }
+    for (i, g) in world.goals.iter().enumerate() {
+        if !on_floor(g.at) || world.clearance(g.at) <= 0.0 {
+            return Err(format!(
+                "goal[{i}] ('{}'): 'at' {:?} must lie on the floor, outside every obstacle",
+                g.name, g.at
+            ));
+        }
+    }
     for (i, s) in f.survey.iter().enumerate() {
         positive(
             format!("survey[{i}].direction length"),

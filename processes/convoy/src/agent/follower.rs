@@ -31,8 +31,11 @@ pub struct FollowerParams {
     pub stop_margin_m: f64,
     /// Speed allowed per metre of gap beyond safety distance and margin, s⁻¹.
     pub k_gap: f64,
-    /// Footprint half extents (x, y) and its centre's offset ahead of base_link, m.
+    /// Footprint half extents (x, y) and its centre's offset ahead of base_link, m: the URDF's
+    /// chassis box (set by the node from the robot description, not a launch-file key).
+    #[serde(skip)]
     pub footprint_half_m: [f64; 2],
+    #[serde(skip)]
     pub footprint_offset_m: f64,
     pub v_max: f64,
     pub omega_max: f64,
@@ -48,6 +51,7 @@ impl Default for FollowerParams {
             safety_distance_m: 0.15,
             stop_margin_m: 0.05,
             k_gap: 1.5,
+            // The convoy robot's chassis; the node takes it from the URDF.
             footprint_half_m: [0.10, 0.09],
             footprint_offset_m: -0.02,
             v_max: 0.25,

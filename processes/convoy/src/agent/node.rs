@@ -21,10 +21,15 @@ pub struct Geometry {
 }
 
 /// Checks `p` and reads the robot's geometry from its URDF, before the node joins the group.
-pub fn setup(p: Params, identity: &caravan::NodeIdentity) -> Result<(Params, Geometry), String> {
+pub fn setup(
+    mut p: Params,
+    identity: &caravan::NodeIdentity,
+) -> Result<(Params, Geometry), String> {
     p.validate()?;
     let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
         .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+    p.follower.footprint_half_m = [robot.chassis_half_extents[0], robot.chassis_half_extents[1]];
+    p.follower.footprint_offset_m = robot.chassis_center[0];
     let geometry = Geometry {
         wheel_radius_m: robot.wheel_radius,
         wheel_separation_m: robot.wheel_separation(),

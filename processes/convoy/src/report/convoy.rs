@@ -2,12 +2,17 @@
 //! order, and each follower's cross-track error to its predecessor's and the leader's paths.
 //!
 //! Definitions (Caravan's, documented in report.json's doc):
-//! - gap: distance between two robots' footprint rectangles (0.20 × 0.18 m, centred 0.02 m
-//!   behind base_link, from the URDF), at every recorded physics stamp;
+//! - gap: distance between two robots' footprint rectangles (the URDF's chassis box: 0.20 ×
+//!   0.18 m, centred 0.02 m behind base_link, for the convoy robot), from their true poses
+//!   (`robot/<i>/pose_true`), at every recorded physics stamp; `min_gap_m` is the smallest gap
+//!   between any two robots (not only neighbours) over the run: 0 when they touch, below the
+//!   reference's 0.15 m safety distance when a follower came too close;
 //! - order kept: along the leader's path (extended 5 m backwards along its start heading, so
 //!   the followers' start line counts), every robot stays behind its predecessor, within 5 cm;
 //! - cross-track error: distance from a follower's position to the other robot's whole path
-//!   (extended the same way), over all recorded samples.
+//!   (extended the same way), over all recorded samples; `cross_track_to_leader_mean_m` and
+//!   `cross_track_to_predecessor_mean_m` are the means of the followers' means (the measure of
+//!   docs/fig9a.md).
 
 use super::plot::Plot;
 use caravan_report::RecordedMessage;
@@ -114,9 +119,20 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
         "min_gap_m": min_gap,
         "collisions": collisions,
         "order_kept": order_kept,
+        "cross_track_to_leader_mean_m": mean_over(&followers, "cross_track_to_leader_m"),
+        "cross_track_to_predecessor_mean_m": mean_over(&followers, "cross_track_to_predecessor_m"),
         "followers": followers,
         "plot": "trajectories.svg",
     }))
+}
+
+/// The mean over the followers of their mean cross-track error `key` (the Fig. 9a measure).
+fn mean_over(followers: &[Value], key: &str) -> Option<f64> {
+    let means: Vec<f64> = followers
+        .iter()
+        .filter_map(|f| f[key]["mean"].as_f64())
+        .collect();
+    (!means.is_empty()).then(|| means.iter().sum::<f64>() / means.len() as f64)
 }
 
 /// A robot's path, with 5 m prepended behind its start along its start heading.

@@ -37,6 +37,8 @@ pub fn room(wall_x: Option<f64>) -> World {
         size: [4.0, 4.0],
         obstacles,
         surveys: Vec::new(),
+        starts: Vec::new(),
+        goals: Vec::new(),
     }
 }
 
