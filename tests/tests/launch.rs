@@ -500,3 +500,77 @@ required = false
     );
     assert_eq!(node(&s.report(), "ping")["exit_status"], "exited 0");
 }
+
+/// Included by the tests below; line numbers refer to it.
+const BASE: &str = r#"[group]
+name = "base"
+clock = "lockstep"
+duration = "30s"
+seed = 3
+record = ["demo/*"]
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+rate = "10Hz"
+
+[[process]]
+name = "pong"
+exec = "caravan-demo pong"
+on = "demo/ping"
+params = { gain = 2.0 }
+"#;
+
+/// A file that includes BASE (changing it with `set`) and adds three templated processes.
+const INCLUDING: &str = r#"duration = "2s"
+
+[[include]]
+file = "base.toml"
+set = ["process.ping.rate=20Hz"]
+
+[[process]]
+name = "noise-{i}"
+for = "i in 0..3"
+exec = "caravan-demo noise"
+rate = "7Hz"
+"#;
+
+#[test]
+fn included_files_and_templates_run_as_one_group() {
+    let s = Scenario::new("include", INCLUDING);
+    std::fs::write(s.dir.join("base.toml"), BASE).unwrap();
+    let out = s.run(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = s.report();
+    assert_eq!(report["run"]["outcome"], "completed");
+    assert_eq!(report["run"]["sim_time_s"], 2.0);
+    let mut names: Vec<&str> = report["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n["name"].as_str().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["noise-0", "noise-1", "noise-2", "ping", "pong"]);
+    // The include's `set` reached the included process: 20 Hz for 2 s, both ends included.
+    assert_eq!(node(&report, "ping")["steps"], 41);
+    for n in ["noise-0", "noise-1", "noise-2", "pong"] {
+        assert_eq!(node(&report, n)["exit_status"], "exited 0", "{n}");
+    }
+}
+
+#[test]
+fn error_in_an_included_file_names_that_file_and_line() {
+    let s = Scenario::new("include-bad", INCLUDING);
+    let base = s.dir.join("base.toml");
+    let bad = BASE.replace("gain = 2.0 }", "gain = 2.0 }\nrestart = \"sometimes\"");
+    std::fs::write(&base, bad).unwrap();
+    assert_bad_input(
+        &s,
+        &[],
+        &[
+            &format!("{}:18: process 'pong', key 'restart'", base.display()),
+            "'sometimes' is not a restart policy",
+        ],
+    );
+}

@@ -1,7 +1,17 @@
-//! Launch files: the model, parsing with `--set` overrides, and validation.
+//! Launch files: the model, reading with includes, templates, arguments and `--set`
+//! overrides, and validation.
 
 pub mod args;
+mod check;
+mod convert;
+mod include;
 pub mod load;
 pub mod model;
 pub mod overrides;
+mod sections;
+mod source;
 pub mod suggest;
+mod template;
+
+#[cfg(test)]
+mod tests;

@@ -16,8 +16,11 @@ pub struct LaunchFile {
     pub hosts: BTreeMap<String, HostSpec>,
     pub links: Vec<LinkSpec>,
     pub processes: Vec<ProcessSpec>,
-    /// The file's text after `--set` overrides; the launcher saves it in the run directory so a
-    /// run can be repeated exactly.
+    /// The `[[report]]` entries, in file order (included files' first).
+    pub reports: Vec<ReportSpec>,
+    /// The file after includes, templates, arguments and `--set` overrides; the launcher saves
+    /// it in the run directory so a run can be repeated exactly. It names executables and
+    /// paths as written, so an included file's relative paths stay relative to its directory.
     pub resolved_toml: String,
 }
 
@@ -146,6 +149,19 @@ pub struct ProcessSpec {
     /// Whether the group stops when this process fails for good.
     pub required: bool,
     pub env: BTreeMap<String, String>,
+    /// The directory of the launch file that defined the process, absolute: relative `exec`
+    /// paths start there, and the process gets it as `CARAVAN_LAUNCH_DIR`.
+    pub launch_dir: PathBuf,
+}
+
+/// One `[[report]]` entry: an executable that computes report sections after the run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportSpec {
+    pub exec: Exec,
+    /// Free-form parameters; always a JSON object.
+    pub params: serde_json::Value,
+    /// The directory of the launch file that defined the entry, absolute.
+    pub launch_dir: PathBuf,
 }
 
 impl ProcessSpec {

@@ -34,10 +34,19 @@ pub struct Rejected {
 
 /// Applies each override in order (a later one wins); returns those applied and those not.
 pub fn apply(doc: &mut DocumentMut, sets: &[String]) -> (Vec<Applied>, Vec<Rejected>) {
+    apply_with(doc, sets, &|v| Ok(v))
+}
+
+/// [`apply`], passing each value through `map` first (to substitute arguments in it).
+pub fn apply_with(
+    doc: &mut DocumentMut,
+    sets: &[String],
+    map: &dyn Fn(Value) -> Result<Value, String>,
+) -> (Vec<Applied>, Vec<Rejected>) {
     let mut applied = Vec::new();
     let mut rejected = Vec::new();
     for text in sets {
-        match apply_one(doc, text) {
+        match apply_one(doc, text, map) {
             Ok(path) => applied.push(Applied {
                 text: text.clone(),
                 path,
@@ -58,7 +67,18 @@ pub fn parse_value(raw: &str) -> Value {
         .unwrap_or_else(|_| Value::from(raw.trim()))
 }
 
-fn apply_one(doc: &mut DocumentMut, text: &str) -> Result<Vec<Seg>, String> {
+/// Whether an override sets an argument (`args.NAME=…`): those apply before substitution.
+pub fn targets_args(text: &str) -> bool {
+    let key = text.split_once('=').map_or(text, |(k, _)| k);
+    Key::parse(key.trim())
+        .is_ok_and(|keys| keys.first().is_some_and(|k| k.get() == super::args::TABLE))
+}
+
+fn apply_one(
+    doc: &mut DocumentMut,
+    text: &str,
+    map: &dyn Fn(Value) -> Result<Value, String>,
+) -> Result<Vec<Seg>, String> {
     let (key, raw) = text
         .split_once('=')
         .ok_or("expected KEY=VALUE, e.g. --set group.seed=3")?;
@@ -70,7 +90,7 @@ fn apply_one(doc: &mut DocumentMut, text: &str) -> Result<Vec<Seg>, String> {
     let Some((last, parents)) = keys.split_last() else {
         return Err("empty key".into());
     };
-    let mut value = parse_value(raw);
+    let mut value = map(parse_value(raw))?;
     let mut path = Vec::new();
     let mut table: &mut dyn TableLike = doc.as_table_mut();
     let mut i = 0;
@@ -126,7 +146,7 @@ fn apply_one(doc: &mut DocumentMut, text: &str) -> Result<Vec<Seg>, String> {
 /// tables must already exist, which catches misspelt paths.
 fn may_create(path: &[Seg], seg: &str) -> bool {
     path.len() >= 2
-        && path[0].is_key("process")
+        && (path[0].is_key("process") || path[0].is_key("report"))
         && ((path.len() == 2 && seg == "params") || path[2].is_key("params"))
 }
 

@@ -107,12 +107,8 @@ fn plan(lf: &LaunchFile) -> Vec<Planned> {
                 Exec::Command(words) => {
                     let first = &words[0];
                     let program = if first.contains('/') {
-                        let p = PathBuf::from(first);
-                        if p.is_absolute() {
-                            p
-                        } else {
-                            lf.path.parent().unwrap_or(Path::new(".")).join(p)
-                        }
+                        // Relative to the file that defined the process (absolute).
+                        spec.launch_dir.join(first)
                     } else {
                         resolve_exec(first).unwrap_or_else(|| PathBuf::from(first))
                     };
@@ -120,8 +116,15 @@ fn plan(lf: &LaunchFile) -> Vec<Planned> {
                 }
             };
             args.extend(spec.args.iter().cloned());
+            // Relative paths in params (worlds, robot descriptions) are relative to the file
+            // that defined the process, which may be an included one; the process's own env
+            // may still say otherwise.
+            let mut spec = spec.clone();
+            spec.env
+                .entry(caravan::env_vars::LAUNCH_DIR.to_string())
+                .or_insert_with(|| spec.launch_dir.display().to_string());
             Planned {
-                spec: spec.clone(),
+                spec,
                 program,
                 args,
             }
@@ -218,16 +221,6 @@ fn run_group(
     env.insert(
         caravan::env_vars::SEED.to_string(),
         lf.group.seed.to_string(),
-    );
-    // Relative paths in params (worlds, robot descriptions) are relative to the launch file.
-    let parent = lf
-        .path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    env.insert(
-        caravan::env_vars::LAUNCH_DIR.to_string(),
-        std::path::absolute(parent)?.display().to_string(),
     );
     if let Some(net) = network::resolve(lf) {
         env.insert(

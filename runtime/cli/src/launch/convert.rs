@@ -1,0 +1,194 @@
+//! Converters: an item of the document to a typed value, or a message saying what was expected.
+
+use super::model::Restart;
+use super::suggest;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Duration;
+use toml_edit::{Item, TableLike, Value};
+
+pub fn found(item: &Item) -> String {
+    match item {
+        Item::Value(Value::String(s)) => format!("string {:?}", s.value()),
+        Item::Value(Value::Integer(i)) => format!("integer {}", i.value()),
+        Item::Value(Value::Float(f)) => format!("float {}", f.value()),
+        Item::Value(Value::Boolean(b)) => format!("boolean {}", b.value()),
+        Item::Value(Value::Datetime(d)) => format!("datetime {}", d.value()),
+        Item::Value(Value::Array(_)) => "an array".into(),
+        Item::ArrayOfTables(_) => "an array of tables".into(),
+        _ => "a table".into(),
+    }
+}
+
+pub fn expected(what: &str, item: &Item) -> String {
+    format!("expected {what}, found {}", found(item))
+}
+
+pub fn string(item: &Item) -> Result<String, String> {
+    item.as_str()
+        .map(str::to_string)
+        .ok_or_else(|| expected("a string", item))
+}
+
+pub fn probability(item: &Item) -> Result<f64, String> {
+    let f = number(item)?;
+    if (0.0..=1.0).contains(&f) {
+        Ok(f)
+    } else {
+        Err(format!("must be between 0.0 and 1.0, found {f}"))
+    }
+}
+
+pub fn unsigned(item: &Item) -> Result<u64, String> {
+    item.as_integer()
+        .and_then(|i| u64::try_from(i).ok())
+        .ok_or_else(|| expected("a non-negative integer", item))
+}
+
+pub fn number(item: &Item) -> Result<f64, String> {
+    item.as_float()
+        .or_else(|| item.as_integer().map(|i| i as f64))
+        .ok_or_else(|| expected("a number", item))
+}
+
+pub fn boolean(item: &Item) -> Result<bool, String> {
+    item.as_bool()
+        .ok_or_else(|| expected("true or false", item))
+}
+
+pub fn strings(item: &Item) -> Result<Vec<String>, String> {
+    let list = item
+        .as_array()
+        .ok_or_else(|| expected("an array of strings", item))?;
+    list.iter()
+        .map(|v| v.as_str().map(str::to_string))
+        .collect::<Option<_>>()
+        .ok_or_else(|| expected("an array of strings", item))
+}
+
+pub fn patterns(item: &Item) -> Result<Vec<String>, String> {
+    let list = strings(item)?;
+    match list
+        .iter()
+        .find(|p| p.trim().is_empty() || p.contains("***"))
+    {
+        Some(bad) => Err(format!("'{bad}' is not a topic pattern")),
+        None => Ok(list),
+    }
+}
+
+pub fn duration(item: &Item) -> Result<Duration, String> {
+    caravan::parse_duration(&string(item)?).map_err(|e| e.to_string())
+}
+
+pub fn positive_duration(item: &Item) -> Result<Duration, String> {
+    let d = duration(item)?;
+    if d.is_zero() {
+        return Err("must be greater than zero".into());
+    }
+    Ok(d)
+}
+
+pub fn restart(item: &Item) -> Result<Restart, String> {
+    let text = string(item)?;
+    text.parse::<Restart>()
+        .map_err(|e| match suggest::nearest(&text, Restart::NAMES) {
+            Some(near) => format!("'{text}' is not a restart policy; did you mean '{near}'?"),
+            None => e,
+        })
+}
+
+pub fn env(item: &Item) -> Result<BTreeMap<String, String>, String> {
+    let table = item
+        .as_table_like()
+        .ok_or_else(|| expected("a table of strings", item))?;
+    let mut env = BTreeMap::new();
+    for (key, value) in table.iter() {
+        if key.is_empty() || key.contains(['=', '\0']) {
+            return Err(format!("'{key}' is not an environment variable name"));
+        }
+        let value = value
+            .as_str()
+            .ok_or_else(|| format!("value of '{key}': {}", expected("a string", value)))?;
+        env.insert(key.to_string(), value.to_string());
+    }
+    Ok(env)
+}
+
+pub fn params(item: &Item) -> Result<serde_json::Value, String> {
+    if !item.is_table_like() {
+        return Err(expected("a table", item));
+    }
+    to_json(item, "params")
+}
+
+/// Params are handed to nodes as JSON; TOML datetimes become strings.
+pub fn to_json(item: &Item, at: &str) -> Result<serde_json::Value, String> {
+    use serde_json::Value as J;
+    let table = |t: &dyn TableLike| -> Result<J, String> {
+        t.iter()
+            .map(|(k, v)| Ok((k.to_string(), to_json(v, &format!("{at}.{k}"))?)))
+            .collect::<Result<serde_json::Map<_, _>, String>>()
+            .map(J::Object)
+    };
+    Ok(match item {
+        Item::None => J::Null,
+        Item::Table(t) => table(t)?,
+        Item::ArrayOfTables(a) => J::Array(a.iter().map(|t| table(t)).collect::<Result<_, _>>()?),
+        Item::Value(v) => match v {
+            Value::String(s) => J::String(s.value().clone()),
+            Value::Integer(i) => J::from(*i.value()),
+            Value::Float(f) => serde_json::Number::from_f64(*f.value())
+                .map(J::Number)
+                .ok_or_else(|| format!("{at}: {} cannot be passed as a parameter", f.value()))?,
+            Value::Boolean(b) => J::Bool(*b.value()),
+            Value::Datetime(d) => J::String(d.value().to_string()),
+            Value::Array(a) => J::Array(
+                a.iter()
+                    .map(|v| to_json(&Item::Value(v.clone()), at))
+                    .collect::<Result<_, _>>()?,
+            ),
+            Value::InlineTable(t) => table(t)?,
+        },
+    })
+}
+
+/// Parses a bandwidth like `"54Mbit"`, `"500kbit"` or `"1Gbit"` into bits per second.
+pub fn parse_bandwidth(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let scale = match unit.trim().to_ascii_lowercase().as_str() {
+        "bit" => 1.0,
+        "kbit" => 1e3,
+        "mbit" => 1e6,
+        "gbit" => 1e9,
+        _ => f64::NAN,
+    };
+    let bps = number
+        .parse::<f64>()
+        .map(|n| (n * scale).round())
+        .unwrap_or(f64::NAN);
+    if bps.is_finite() && bps >= 1.0 && bps < u64::MAX as f64 {
+        Ok(bps as u64)
+    } else {
+        Err(format!(
+            "'{text}' is not a bandwidth; write a number and a unit: bit, kbit, Mbit or Gbit (\"54Mbit\")"
+        ))
+    }
+}
+
+pub fn is_process_name(name: &str) -> bool {
+    !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+}
+
+pub fn is_executable(path: &Path) -> bool {
+    use std::os::unix::fs::PermissionsExt;
+    path.metadata()
+        .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
+}
