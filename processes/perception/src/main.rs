@@ -39,8 +39,11 @@ struct Params {
     mode: Mode,
     robot: usize,
     /// The robot's start pose [x, y, θ] in the map frame: SLAM's map origin is laid so that
-    /// map and world frames agree, and odometry counts from it.
-    initial_pose: [f64; 3],
+    /// map and world frames agree, and odometry counts from it. Default: the `world` file's
+    /// `[[start]]` pose of `robot`.
+    initial_pose: Option<[f64; 3]>,
+    /// The world file, relative to the launch file, when `initial_pose` is not given.
+    world: Option<String>,
     #[serde(default)]
     localisation: Localisation,
     #[serde(default)]
@@ -65,7 +68,7 @@ fn default_save_map() -> String {
 
 impl Params {
     fn validate(&self) -> Result<(), String> {
-        if !self.initial_pose.iter().all(|v| v.is_finite()) {
+        if !self.initial_pose.iter().flatten().all(|v| v.is_finite()) {
             return Err("key 'initial_pose': must be three finite numbers [x, y, theta]".into());
         }
         if !(self.map_rate_hz > 0.0 && self.map_rate_hz.is_finite()) {
@@ -82,9 +85,30 @@ impl Params {
         Ok(())
     }
 
-    fn initial(&self) -> Pose2D {
-        let [x, y, theta] = self.initial_pose;
-        Pose2D { x, y, theta }
+    /// The start pose: `initial_pose`, else the world file's start of this robot.
+    fn initial(&self, identity: &caravan::NodeIdentity) -> Result<Pose2D, String> {
+        let [x, y, theta] = match (self.initial_pose, &self.world) {
+            (Some(pose), _) => pose,
+            (None, Some(file)) => {
+                let world = caravan_world::load_world(&identity.resolve_path(file))
+                    .map_err(|e| format!("key 'world': world file {e}"))?;
+                *world.starts.get(self.robot).ok_or_else(|| {
+                    format!(
+                        "key 'initial_pose': not given, and world file {file} has no [[start]] \
+                         pose for robot {}",
+                        self.robot
+                    )
+                })?
+            }
+            (None, None) => {
+                return Err(
+                    "key 'initial_pose': give the start pose [x, y, theta], or a 'world' \
+                            file whose [[start]] poses include this robot"
+                        .into(),
+                );
+            }
+        };
+        Ok(Pose2D { x, y, theta })
     }
 }
 
@@ -99,6 +123,7 @@ fn main() -> ExitCode {
         "caravan-perception",
         |p: Params, identity| {
             p.validate()?;
+            let initial = p.initial(identity)?;
             let wheels = match (&p.urdf, p.mode) {
                 (Some(urdf), _) => {
                     let robot = caravan_world::load_robot(&identity.resolve_path(urdf))
@@ -113,18 +138,18 @@ fn main() -> ExitCode {
                 }
                 (None, Mode::Slam) => None,
             };
-            Ok((p, wheels))
+            Ok((p, initial, wheels))
         },
-        |node, (p, wheels)| match (p.mode, wheels) {
-            (Mode::Odometry, Some(wheels)) => odometry(node, &p, &wheels),
-            _ => slam(node, &p),
+        |node, (p, initial, wheels)| match (p.mode, wheels) {
+            (Mode::Odometry, Some(wheels)) => odometry(node, &p, initial, &wheels),
+            _ => slam(node, &p, initial),
         },
     )
 }
 
-fn slam(mut node: Node, p: &Params) -> Result<(), Error> {
+fn slam(mut node: Node, p: &Params, initial: Pose2D) -> Result<(), Error> {
     let i = p.robot;
-    let mut slam = Slam::new(p.slam.clone(), p.initial()).map_err(|message| Error::Params {
+    let mut slam = Slam::new(p.slam.clone(), initial).map_err(|message| Error::Params {
         node: node.name().to_string(),
         message: format!("key 'slam': {message}"),
     })?;
@@ -169,7 +194,7 @@ fn slam(mut node: Node, p: &Params) -> Result<(), Error> {
     Ok(())
 }
 
-fn odometry(mut node: Node, p: &Params, wheels: &Wheels) -> Result<(), Error> {
+fn odometry(mut node: Node, p: &Params, initial: Pose2D, wheels: &Wheels) -> Result<(), Error> {
     let i = p.robot;
     let ticks_topic = topics::encoder_ticks(i);
     let ticks = node.subscriber(&Topic::<EncoderTicks>::new(&ticks_topic))?;
@@ -179,7 +204,7 @@ fn odometry(mut node: Node, p: &Params, wheels: &Wheels) -> Result<(), Error> {
     };
     let odom_pub = node.publisher(&Topic::<Odometry>::new(&topics::odometry(i)))?;
     let pose_pub = node.publisher(&Topic::<Pose2D>::new(&topics::pose(i)))?;
-    let mut odometry = WheelOdometry::new(p.initial(), wheels.radius_m, wheels.separation_m);
+    let mut odometry = WheelOdometry::new(initial, wheels.radius_m, wheels.separation_m);
     node.run(Trigger::on(&ticks_topic), |_| {
         while let Some(msg) = ticks.receive()? {
             let t = msg.header().stamp_ns as f64 * 1e-9;

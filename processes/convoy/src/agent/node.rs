@@ -30,6 +30,16 @@ pub fn setup(
         .map_err(|e| format!("key 'urdf': robot description {e}"))?;
     p.follower.footprint_half_m = [robot.chassis_half_extents[0], robot.chassis_half_extents[1]];
     p.follower.footprint_offset_m = robot.chassis_center[0];
+    if let (Mode::Leader, true, Some(file)) = (p.mode, p.leader.goals.is_empty(), &p.world) {
+        let world = caravan_world::load_world(&identity.resolve_path(file))
+            .map_err(|e| format!("key 'world': world file {e}"))?;
+        if world.goals.is_empty() {
+            return Err(format!(
+                "key 'leader.goals': none given, and world file {file} has no [[goal]]s"
+            ));
+        }
+        p.leader.goals = world.goals.iter().map(|g| g.at).collect();
+    }
     let geometry = Geometry {
         wheel_radius_m: robot.wheel_radius,
         wheel_separation_m: robot.wheel_separation(),

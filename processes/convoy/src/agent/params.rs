@@ -29,6 +29,8 @@ pub struct Params {
     pub cmd_vel_timeout_s: f64,
     /// The robot's URDF, relative to the launch file: wheel radius and separation (required).
     pub urdf: String,
+    /// Leader: the world file whose `[[goal]]`s are the goals when `leader.goals` is empty.
+    pub world: Option<String>,
     pub follower: FollowerParams,
     pub leader: LeaderParams,
 }
@@ -43,6 +45,7 @@ impl Default for Params {
             cmd_vel_topic: None,
             cmd_vel_timeout_s: 0.5,
             urdf: String::new(),
+            world: None,
             follower: FollowerParams::default(),
             leader: LeaderParams::default(),
         }
@@ -56,7 +59,7 @@ impl Params {
             Mode::Follower if self.robot == 0 && self.predecessor_topic.is_none() => {
                 Err("key 'robot': robot 0 has no predecessor; make it the leader (mode = \"leader\") or set 'predecessor_topic'".into())
             }
-            Mode::Leader if self.leader.goals.is_empty() => Err("key 'leader.goals': a leader needs at least one goal".into()),
+            Mode::Leader if self.leader.goals.is_empty() && self.world.is_none() => Err("key 'leader.goals': a leader needs at least one goal (or a 'world' file with [[goal]]s)".into()),
             _ if self.urdf.is_empty() => Err(
                 "key 'urdf': give the robot's URDF (its wheel radius and separation)".into(),
             ),

@@ -9,7 +9,7 @@ use crate::launch::model::{Exec, LaunchFile};
 use crate::report;
 use anyhow::{Context, Result};
 use caravan::ClockMode;
-use caravan_report::{HostFacts, Latency, RunFacts};
+use caravan_report::{HostFacts, Latency, ReportEntry, RunFacts};
 use clap::Args;
 use crossbeam::channel::{RecvTimeoutError, unbounded};
 use driver::{Control, DriverConfig};
@@ -132,6 +132,21 @@ fn plan(lf: &LaunchFile) -> Vec<Planned> {
         .collect()
 }
 
+/// The launch file's `[[report]]` entries, as the run's facts keep them.
+fn report_entries(lf: &LaunchFile) -> Vec<ReportEntry> {
+    lf.reports
+        .iter()
+        .map(|r| ReportEntry {
+            exec: match &r.exec {
+                Exec::Workspace(name) => vec![name.clone()],
+                Exec::Command(words) => words.clone(),
+            },
+            params: r.params.clone(),
+            launch_dir: r.launch_dir.display().to_string(),
+        })
+        .collect()
+}
+
 /// Runs the group; returns the process exit code.
 pub fn launch(args: &LaunchArgs) -> Result<u8> {
     let console = Console::new(args.quiet);
@@ -142,6 +157,18 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
             return Ok(EXIT_BAD_INPUT);
         }
     };
+    // Report plugins check their params now, so bad ones start nothing.
+    let reports = report_entries(&lf);
+    for entry in &reports {
+        if let Err(why) = report::check(entry) {
+            eprintln!(
+                "caravan: {}: report '{}': {why}",
+                lf.path.display(),
+                entry.exec.join(" ")
+            );
+            return Ok(EXIT_BAD_INPUT);
+        }
+    }
     let group = lf.group.name.clone();
     if crate::clean::group_is_running(&group)? {
         eprintln!(
@@ -161,7 +188,10 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
         dir.display()
     ));
 
-    let result = run_group(&lf, &dir, &config_path, &console);
+    let result = run_group(&lf, &dir, &config_path, &console).map(|mut facts| {
+        facts.reports = reports;
+        facts
+    });
     // Whatever happened, leave no shared memory of the group behind.
     let _ = caravan::group::remove_resources(&group);
     let facts = result?;

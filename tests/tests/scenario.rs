@@ -1,0 +1,119 @@
+//! A tiny scenario added without touching the launcher: a demo group and its own report
+//! plugin (`caravan-count-report`, in this crate), named in the launch file.
+
+use caravan_tests::{Scenario, workspace_bin};
+use serde_json::Value;
+use std::process::Output;
+
+/// A pingpong group whose report plugin counts `demo/ping` and adds up its `x` field.
+fn tiny(report_params: &str) -> String {
+    format!(
+        r#"clock = "lockstep"
+duration = "5s"
+seed = 2
+record = ["demo/*"]
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+rate = "10Hz"
+
+[[process]]
+name = "pong"
+exec = "caravan-demo pong"
+on = "demo/ping"
+
+[[report]]
+exec = "caravan-count-report"
+params = {report_params}
+"#
+    )
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn read_json(path: &std::path::Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn a_scenario_report_plugin_adds_its_section() {
+    // The plugin binary is built with the workspace's binaries.
+    workspace_bin("caravan-count-report");
+    let s = Scenario::new("tiny", &tiny(r#"{ topic = "demo/ping", field = "x" }"#));
+    let out = s.run(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = s.report();
+    // ping steps at 0, 0.1, …, 5.0 s and publishes its step index as x.
+    assert_eq!(report["count"]["messages"], 51);
+    assert_eq!(report["count"]["sum"], (0..51).sum::<i32>() as f64);
+    assert_eq!(report["count"]["topic"], "demo/ping");
+    // The generic report is still there, and the recording agrees with the plugin.
+    let ping = report["topics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["name"] == "demo/ping")
+        .unwrap();
+    assert_eq!(ping["messages"], 51);
+    let dir = s.run_dirs().pop().unwrap();
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(
+        md.contains("## Count\n\n51 messages on `demo/ping`."),
+        "{md}"
+    );
+
+    // `caravan report` reruns the plugin: same section after the files are gone.
+    std::fs::remove_file(dir.join("report.json")).unwrap();
+    std::fs::remove_dir_all(dir.join("sections")).unwrap();
+    let again = std::process::Command::new(workspace_bin("caravan"))
+        .arg("report")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert_eq!(
+        read_json(&dir.join("report.json"))["count"],
+        report["count"]
+    );
+}
+
+#[test]
+fn bad_plugin_params_start_nothing() {
+    workspace_bin("caravan-count-report");
+    let s = Scenario::new("tiny-bad", &tiny(r#"{ topic = "demo/ping", feild = "x" }"#));
+    let out = s.run(&[]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains("caravan-count-report") && err.contains("'feild'"),
+        "{err}"
+    );
+    assert!(s.run_dirs().is_empty(), "a run directory was created");
+    assert!(s.shm_entries().is_empty());
+}
+
+#[test]
+fn a_failing_plugin_fails_the_launch_but_keeps_the_report() {
+    workspace_bin("caravan-count-report");
+    let s = Scenario::new(
+        "tiny-fail",
+        &tiny(r#"{ topic = "demo/ping", fail = true }"#),
+    );
+    let out = s.run(&[]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let report = s.report();
+    assert_eq!(report["run"]["outcome"], "completed");
+    assert!(report.get("count").is_none());
+    let failed = &report["failed_sections"][0];
+    assert_eq!(failed["exec"], "caravan-count-report");
+    assert!(
+        failed["message"]
+            .as_str()
+            .unwrap()
+            .contains("asked to fail after reading 51 messages"),
+        "{failed}"
+    );
+}
