@@ -156,7 +156,7 @@ def agent():
     if p.urdf is None:
         raise CaravanError("key 'urdf': give the robot's URDF (its wheel radius and separation)")
     i = p.robot
-    r, sep = wheel_geometry(node.resolve_path(p.urdf))
+    r, sep = wheel_geometry(node.identity.resolve_path(p.urdf))
     own = node.subscriber(Pose2D, p.pose_topic or topics.pose_true(i))
     predecessor = node.subscriber(Pose2D, p.predecessor_topic or topics.pose_true(i - 1))
     setpoint = node.publisher(WheelSetpoint, topics.wheel_setpoint(i))

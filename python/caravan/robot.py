@@ -5,7 +5,7 @@ it (processes/world/src/robot.rs): the two continuous joints are the wheels, eac
 
 import xml.etree.ElementTree as ET
 
-from .node import CaravanError
+from .identity import CaravanError
 
 
 def wheel_geometry(path):
