@@ -129,13 +129,13 @@ mod tests {
     }
 
     #[test]
-    fn nested_motor_keys_and_alias() {
+    fn nested_motor_keys() {
         let p = parse(
-            json!({"robots": "r.urdf", "count": 1, "poses": [[1.0, 1.0, 0.0]],
+            json!({"urdf": "r.urdf", "count": 1, "poses": [[1.0, 1.0, 0.0]],
                              "motor": {"gear_ratio": 50.0}, "pid": {"kp": 1.0}}),
         )
         .unwrap();
-        assert_eq!(p.robot, "r.urdf");
+        assert_eq!(p.urdf, "r.urdf");
         assert_eq!(p.motor.gear_ratio, 50.0);
         assert_eq!(p.motor.supply_v, MotorParams::default().supply_v);
         assert_eq!(p.pid.kp, 1.0);
