@@ -5,12 +5,12 @@
 //! periodically or on message arrival under a real-time or lockstep clock:
 //!
 //! ```no_run
-//! use caravan::{Node, Topic, Trigger};
+//! use caravan::{Node, Trigger};
 //! use caravan_schemas::{topics, Pose2D};
 //!
 //! # fn main() -> Result<(), caravan::Error> {
 //! let mut node = Node::from_env()?;
-//! let pose = node.publisher(&Topic::<Pose2D>::new(&topics::pose(0)))?;
+//! let pose = node.publisher(&topics::pose(0))?;
 //! node.run(Trigger::every_hz(10.0), |step| {
 //!     pose.publish(&Pose2D { x: step.now().as_secs_f64(), y: 0.0, theta: 0.0 })
 //! })?;
@@ -33,11 +33,11 @@ mod rate;
 mod stats;
 mod subscriber;
 pub mod tap;
-mod topic;
 mod transport;
 
 pub use caravan_schemas as schemas;
 pub use caravan_schemas::Header;
+pub use caravan_schemas::{Delivery, Topic};
 pub use clock::ClockMode;
 pub use entry::{EXIT_BAD_INPUT, EXIT_FAILURE, node_main};
 pub use error::Error;
@@ -49,7 +49,6 @@ pub use publisher::{Loan, Publisher};
 pub use rate::{Trigger, parse_duration, parse_rate};
 pub use stats::StepStats;
 pub use subscriber::{Received, Subscriber};
-pub use topic::{Delivery, Topic};
 
 /// Wall-clock time (CLOCK_REALTIME) in nanoseconds since the Unix epoch.
 pub fn wall_clock_ns() -> u64 {

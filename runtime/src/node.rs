@@ -95,10 +95,7 @@ impl Node {
             next_arrival_ns: Cell::new(u64::MAX),
             step_started: Cell::new(None),
         });
-        let status = Publisher::new(
-            shared.clone(),
-            &Topic::<NodeStatus>::new(caravan_schemas::topics::STATUS),
-        )?;
+        let status = Publisher::new(shared.clone(), &caravan_schemas::topics::status())?;
         let epoch_offset_ns = identity
             .epoch_ns
             .map_or(0, |epoch| crate::wall_clock_ns().saturating_sub(epoch));

@@ -47,7 +47,7 @@ impl<T: Message> Publisher<T> {
         let notifier = transport::notifier(&shared.iox, topic.name())?;
         Ok(Self {
             topic: topic.name().to_string(),
-            topic_hash: topic.hash(),
+            topic_hash: topic.name_hash(),
             port,
             notifier,
             seq: Cell::new(0),

@@ -278,30 +278,44 @@ describe! {
     Done { node_hash, now_ns, wake_ns, published }
 }
 
-/// The constant topic names of [`crate::topics`], by their Rust names.
-pub const TOPIC_CONSTANTS: &[(&str, &str)] = &[
-    ("STATUS", crate::topics::STATUS),
-    ("MAP", crate::topics::MAP),
-    ("GOAL", crate::topics::GOAL),
-    ("COLLISIONS", crate::topics::COLLISIONS),
+/// Erases the message types of [`crate::topics`] helpers, keeping how they name topics, and
+/// names each entry after its helper so that the table cannot drift from the functions.
+macro_rules! topic_names {
+    ($($constant:ident = $helper:ident),* $(,)?) => {
+        &[$((stringify!($constant), || crate::topics::$helper().name().to_owned())),*]
+    };
+    ($($helper:ident),* $(,)?) => {
+        &[$((stringify!($helper), |i| crate::topics::$helper(i).name().to_owned())),*]
+    };
+}
+
+/// A global topic helper with its message type erased: the topic's name.
+pub type GlobalTopic = fn() -> String;
+
+/// The global topics of [`crate::topics`], by the constant names other languages give them.
+pub const TOPIC_CONSTANTS: &[(&str, GlobalTopic)] = topic_names![
+    STATUS = status,
+    MAP = map,
+    GOAL = goal,
+    COLLISIONS = collisions,
 ];
 
-/// A per-robot topic helper: robot index to topic name.
+/// A per-robot topic helper with its message type erased: robot index to topic name.
 pub type RobotTopic = fn(usize) -> String;
 
 /// The per-robot topic helpers of [`crate::topics`], by their Rust names.
-pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = &[
-    ("scan", crate::topics::scan),
-    ("imu", crate::topics::imu),
-    ("pose_true", crate::topics::pose_true),
-    ("twist_true", crate::topics::twist_true),
-    ("pose", crate::topics::pose),
-    ("odometry", crate::topics::odometry),
-    ("wheel_setpoint", crate::topics::wheel_setpoint),
-    ("wheel_state", crate::topics::wheel_state),
-    ("encoder_ticks", crate::topics::encoder_ticks),
-    ("cmd_vel", crate::topics::cmd_vel),
-    ("path", crate::topics::path),
+pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
+    scan,
+    imu,
+    pose_true,
+    twist_true,
+    pose,
+    odometry,
+    wheel_setpoint,
+    wheel_state,
+    encoder_ticks,
+    cmd_vel,
+    path,
 ];
 
 /// Alignment of a field's element: a scalar's size, or a described struct's alignment.

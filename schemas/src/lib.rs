@@ -1,4 +1,4 @@
-//! Caravan message types and topic names.
+//! Caravan message types and the typed topics that carry them.
 //!
 //! Every type is `#[repr(C)]`, fixed-capacity and pointer-free so that it can live in iceoryx2
 //! shared memory and be read from C, C++ or Python with the same layout. Each carries a stable
@@ -17,6 +17,7 @@ mod map;
 mod robot;
 mod sensors;
 mod status;
+mod topic;
 pub mod topics;
 
 pub use fixed::{FixedString, FixedVec};
@@ -26,6 +27,7 @@ pub use map::{Goal, MAP_MAX_CELLS, MAP_MAX_SIDE, OccupancyGrid, PATH_MAX_POSES, 
 pub use robot::{Collision, EncoderTicks, Odometry, WheelSetpoint, WheelState};
 pub use sensors::{Imu, LaserScan, SCAN_MAX_BEAMS};
 pub use status::NodeStatus;
+pub use topic::{Delivery, Topic};
 
 /// A type that can travel on a Caravan topic.
 ///

@@ -1,58 +1,124 @@
-//! Topic names, ROS style and scoped by robot. Use these helpers instead of string literals so
-//! that a typo is a compile error, not a silent missing connection.
+//! The well-known topics, ROS style and scoped by robot, each bound to its message type. Open
+//! them through these helpers (`node.subscriber(&topics::pose(i))`) instead of pairing a
+//! string with a type at every call site: a typo or a wrong type is then a compile error, not
+//! a silent missing connection or a port iceoryx2 rejects at run time.
+//!
+//! Every topic here uses [`Topic::new`]'s delivery ([`crate::Delivery::Latest`], depth 8).
+//! Where only the name is needed (matching recorded messages), use [`Topic::name`].
 
-/// Per-node execution statistics ([`crate::NodeStatus`]).
-pub const STATUS: &str = "status";
-/// The shared occupancy map ([`crate::OccupancyGrid`]).
-pub const MAP: &str = "map";
-/// The current operator goal ([`crate::Goal`]).
-pub const GOAL: &str = "goal";
-/// Contacts between robots and with obstacles ([`crate::Collision`]).
-pub const COLLISIONS: &str = "collisions";
+use crate::{
+    Collision, EncoderTicks, Goal, Imu, LaserScan, NodeStatus, OccupancyGrid, Odometry, Path2D,
+    Pose2D, Topic, Twist, WheelSetpoint, WheelState,
+};
 
-fn robot(i: usize, leaf: &str) -> String {
-    format!("robot/{i}/{leaf}")
+/// Per-node execution statistics, published by every node (`status`).
+pub fn status() -> Topic<NodeStatus> {
+    Topic::new("status")
+}
+/// The shared occupancy map (`map`).
+pub fn map() -> Topic<OccupancyGrid> {
+    Topic::new("map")
+}
+/// The current operator goal (`goal`).
+pub fn goal() -> Topic<Goal> {
+    Topic::new("goal")
+}
+/// Contacts between robots and with obstacles (`collisions`).
+pub fn collisions() -> Topic<Collision> {
+    Topic::new("collisions")
 }
 
-pub fn scan(i: usize) -> String {
+fn robot<T: crate::Message>(i: usize, leaf: &str) -> Topic<T> {
+    Topic::new(&format!("robot/{i}/{leaf}"))
+}
+
+/// Robot `i`'s laser scans (`robot/i/scan`).
+pub fn scan(i: usize) -> Topic<LaserScan> {
     robot(i, "scan")
 }
-pub fn imu(i: usize) -> String {
+/// Robot `i`'s IMU readings (`robot/i/imu`).
+pub fn imu(i: usize) -> Topic<Imu> {
     robot(i, "imu")
 }
-pub fn pose_true(i: usize) -> String {
+/// Robot `i`'s ground-truth pose from the simulator (`robot/i/pose_true`).
+pub fn pose_true(i: usize) -> Topic<Pose2D> {
     robot(i, "pose_true")
 }
-pub fn twist_true(i: usize) -> String {
+/// Robot `i`'s ground-truth velocity from the simulator (`robot/i/twist_true`).
+pub fn twist_true(i: usize) -> Topic<Twist> {
     robot(i, "twist_true")
 }
-pub fn pose(i: usize) -> String {
+/// Robot `i`'s estimated pose (`robot/i/pose`).
+pub fn pose(i: usize) -> Topic<Pose2D> {
     robot(i, "pose")
 }
-pub fn odometry(i: usize) -> String {
+/// Robot `i`'s wheel odometry (`robot/i/odometry`).
+pub fn odometry(i: usize) -> Topic<Odometry> {
     robot(i, "odometry")
 }
-pub fn wheel_setpoint(i: usize) -> String {
+/// Wheel speeds commanded to robot `i` (`robot/i/wheel_setpoint`).
+pub fn wheel_setpoint(i: usize) -> Topic<WheelSetpoint> {
     robot(i, "wheel_setpoint")
 }
-pub fn wheel_state(i: usize) -> String {
+/// Robot `i`'s simulated wheel speeds (`robot/i/wheel_state`).
+pub fn wheel_state(i: usize) -> Topic<WheelState> {
     robot(i, "wheel_state")
 }
-pub fn encoder_ticks(i: usize) -> String {
+/// Robot `i`'s wheel encoder counts (`robot/i/encoder_ticks`).
+pub fn encoder_ticks(i: usize) -> Topic<EncoderTicks> {
     robot(i, "encoder_ticks")
 }
-pub fn cmd_vel(i: usize) -> String {
+/// Velocity commanded to robot `i` (`robot/i/cmd_vel`).
+pub fn cmd_vel(i: usize) -> Topic<Twist> {
     robot(i, "cmd_vel")
 }
-pub fn path(i: usize) -> String {
+/// Robot `i`'s planned path (`robot/i/path`).
+pub fn path(i: usize) -> Topic<Path2D> {
     robot(i, "path")
 }
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use crate::{Delivery, Message, type_name};
+
+    fn check<T: Message>(topic: Topic<T>, name: &str) {
+        assert_eq!(topic.name(), name);
+        assert_eq!(topic.type_name(), type_name::<T>());
+        assert_eq!(topic.delivery(), Delivery::Latest { depth: 8 }, "{name}");
+    }
+
     #[test]
-    fn robot_topics_are_scoped() {
-        assert_eq!(super::scan(0), "robot/0/scan");
-        assert_eq!(super::wheel_setpoint(3), "robot/3/wheel_setpoint");
+    fn robot_topics_are_scoped_and_typed() {
+        check::<LaserScan>(scan(3), "robot/3/scan");
+        check::<Imu>(imu(3), "robot/3/imu");
+        check::<Pose2D>(pose_true(3), "robot/3/pose_true");
+        check::<Twist>(twist_true(3), "robot/3/twist_true");
+        check::<Pose2D>(pose(3), "robot/3/pose");
+        check::<Odometry>(odometry(3), "robot/3/odometry");
+        check::<WheelSetpoint>(wheel_setpoint(3), "robot/3/wheel_setpoint");
+        check::<WheelState>(wheel_state(3), "robot/3/wheel_state");
+        check::<EncoderTicks>(encoder_ticks(3), "robot/3/encoder_ticks");
+        check::<Twist>(cmd_vel(3), "robot/3/cmd_vel");
+        check::<Path2D>(path(3), "robot/3/path");
+        assert_eq!(scan(0).name(), "robot/0/scan");
+    }
+
+    #[test]
+    fn global_topics_are_typed() {
+        check::<NodeStatus>(status(), "status");
+        check::<OccupancyGrid>(map(), "map");
+        check::<Goal>(goal(), "goal");
+        check::<Collision>(collisions(), "collisions");
+        assert_eq!(scan(0).type_name(), "caravan::LaserScan");
+    }
+
+    #[test]
+    fn name_hash_is_the_lockstep_hash() {
+        let topic = pose(1);
+        assert_eq!(
+            topic.name_hash(),
+            crate::lockstep::name_hash("robot/1/pose")
+        );
     }
 }

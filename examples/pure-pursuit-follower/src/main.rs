@@ -1,7 +1,7 @@
 //! A custom convoy follower: pure pursuit on the path its predecessor drove.
 //! See docs/agents.md for a walk through this file.
 
-use caravan::{Error, Node, Topic, Trigger};
+use caravan::{Error, Node, Trigger};
 use caravan_schemas::{Pose2D, WheelSetpoint, topics};
 use caravan_world::{RobotModel, kinematics::wheel_speeds};
 use serde::Deserialize;
@@ -46,11 +46,9 @@ fn setup(p: Params, identity: &caravan::NodeIdentity) -> Result<(Params, RobotMo
 }
 
 fn run(mut node: Node, (p, robot): (Params, RobotModel)) -> Result<(), Error> {
-    let me = node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(p.robot)))?;
-    let ahead = node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(p.robot - 1)))?;
-    let wheels = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(
-        p.robot,
-    )))?;
+    let me = node.subscriber(&topics::pose_true(p.robot))?;
+    let ahead = node.subscriber(&topics::pose_true(p.robot - 1))?;
+    let wheels = node.publisher(&topics::wheel_setpoint(p.robot))?;
     let mut path = std::collections::VecDeque::new();
     node.run(Trigger::every_hz(20.0), |_| {
         while let Some(pose) = ahead.receive()? {

@@ -9,11 +9,10 @@
 //! `localisation = "ideal"` replaces the estimate on `robot/i/pose` by the true pose (from
 //! `robot/i/pose_true`), for ablations; SLAM then still maps, from the true poses.
 
-use caravan::{Error, Node, Topic, Trigger};
+use caravan::{Error, Node, Trigger};
 use caravan_perception::{Slam, SlamParams, WheelOdometry, map_file};
 use caravan_schemas::{
-    EncoderTicks, LaserScan, OccupancyGrid, Odometry, Pose2D, Pose3D, Quaternion, Twist, Vector3,
-    topics,
+    OccupancyGrid, Odometry, Pose2D, Pose3D, Quaternion, Twist, Vector3, topics,
 };
 use serde::Deserialize;
 use std::process::ExitCode;
@@ -154,16 +153,16 @@ fn slam(mut node: Node, p: &Params, initial: Pose2D) -> Result<(), Error> {
         message: format!("key 'slam': {message}"),
     })?;
     let scan_topic = topics::scan(i);
-    let scans = node.subscriber(&Topic::<LaserScan>::new(&scan_topic))?;
+    let scans = node.subscriber(&scan_topic)?;
     let truth = match p.localisation {
-        Localisation::Ideal => Some(node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(i)))?),
+        Localisation::Ideal => Some(node.subscriber(&topics::pose_true(i))?),
         Localisation::Estimated => None,
     };
-    let pose_pub = node.publisher(&Topic::<Pose2D>::new(&topics::pose(i)))?;
-    let map_pub = node.publisher(&Topic::<OccupancyGrid>::new(topics::MAP))?;
+    let pose_pub = node.publisher(&topics::pose(i))?;
+    let map_pub = node.publisher(&topics::map())?;
     let map_period = 1.0 / p.map_rate_hz;
     let mut next_map = 0.0;
-    node.run(Trigger::on(&scan_topic), |step| {
+    node.run(Trigger::on(scan_topic.name()), |step| {
         let Some(scan) = scans.latest()? else {
             return Ok(());
         };
@@ -197,15 +196,15 @@ fn slam(mut node: Node, p: &Params, initial: Pose2D) -> Result<(), Error> {
 fn odometry(mut node: Node, p: &Params, initial: Pose2D, wheels: &Wheels) -> Result<(), Error> {
     let i = p.robot;
     let ticks_topic = topics::encoder_ticks(i);
-    let ticks = node.subscriber(&Topic::<EncoderTicks>::new(&ticks_topic))?;
+    let ticks = node.subscriber(&ticks_topic)?;
     let truth = match p.localisation {
-        Localisation::Ideal => Some(node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(i)))?),
+        Localisation::Ideal => Some(node.subscriber(&topics::pose_true(i))?),
         Localisation::Estimated => None,
     };
-    let odom_pub = node.publisher(&Topic::<Odometry>::new(&topics::odometry(i)))?;
-    let pose_pub = node.publisher(&Topic::<Pose2D>::new(&topics::pose(i)))?;
+    let odom_pub = node.publisher(&topics::odometry(i))?;
+    let pose_pub = node.publisher(&topics::pose(i))?;
     let mut odometry = WheelOdometry::new(initial, wheels.radius_m, wheels.separation_m);
-    node.run(Trigger::on(&ticks_topic), |_| {
+    node.run(Trigger::on(ticks_topic.name()), |_| {
         while let Some(msg) = ticks.receive()? {
             let t = msg.header().stamp_ns as f64 * 1e-9;
             let Some(estimate) = odometry.update(t, &msg) else {

@@ -7,9 +7,9 @@
 //! Params and inputs are checked before the node joins the group, so bad input never leaves
 //! anything behind in shared memory.
 
-use caravan::{Node, NodeIdentity, Publisher, Subscriber, Topic, Trigger};
+use caravan::{Node, NodeIdentity, Publisher, Subscriber, Trigger};
 use caravan_physics::{Params, Simulation};
-use caravan_schemas::{Collision, Pose2D, Twist, WheelSetpoint, WheelState, topics};
+use caravan_schemas::{Pose2D, Twist, WheelSetpoint, WheelState, topics};
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -77,10 +77,10 @@ struct RobotPorts {
 impl RobotPorts {
     fn open(node: &Node, i: usize) -> Result<Self, caravan::Error> {
         Ok(Self {
-            setpoint: node.subscriber(&Topic::new(&topics::wheel_setpoint(i)))?,
-            pose: node.publisher(&Topic::new(&topics::pose_true(i)))?,
-            twist: node.publisher(&Topic::new(&topics::twist_true(i)))?,
-            wheels: node.publisher(&Topic::new(&topics::wheel_state(i)))?,
+            setpoint: node.subscriber(&topics::wheel_setpoint(i))?,
+            pose: node.publisher(&topics::pose_true(i))?,
+            twist: node.publisher(&topics::twist_true(i))?,
+            wheels: node.publisher(&topics::wheel_state(i))?,
         })
     }
 }
@@ -95,7 +95,7 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     let ports = (0..sim.robot_count())
         .map(|i| RobotPorts::open(&node, i))
         .collect::<Result<Vec<_>, _>>()?;
-    let collisions = node.publisher(&Topic::<Collision>::new(topics::COLLISIONS))?;
+    let collisions = node.publisher(&topics::collisions())?;
 
     let mut slip_ns = 0u64;
     node.run(Trigger::Every(Duration::from_nanos(period_ns)), |step| {

@@ -10,12 +10,12 @@
 //! unreachable goal is reported once, with the planner's reason, and nothing is commanded:
 //! the leader stops when its commands go stale.
 
-use caravan::{Error, Node, Topic, Trigger};
+use caravan::{Error, Node, Trigger};
 use caravan_planning::{
     Costmap, CostmapParams, GlobalParams, GlobalPlanner, LocalParams, LocalPlanner, fill_path2d,
     nearest_pose_index, path_blocked,
 };
-use caravan_schemas::{Goal, OccupancyGrid, Path2D, Pose2D, Twist, topics};
+use caravan_schemas::{Goal, Pose2D, Twist, topics};
 use serde::Deserialize;
 use std::process::ExitCode;
 
@@ -89,11 +89,11 @@ struct State {
 
 fn plan(mut node: Node, p: &Params) -> Result<(), Error> {
     let i = p.robot;
-    let map_sub = node.subscriber(&Topic::<OccupancyGrid>::new(topics::MAP))?;
-    let pose_sub = node.subscriber(&Topic::<Pose2D>::new(&topics::pose(i)))?;
-    let goal_sub = node.subscriber(&Topic::<Goal>::new(topics::GOAL))?;
-    let path_pub = node.publisher(&Topic::<Path2D>::new(&topics::path(i)))?;
-    let cmd_pub = node.publisher(&Topic::<Twist>::new(&topics::cmd_vel(i)))?;
+    let map_sub = node.subscriber(&topics::map())?;
+    let pose_sub = node.subscriber(&topics::pose(i))?;
+    let goal_sub = node.subscriber(&topics::goal())?;
+    let path_pub = node.publisher(&topics::path(i))?;
+    let cmd_pub = node.publisher(&topics::cmd_vel(i))?;
     let mut global = GlobalPlanner::new(p.global.clone());
     let local = LocalPlanner::new(p.local.clone());
     let mut s = State::default();

@@ -7,8 +7,8 @@
 //!      `robot/j/pose_true` of the other robots (for the laser to see their chassis).
 //! Out: `robot/i/encoder_ticks`, `robot/i/scan` (if `laser`), `robot/i/imu` (if `imu`).
 
-use caravan::{Node, NodeIdentity, Subscriber, Topic, Trigger, parse_rate};
-use caravan_schemas::{EncoderTicks, Imu, LaserScan, Pose2D, Twist, WheelState, topics};
+use caravan::{Node, NodeIdentity, Subscriber, Trigger, parse_rate};
+use caravan_schemas::{Pose2D, Twist, WheelState, topics};
 use caravan_sensor::encoders::encoder_ticks;
 use caravan_sensor::imu::{BodyState, Mount, VirtualImu};
 use caravan_sensor::laser::Laser;
@@ -78,10 +78,10 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         laser_every,
     } = ready;
     let i = p.robot;
-    let sub_pose = |j: usize| node.subscriber(&Topic::<Pose2D>::new(&topics::pose_true(j)));
+    let sub_pose = |j: usize| node.subscriber(&topics::pose_true(j));
     let own_pose = sub_pose(i)?;
-    let wheels = node.subscriber(&Topic::<WheelState>::new(&topics::wheel_state(i)))?;
-    let ticks_out = node.publisher(&Topic::<EncoderTicks>::new(&topics::encoder_ticks(i)))?;
+    let wheels = node.subscriber(&topics::wheel_state(i))?;
+    let ticks_out = node.publisher(&topics::encoder_ticks(i))?;
 
     // The laser sees the other robots at their latest true poses.
     let mut laser = p
@@ -96,7 +96,7 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         Vec::new()
     };
     let scan_out = if p.laser {
-        Some(node.publisher(&Topic::<LaserScan>::new(&topics::scan(i)))?)
+        Some(node.publisher(&topics::scan(i))?)
     } else {
         None
     };
@@ -107,8 +107,8 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     };
     let mut imu = p.imu.then(|| VirtualImu::new(mount, p.imu_noise(), seed));
     let (twist_in, imu_out) = if p.imu {
-        let twist_in = node.subscriber(&Topic::<Twist>::new(&topics::twist_true(i)))?;
-        let imu_out = node.publisher(&Topic::<Imu>::new(&topics::imu(i)))?;
+        let twist_in = node.subscriber(&topics::twist_true(i))?;
+        let imu_out = node.publisher(&topics::imu(i))?;
         (Some(twist_in), Some(imu_out))
     } else {
         (None, None)

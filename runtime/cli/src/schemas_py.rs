@@ -270,8 +270,8 @@ pub fn python_module() -> Result<String> {
     py.push_str(
         "\n\nclass topics:\n    \"\"\"Topic names, as `caravan_schemas::topics`: scoped by robot, ROS style.\"\"\"\n\n",
     );
-    for (name, value) in TOPIC_CONSTANTS {
-        writeln!(py, "    {name} = \"{value}\"")?;
+    for (name, topic) in TOPIC_CONSTANTS {
+        writeln!(py, "    {name} = \"{}\"", topic())?;
     }
     // Learn each helper's pattern from the Rust function itself.
     const SENTINEL: usize = 987_654_321;

@@ -50,10 +50,12 @@ pub fn setup(
 /// Runs the agent `p` describes until the group stops.
 pub fn run(mut node: Node, (p, geometry): (Params, Geometry)) -> Result<(), Error> {
     let i = p.robot;
-    let own = node.subscriber(&Topic::<Pose2D>::new(
-        &p.pose_topic.clone().unwrap_or_else(|| topics::pose_true(i)),
-    ))?;
-    let setpoint = node.publisher(&Topic::<WheelSetpoint>::new(&topics::wheel_setpoint(i)))?;
+    let own_topic = match &p.pose_topic {
+        Some(name) => Topic::new(name),
+        None => topics::pose_true(i),
+    };
+    let own = node.subscriber(&own_topic)?;
+    let setpoint = node.publisher(&topics::wheel_setpoint(i))?;
     let wheels = Wheels {
         setpoint,
         radius_m: geometry.wheel_radius_m,
@@ -88,7 +90,7 @@ fn run_leader(
     own: Subscriber<Pose2D>,
     wheels: Wheels,
 ) -> Result<(), Error> {
-    let goal_pub = node.publisher(&Topic::<Goal>::new(topics::GOAL))?;
+    let goal_pub = node.publisher(&topics::goal())?;
     let planner = match &p.cmd_vel_topic {
         Some(topic) => Some(node.subscriber(&Topic::<Twist>::new(topic))?),
         None => None,
@@ -150,11 +152,11 @@ fn run_follower(
     own: Subscriber<Pose2D>,
     wheels: Wheels,
 ) -> Result<(), Error> {
-    let predecessor_topic = p
-        .predecessor_topic
-        .clone()
-        .unwrap_or_else(|| topics::pose_true(p.robot - 1));
-    let predecessor = node.subscriber(&Topic::<Pose2D>::new(&predecessor_topic))?;
+    let predecessor_topic = match &p.predecessor_topic {
+        Some(name) => Topic::new(name),
+        None => topics::pose_true(p.robot - 1),
+    };
+    let predecessor = node.subscriber(&predecessor_topic)?;
     let mut history = PoseHistory::new(p.follower.tau_s + 2.0);
     let mut pose = None;
     node.run(Trigger::every_hz(RATE_HZ), |step| {

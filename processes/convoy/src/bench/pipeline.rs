@@ -129,10 +129,13 @@ fn first_use(inputs: &[u64], outputs: &[u64]) -> Vec<Option<usize>> {
 
 fn analyse(messages: &[RecordedMessage]) -> Vec<Hop> {
     let stages = [
-        ("scan", topics::scan(LEADER)),
-        ("pose", topics::pose(LEADER)),
-        ("cmd_vel", topics::cmd_vel(LEADER)),
-        ("wheel_setpoint", topics::wheel_setpoint(LEADER)),
+        ("scan", topics::scan(LEADER).name().to_owned()),
+        ("pose", topics::pose(LEADER).name().to_owned()),
+        ("cmd_vel", topics::cmd_vel(LEADER).name().to_owned()),
+        (
+            "wheel_setpoint",
+            topics::wheel_setpoint(LEADER).name().to_owned(),
+        ),
     ];
     let times: Vec<Vec<u64>> = stages.iter().map(|(_, t)| sends(messages, t)).collect();
     let links: Vec<Vec<Option<usize>>> =

@@ -16,6 +16,7 @@
 
 use super::plot::Plot;
 use caravan_report::RecordedMessage;
+use caravan_schemas::topics;
 use caravan_world::geometry::{Polyline, footprint, rect_distance};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
@@ -66,7 +67,7 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
                 .entry(i)
                 .or_default()
                 .push((stamp, [f("x"), f("y"), f("theta")]));
-        } else if m.topic == caravan_schemas::topics::GOAL {
+        } else if m.topic == topics::goal().name() {
             let pose = &m.json["pose"];
             let p = [
                 pose["x"].as_f64().unwrap_or(0.0),
@@ -78,7 +79,7 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
                 m.json["total"].as_u64()?,
                 p,
             ));
-        } else if m.topic == caravan_schemas::topics::COLLISIONS && m.json["started"] == 1 {
+        } else if m.topic == topics::collisions().name() && m.json["started"] == 1 {
             collisions += 1;
         }
     }

@@ -98,11 +98,11 @@ fn pose_error(messages: &[RecordedMessage]) -> Option<Value> {
     let mut scans: Vec<u64> = Vec::new();
     let mut estimates: Vec<(u64, [f64; 2])> = Vec::new();
     for m in messages {
-        if m.topic == truth_topic {
+        if m.topic == truth_topic.name() {
             truth.push((stamp(m), xy(m)));
-        } else if m.topic == scan_topic {
+        } else if m.topic == scan_topic.name() {
             scans.push(stamp(m));
-        } else if m.topic == estimate_topic {
+        } else if m.topic == estimate_topic.name() {
             estimates.push((stamp(m), xy(m)));
         }
     }

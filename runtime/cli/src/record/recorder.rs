@@ -10,7 +10,6 @@ use super::schema;
 use crate::launch::model::glob_match;
 use anyhow::{Context, Result};
 use caravan::tap::{DynTap, Tapped, list_topics, open_tap};
-use caravan_schemas::topics::STATUS;
 use hdrhistogram::Histogram;
 use iceoryx2::prelude::*;
 use serde_json::{Value, json};
@@ -107,13 +106,14 @@ impl Recorder {
 
     /// Opens taps on new topics that match the patterns, and on `status`.
     pub fn discover(&mut self) -> Result<()> {
+        let status = caravan_schemas::topics::status();
         for info in list_topics(&self.config, false)? {
             let hash = caravan_schemas::lockstep::name_hash(&info.name);
             if !self.seen.insert(hash) {
                 continue;
             }
-            let wanted =
-                info.name == STATUS || self.patterns.iter().any(|p| glob_match(p, &info.name));
+            let wanted = info.name == status.name()
+                || self.patterns.iter().any(|p| glob_match(p, &info.name));
             if !wanted {
                 continue;
             }
@@ -126,7 +126,7 @@ impl Recorder {
                 continue;
             }
             match open_tap(&self.iox, &info.name, &info.type_name) {
-                Ok(tap) if info.name == STATUS => self.status_tap = Some(tap),
+                Ok(tap) if info.name == status.name() => self.status_tap = Some(tap),
                 Ok(tap) => self.taps.push(tap),
                 // The service went away between listing and opening (its last node exited);
                 // look again next time.

@@ -1,6 +1,6 @@
 //! Typed topics: a service name bound to a message type and a delivery contract.
 
-use caravan_schemas::Message;
+use crate::Message;
 use std::marker::PhantomData;
 
 /// How a topic hands messages to slow subscribers. Publisher and subscriber of one topic must
@@ -15,18 +15,21 @@ pub enum Delivery {
 }
 
 impl Delivery {
+    /// The queue depth, at least 1.
     pub fn depth(&self) -> usize {
         match *self {
             Delivery::Latest { depth } | Delivery::Lossless { depth } => depth.max(1),
         }
     }
 
+    /// Whether publishers wait rather than overwrite (iceoryx2's safe overflow is off).
     pub fn is_lossless(&self) -> bool {
         matches!(self, Delivery::Lossless { .. })
     }
 }
 
-/// A service name bound to the message type `T`.
+/// A service name bound to the message type `T`. The helpers of [`crate::topics`] return the
+/// well-known ones, so that a name cannot be paired with the wrong type.
 #[derive(Debug)]
 pub struct Topic<T> {
     name: String,
@@ -59,25 +62,30 @@ impl<T: Message> Topic<T> {
         Self::new(name).with_delivery(Delivery::Lossless { depth: 256 })
     }
 
+    /// The same topic with another delivery contract; every port of the topic must use it.
     pub fn with_delivery(mut self, delivery: Delivery) -> Self {
         self.delivery = delivery;
         self
     }
 
+    /// The iceoryx2 service name, as recordings and `caravan topic` show it.
     pub fn name(&self) -> &str {
         &self.name
     }
 
+    /// How the topic hands messages to slow subscribers.
     pub fn delivery(&self) -> Delivery {
         self.delivery
     }
 
     /// The stable cross-language name of `T`.
     pub fn type_name(&self) -> &'static str {
-        caravan_schemas::type_name::<T>()
+        crate::type_name::<T>()
     }
 
-    pub(crate) fn hash(&self) -> u64 {
-        caravan_schemas::lockstep::name_hash(&self.name)
+    /// The lockstep protocol's hash of the name ([`crate::lockstep::name_hash`]): how a step
+    /// reports which topics it published to, so the scheduler can wake their subscribers.
+    pub fn name_hash(&self) -> u64 {
+        crate::lockstep::name_hash(&self.name)
     }
 }
