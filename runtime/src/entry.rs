@@ -49,6 +49,11 @@ pub fn node_main<P: DeserializeOwned, S>(
         Error::Params { .. } | Error::Env { .. } | Error::Input(_) => (EXIT_BAD_INPUT, e),
         other => (EXIT_FAILURE, other),
     };
+    // iceoryx2 installs its SIGTERM/SIGINT handlers on first use; install them now, so that a
+    // group stopped while this node is still setting up ends it cleanly instead of killing it.
+    if iceoryx2_bb_posix::signal::SignalHandler::termination_requested() {
+        return ExitCode::SUCCESS;
+    }
     let result = (|| -> Result<(), (u8, Error)> {
         let identity = NodeIdentity::from_env().map_err(classify)?;
         let p: P = parse_params(&identity.name, &identity.params).map_err(classify)?;

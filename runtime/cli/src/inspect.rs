@@ -1,4 +1,4 @@
-//! `caravan topic …`, `caravan node list` and `caravan record`: looking into a running group.
+//! `caravan topic …` and `caravan node list`: looking into a running group.
 
 use crate::clean::{choose_group, live_nodes};
 use anyhow::{Result, anyhow};
@@ -176,52 +176,4 @@ pub fn node(cmd: NodeCommand) -> Result<()> {
             Ok(())
         }
     }
-}
-
-#[derive(Args)]
-pub struct RecordArgs {
-    /// Topic patterns (`*` one segment, `**` any); default all topics
-    pub patterns: Vec<String>,
-    /// Output MCAP file
-    #[arg(short, long)]
-    pub output: std::path::PathBuf,
-    #[command(flatten)]
-    pub group: GroupArg,
-    /// Stop after this many seconds (default: until Ctrl-C)
-    #[arg(long)]
-    pub seconds: Option<f64>,
-}
-
-/// `caravan record`: records a running group's topics until Ctrl-C.
-pub fn record(args: RecordArgs) -> Result<()> {
-    let group = choose_group(args.group.group.as_deref())?;
-    let patterns = if args.patterns.is_empty() {
-        vec!["**".to_string()]
-    } else {
-        args.patterns
-    };
-    let mut recorder = crate::record::Recorder::create(
-        &caravan::group::config(&group)?,
-        &args.output,
-        &patterns,
-        false,
-    )?;
-    let end = args
-        .seconds
-        .map(|s| Instant::now() + Duration::from_secs_f64(s));
-    let config = caravan::group::config(&group)?;
-    crate::run::driver::record_until(
-        &config,
-        &mut recorder,
-        SignalHandlingMode::HandleTerminationRequests,
-        |_| end.is_some_and(|e| Instant::now() >= e),
-    )?;
-    let recording = recorder.finish()?;
-    let total: u64 = recording.topics.values().map(|t| t.messages).sum();
-    println!(
-        "recorded {total} messages on {} topics to {}",
-        recording.topics.len(),
-        args.output.display()
-    );
-    Ok(())
 }

@@ -27,7 +27,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Launch a process group from a launch file
-    Launch(run::LaunchArgs),
+    Launch(launch::command::LaunchArgs),
     /// Run a launch file over a grid of overrides × seeds, several groups at once
     Sweep(sweep::SweepArgs),
     /// Topics of a running group
@@ -37,7 +37,7 @@ enum Command {
     #[command(subcommand)]
     Node(inspect::NodeCommand),
     /// Record a running group's topics to an MCAP file
-    Record(inspect::RecordArgs),
+    Record(record::command::RecordArgs),
     /// Recompute report.json and report.md of a run directory
     Report {
         /// The run directory (runs/<group>-<time>)
@@ -55,11 +55,11 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Launch(args) => run::launch(&args).map(ExitCode::from),
+        Command::Launch(args) => launch::command::launch(&args).map(ExitCode::from),
         Command::Sweep(args) => sweep::run(&args).map(ExitCode::from),
         Command::Topic(cmd) => inspect::topic(cmd).map(|_| ExitCode::SUCCESS),
         Command::Node(cmd) => inspect::node(cmd).map(|_| ExitCode::SUCCESS),
-        Command::Record(args) => inspect::record(args).map(|_| ExitCode::SUCCESS),
+        Command::Record(args) => record::command::record(args).map(|_| ExitCode::SUCCESS),
         Command::Report { run_dir } => report::write(&run_dir).map(|w| {
             println!("{}", report_summary(&w.report));
             for failure in &w.failures {

@@ -3,6 +3,7 @@
 
 pub mod args;
 mod check;
+pub mod command;
 mod convert;
 mod include;
 pub mod load;

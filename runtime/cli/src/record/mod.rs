@@ -1,5 +1,6 @@
 //! Recording topics to MCAP (`caravan-report` reads recordings back).
 
+pub mod command;
 pub mod recorder;
 pub mod schema;
 

@@ -3,7 +3,7 @@
 //! protocol a plugin follows.
 
 use caravan_report::{ReportEntry, Section};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
 /// A section a plugin wrote, with its JSON text as written.
@@ -73,7 +73,7 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
     let Some((first, rest)) = entry.exec.split_first() else {
         return Err("the command is empty".into());
     };
-    let program = program(first, Path::new(&entry.launch_dir));
+    let program = crate::run::exec::program(first, Path::new(&entry.launch_dir));
     Command::new(&program)
         .args(rest)
         .args(args)
@@ -82,16 +82,6 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
         .stdin(Stdio::null())
         .output()
         .map_err(|e| format!("cannot run {}: {e}", program.display()))
-}
-
-/// A program named with a '/' is a path relative to the launch file; a bare name is found
-/// like a process's executable.
-fn program(first: &str, launch_dir: &Path) -> PathBuf {
-    if first.contains('/') {
-        launch_dir.join(first)
-    } else {
-        crate::run::resolve_exec(first).unwrap_or_else(|| PathBuf::from(first))
-    }
 }
 
 /// The plugin's error: its stderr (a plugin prints one paragraph), else its exit status.

@@ -8,8 +8,8 @@ mod runner;
 mod stats;
 mod summary;
 
+use crate::launch::command::{EXIT_BAD_INPUT, LaunchArgs};
 use crate::launch::load::LaunchError;
-use crate::run::{EXIT_BAD_INPUT, LaunchArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use grid::{Axis, Cell};
@@ -363,7 +363,7 @@ fn validate(plan: &Plan) -> Vec<String> {
             runs_dir: PathBuf::new(),
             quiet: true,
         };
-        match crate::run::load(&args) {
+        match crate::launch::command::load(&args) {
             Ok(_) => {}
             Err(e @ LaunchError::Read { .. }) => return vec![e.to_string()],
             Err(LaunchError::Invalid(list)) => {

@@ -1,0 +1,155 @@
+//! `caravan launch FILE`: load and check the launch file, start the group in a new run
+//! directory, supervise it until it ends, then write its facts and report.
+
+use super::load::LaunchError;
+use super::model::{Exec, LaunchFile};
+use crate::report;
+use crate::run::{self, output::Console};
+use anyhow::{Context, Result};
+use caravan_report::ReportEntry;
+use clap::Args;
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct LaunchArgs {
+    /// The launch file (TOML)
+    pub file: PathBuf,
+    /// Override a value of the launch file, e.g. `group.seed=3` or `process.ping.rate=20Hz`
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Run for this long (simulated time in lockstep), e.g. `30s`
+    #[arg(long)]
+    pub duration: Option<String>,
+    /// Clock mode
+    #[arg(long, value_parser = ["realtime", "lockstep"])]
+    pub clock: Option<String>,
+    /// Random seed of the group
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Directory that receives the run directory
+    #[arg(long, default_value = "runs")]
+    pub runs_dir: PathBuf,
+    /// Do not echo process output to the terminal (it still goes to the logs)
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Exit code for bad input: nothing was started.
+pub const EXIT_BAD_INPUT: u8 = 2;
+
+/// Loads and validates the launch file with the command line's overrides.
+pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
+    let mut sets = args.set.clone();
+    if let Some(d) = &args.duration {
+        sets.push(format!("group.duration={d}"));
+    }
+    if let Some(c) = &args.clock {
+        sets.push(format!("group.clock={c}"));
+    }
+    if let Some(s) = args.seed {
+        sets.push(format!("group.seed={s}"));
+    }
+    super::load::load(&args.file, &sets, &run::exec::resolve_exec)
+}
+
+/// Runs the group; returns the process exit code.
+pub fn launch(args: &LaunchArgs) -> Result<u8> {
+    let console = Console::new(args.quiet);
+    let lf = match load(args) {
+        Ok(lf) => lf,
+        Err(e) => {
+            eprintln!("caravan: {e}");
+            return Ok(EXIT_BAD_INPUT);
+        }
+    };
+    // Report plugins check their params now, so bad ones start nothing.
+    let reports = report_entries(&lf);
+    for entry in &reports {
+        if let Err(why) = report::check(entry) {
+            eprintln!(
+                "caravan: {}: report '{}': {why}",
+                lf.path.display(),
+                entry.exec.join(" ")
+            );
+            return Ok(EXIT_BAD_INPUT);
+        }
+    }
+    let group = lf.group.name.clone();
+    if crate::clean::group_is_running(&group)? {
+        eprintln!(
+            "caravan: group '{group}' is already running; stop it, or give this run another name with --set group.name=…"
+        );
+        return Ok(EXIT_BAD_INPUT);
+    }
+    crate::clean::remove_stale(&group)?;
+    let dir = run_dir(&args.runs_dir, &group)?;
+    std::fs::write(dir.join("launch.toml"), &lf.resolved_toml)?;
+    let config_path = dir.join("iceoryx2.toml");
+    caravan::group::write_config(&group, &config_path)?;
+    std::fs::create_dir_all(dir.join("logs"))?;
+    console.say(&format!(
+        "group '{group}' ({} clock), run directory {}",
+        lf.group.clock,
+        dir.display()
+    ));
+
+    let result = run::run_group(&lf, &dir, &config_path, &console).map(|mut facts| {
+        facts.reports = reports;
+        facts
+    });
+    // Whatever happened, leave no shared memory of the group behind.
+    let _ = caravan::group::remove_resources(&group);
+    let facts = result?;
+    let failed = facts.outcome == "failed";
+    facts.save(&dir)?;
+    let written = report::write(&dir)?;
+    for failure in &written.failures {
+        console.say(failure);
+    }
+    console.say(&format!(
+        "{}: simulated {:.1} s in {:.1} s (real-time factor {:.2}); report in {}",
+        facts.outcome,
+        facts.sim_time_s,
+        facts.wall_time_s,
+        facts.real_time_factor(),
+        dir.join("report.md").display()
+    ));
+    Ok(if failed || !written.failures.is_empty() {
+        1
+    } else {
+        0
+    })
+}
+
+fn run_dir(base: &Path, group: &str) -> Result<PathBuf> {
+    let stamp = chrono::Utc::now().format("%Y%m%d-%H%M%S");
+    for n in 0.. {
+        let name = if n == 0 {
+            format!("{group}-{stamp}")
+        } else {
+            format!("{group}-{stamp}-{n}")
+        };
+        let dir = base.join(name);
+        if !dir.exists() {
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+            return Ok(dir);
+        }
+    }
+    unreachable!()
+}
+
+/// The launch file's `[[report]]` entries, as the run's facts keep them.
+fn report_entries(lf: &LaunchFile) -> Vec<ReportEntry> {
+    lf.reports
+        .iter()
+        .map(|r| ReportEntry {
+            exec: match &r.exec {
+                Exec::Workspace(name) => vec![name.clone()],
+                Exec::Command(words) => words.clone(),
+            },
+            params: r.params.clone(),
+            launch_dir: r.launch_dir.display().to_string(),
+        })
+        .collect()
+}

@@ -1,0 +1,70 @@
+//! What the launcher writes to `run.json` about a finished group: from the launch file, the
+//! supervisor's records and the recorder's statistics.
+
+use super::driver::DriverOutcome;
+use super::events::Ending;
+use crate::launch::model::LaunchFile;
+use caravan_report::{HostFacts, Latency, ProcessRecord, RunFacts};
+
+/// The facts of a run that ended as `ending` after `wall_time_s`.
+pub fn collect(
+    lf: &LaunchFile,
+    ending: Ending,
+    processes: Vec<ProcessRecord>,
+    driven: DriverOutcome,
+    wall_time_s: f64,
+) -> RunFacts {
+    let lockstep = lf.group.clock == caravan::ClockMode::Lockstep;
+    let recording = driven.recording;
+    let sim_time_s = if lockstep {
+        driven.sim_time_ns as f64 / 1e9
+    } else {
+        wall_time_s
+    };
+    let topic_latency = recording
+        .topics
+        .iter()
+        .map(|(name, s)| {
+            let q = |q: f64| s.latency.value_at_quantile(q) as f64 / 1e3;
+            (
+                name.clone(),
+                Latency {
+                    p50: q(0.5),
+                    p90: q(0.9),
+                    p99: q(0.99),
+                    max: s.latency.max() as f64 / 1e3,
+                },
+            )
+        })
+        .collect();
+    let topic_types = recording
+        .topics
+        .iter()
+        .map(|(n, s)| (n.clone(), s.type_name.clone()))
+        .collect();
+    RunFacts {
+        group: lf.group.name.clone(),
+        clock: lf.group.clock.to_string(),
+        seed: lf.group.seed,
+        launch_file: lf.path.display().to_string(),
+        outcome: ending.outcome.to_string(),
+        failure: ending.failure,
+        sim_time_s,
+        wall_time_s,
+        processes,
+        node_status: recording.node_status,
+        topic_latency,
+        topic_types,
+        hosts: lf
+            .hosts
+            .iter()
+            .map(|(name, h)| {
+                let facts = HostFacts {
+                    cpu_slowdown: h.cpu_slowdown,
+                };
+                (name.clone(), facts)
+            })
+            .collect(),
+        reports: Vec::new(),
+    }
+}
