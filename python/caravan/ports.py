@@ -87,17 +87,22 @@ class Received:
         return self.header.stamp_ns * 1e-9
 
 
+def _open(port: Any, node: "Node", msg_type: Type[T], topic: str, depth: int, lossless: bool) -> Any:
+    """Binds ``port`` to its node and topic and opens the topic's service."""
+    port.topic = topic
+    port.msg_type = msg_type
+    port._node = node
+    return node._open_pubsub(msg_type, topic, depth, lossless)
+
+
 class Publisher:
     """Publishes one message type on one topic, stamping each message's ``Header``."""
 
     def __init__(
         self, node: "Node", msg_type: Type[T], topic: str, depth: int, lossless: bool
     ) -> None:
-        self.topic = topic
-        self.msg_type = msg_type
-        self._node = node
+        service = _open(self, node, msg_type, topic, depth, lossless)
         self._hash = name_hash(topic)
-        service = node._open_pubsub(msg_type, topic, depth, lossless)
         strategy = (
             iox.BackpressureStrategy.RetryUntilDelivered
             if lossless
@@ -175,10 +180,7 @@ class Subscriber:
     def __init__(
         self, node: "Node", msg_type: Type[T], topic: str, depth: int, lossless: bool
     ) -> None:
-        self.topic = topic
-        self.msg_type = msg_type
-        self._node = node
-        service = node._open_pubsub(msg_type, topic, depth, lossless)
+        service = _open(self, node, msg_type, topic, depth, lossless)
         try:
             self._port = service.subscriber_builder().buffer_size(depth).create()
         except Exception as e:

@@ -312,3 +312,40 @@ impl Drop for Scenario {
         let _ = std::fs::remove_dir_all(&self.dir);
     }
 }
+
+/// A demo group after its `[group]` name: 10 s of lockstep, `ping` at 10 Hz, `pong` on each
+/// ping (gain 2), `sum` at 20 Hz and `noise` at 7 Hz, recording `demo/*`.
+pub const PINGPONG: &str = r#"clock = "lockstep"
+duration = "10s"
+seed = 3
+record = ["demo/*"]
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+rate = "10Hz"
+
+[[process]]
+name = "pong"
+exec = "caravan-demo pong"
+on = "demo/ping"
+params = { gain = 2.0 }
+
+[[process]]
+name = "sum"
+exec = "caravan-demo sum"
+rate = "20Hz"
+
+[[process]]
+name = "noise"
+exec = "caravan-demo noise"
+rate = "7Hz"
+"#;
+
+/// [`PINGPONG`] with only its `ping` and `pong` processes.
+pub fn ping_pong() -> &'static str {
+    let end = PINGPONG
+        .find("\n[[process]]\nname = \"sum\"")
+        .expect("PINGPONG has a sum process");
+    &PINGPONG[..end + 1]
+}

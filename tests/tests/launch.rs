@@ -1,36 +1,9 @@
 //! `caravan launch` and the inspection commands, with real process groups.
 
-use caravan_tests::{Scenario, workspace_bin};
+use caravan_tests::{PINGPONG, Scenario, ping_pong, workspace_bin};
 use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::Duration;
-
-const PINGPONG: &str = r#"clock = "lockstep"
-duration = "10s"
-seed = 3
-record = ["demo/*"]
-
-[[process]]
-name = "ping"
-exec = "caravan-demo ping"
-rate = "10Hz"
-
-[[process]]
-name = "pong"
-exec = "caravan-demo pong"
-on = "demo/ping"
-params = { gain = 2.0 }
-
-[[process]]
-name = "sum"
-exec = "caravan-demo sum"
-rate = "20Hz"
-
-[[process]]
-name = "noise"
-exec = "caravan-demo noise"
-rate = "7Hz"
-"#;
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).to_string()
@@ -501,27 +474,12 @@ required = false
     assert_eq!(node(&s.report(), "ping")["exit_status"], "exited 0");
 }
 
-/// Included by the tests below; line numbers refer to it.
-const BASE: &str = r#"[group]
-name = "base"
-clock = "lockstep"
-duration = "30s"
-seed = 3
-record = ["demo/*"]
+/// Included by the tests below (ping and pong); line numbers refer to it.
+fn base() -> String {
+    format!("[group]\nname = \"base\"\n{}", ping_pong())
+}
 
-[[process]]
-name = "ping"
-exec = "caravan-demo ping"
-rate = "10Hz"
-
-[[process]]
-name = "pong"
-exec = "caravan-demo pong"
-on = "demo/ping"
-params = { gain = 2.0 }
-"#;
-
-/// A file that includes BASE (changing it with `set`) and adds three templated processes.
+/// A file that includes `base()` (changing it with `set`) and adds three templated processes.
 const INCLUDING: &str = r#"duration = "2s"
 
 [[include]]
@@ -538,7 +496,7 @@ rate = "7Hz"
 #[test]
 fn included_files_and_templates_run_as_one_group() {
     let s = Scenario::new("include", INCLUDING);
-    std::fs::write(s.dir.join("base.toml"), BASE).unwrap();
+    std::fs::write(s.dir.join("base.toml"), base()).unwrap();
     let out = s.run(&[]);
     assert!(out.status.success(), "{}", stderr(&out));
     let report = s.report();
@@ -562,14 +520,14 @@ fn included_files_and_templates_run_as_one_group() {
 #[test]
 fn error_in_an_included_file_names_that_file_and_line() {
     let s = Scenario::new("include-bad", INCLUDING);
-    let base = s.dir.join("base.toml");
-    let bad = BASE.replace("gain = 2.0 }", "gain = 2.0 }\nrestart = \"sometimes\"");
-    std::fs::write(&base, bad).unwrap();
+    let file = s.dir.join("base.toml");
+    let bad = base().replace("gain = 2.0 }", "gain = 2.0 }\nrestart = \"sometimes\"");
+    std::fs::write(&file, bad).unwrap();
     assert_bad_input(
         &s,
         &[],
         &[
-            &format!("{}:18: process 'pong', key 'restart'", base.display()),
+            &format!("{}:18: process 'pong', key 'restart'", file.display()),
             "'sometimes' is not a restart policy",
         ],
     );

@@ -1,34 +1,20 @@
 //! A tiny scenario added without touching the launcher: a demo group and its own report
 //! plugin (`caravan-count-report`, in this crate), named in the launch file.
 
-use caravan_tests::{Scenario, workspace_bin};
+use caravan_tests::{Scenario, ping_pong, workspace_bin};
 use serde_json::Value;
 use std::process::Output;
 
-/// A pingpong group whose report plugin counts `demo/ping` and adds up its `x` field.
+/// The ping-pong demo group with a report plugin that counts `demo/ping`.
 fn tiny(report_params: &str) -> String {
     format!(
-        r#"clock = "lockstep"
-duration = "5s"
-seed = 2
-record = ["demo/*"]
-
-[[process]]
-name = "ping"
-exec = "caravan-demo ping"
-rate = "10Hz"
-
-[[process]]
-name = "pong"
-exec = "caravan-demo pong"
-on = "demo/ping"
-
-[[report]]
-exec = "caravan-count-report"
-params = {report_params}
-"#
+        "{}\n[[report]]\nexec = \"caravan-count-report\"\nparams = {report_params}\n",
+        ping_pong()
     )
 }
+
+/// Five simulated seconds of it.
+const FIVE_SECONDS: [&str; 2] = ["--duration", "5s"];
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
@@ -43,7 +29,7 @@ fn a_scenario_report_plugin_adds_its_section() {
     // The plugin binary is built with the workspace's binaries.
     workspace_bin("caravan-count-report");
     let s = Scenario::new("tiny", &tiny(r#"{ topic = "demo/ping", field = "x" }"#));
-    let out = s.run(&[]);
+    let out = s.run(&FIVE_SECONDS);
     assert!(out.status.success(), "{}", stderr(&out));
     let report = s.report();
     // ping steps at 0, 0.1, …, 5.0 s and publishes its step index as x.
@@ -84,7 +70,7 @@ fn a_scenario_report_plugin_adds_its_section() {
 fn bad_plugin_params_start_nothing() {
     workspace_bin("caravan-count-report");
     let s = Scenario::new("tiny-bad", &tiny(r#"{ topic = "demo/ping", feild = "x" }"#));
-    let out = s.run(&[]);
+    let out = s.run(&FIVE_SECONDS);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     let err = stderr(&out);
     assert!(
@@ -102,7 +88,7 @@ fn a_failing_plugin_fails_the_launch_but_keeps_the_report() {
         "tiny-fail",
         &tiny(r#"{ topic = "demo/ping", fail = true }"#),
     );
-    let out = s.run(&[]);
+    let out = s.run(&FIVE_SECONDS);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     let report = s.report();
     assert_eq!(report["run"]["outcome"], "completed");

@@ -10,7 +10,7 @@ pub mod load;
 pub mod model;
 pub mod overrides;
 mod sections;
-mod source;
+pub mod source;
 pub mod suggest;
 mod template;
 

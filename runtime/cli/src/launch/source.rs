@@ -109,7 +109,8 @@ fn syntax_error(path: &Path, text: &str, e: &toml_edit::TomlError) -> ReadFailur
     )
 }
 
-fn line_at(text: &str, offset: usize) -> usize {
+/// The 1-based line of byte `offset` in `text`.
+pub fn line_at(text: &str, offset: usize) -> usize {
     text.as_bytes()[..offset.min(text.len())]
         .iter()
         .filter(|&&b| b == b'\n')

@@ -38,7 +38,7 @@ pub fn parse(path: &Path, text: &str) -> Result<SweepFile, Vec<String>> {
         vec![format!(
             "{}:{}: TOML syntax error: {}",
             path.display(),
-            line_at(text, at),
+            crate::launch::source::line_at(text, at),
             e.message().trim()
         )]
     })?;
@@ -56,7 +56,7 @@ pub fn parse(path: &Path, text: &str) -> Result<SweepFile, Vec<String>> {
         return Err(vec![format!(
             "{}:{}: 'sweep' must be a table",
             path.display(),
-            line_at(text, at)
+            crate::launch::source::line_at(text, at)
         )]);
     };
     p.unknown_keys(sweep, SWEEP_KEYS, "[sweep] ", at);
@@ -68,14 +68,6 @@ pub fn parse(path: &Path, text: &str) -> Result<SweepFile, Vec<String>> {
             Err(p.problems.into_iter().map(|(_, m)| m).collect())
         }
     }
-}
-
-fn line_at(text: &str, offset: usize) -> usize {
-    text.as_bytes()[..offset.min(text.len())]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
-        + 1
 }
 
 struct Parser<'a> {
@@ -92,7 +84,7 @@ impl Parser<'_> {
     }
 
     fn problem(&mut self, offset: usize, message: String) {
-        let line = line_at(self.text, offset);
+        let line = crate::launch::source::line_at(self.text, offset);
         self.problems
             .push((line, format!("{}:{line}: {message}", self.path.display())));
     }
