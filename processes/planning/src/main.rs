@@ -24,6 +24,8 @@ use std::process::ExitCode;
 struct Params {
     /// The robot that plans (the leader).
     robot: usize,
+    /// The robot's URDF, relative to the launch file: its footprint for the costmap (required).
+    urdf: String,
     /// Re-plan at least this often while the map keeps changing, s.
     replan_period_s: f64,
     costmap: CostmapParams,
@@ -35,6 +37,7 @@ impl Default for Params {
     fn default() -> Self {
         Self {
             robot: 0,
+            urdf: String::new(),
             replan_period_s: 1.0,
             costmap: CostmapParams::default(),
             global: GlobalParams::default(),
@@ -66,7 +69,17 @@ impl Params {
 fn main() -> ExitCode {
     caravan::node_main(
         "caravan-planning",
-        |p: Params, _| p.validate().map(|()| p),
+        |mut p: Params, identity| {
+            p.validate()?;
+            if p.urdf.is_empty() {
+                return Err("key 'urdf': give the robot's URDF (its footprint)".into());
+            }
+            let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
+                .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+            p.costmap.footprint_length = 2.0 * robot.chassis_half_extents[0];
+            p.costmap.footprint_width = 2.0 * robot.chassis_half_extents[1];
+            Ok(p)
+        },
         |node, p| plan(node, &p),
     )
 }

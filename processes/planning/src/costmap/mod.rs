@@ -37,9 +37,12 @@ pub struct CostmapParams {
     /// Occupancy (percent) at or above which a cell is an obstacle (costmap_2d's
     /// `occupied_thresh` 0.65).
     pub occupied_threshold: i8,
-    /// Robot footprint along its heading, metres.
+    /// Robot footprint along its heading, metres: the URDF's chassis box (the node sets it
+    /// from the robot description; not a launch-file key).
+    #[serde(skip)]
     pub footprint_length: f64,
-    /// Robot footprint across its heading, metres.
+    /// Robot footprint across its heading, metres (from the URDF, as the length).
+    #[serde(skip)]
     pub footprint_width: f64,
     /// Added to the footprint's circumscribed radius (costmap_2d's `footprint_padding`); it
     /// also absorbs the cell discretisation of the distance.
@@ -56,6 +59,7 @@ impl Default for CostmapParams {
     fn default() -> Self {
         Self {
             occupied_threshold: 65,
+            // The convoy robot's chassis; the node takes it from the URDF.
             footprint_length: 0.20,
             footprint_width: 0.18,
             footprint_padding: 0.01,
