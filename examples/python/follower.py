@@ -18,7 +18,7 @@ launch/convoy/convoy-python.toml runs it as follower-2 of the reference convoy:
 import bisect
 import math
 
-from caravan import CaravanError, Node, main, topics
+from caravan import BadInput, Node, main, topics
 from caravan.robot import wheel_geometry
 from caravan.schemas import Pose2D, WheelSetpoint
 
@@ -148,13 +148,13 @@ def agent():
     node = Node.from_env()
     p = node.params(PARAMS)
     if p.mode != "follower":
-        raise CaravanError(
+        raise BadInput(
             "key 'mode': this Python agent is a follower; use caravan-convoy-agent to lead"
         )
     if p.robot == 0 and p.predecessor_topic is None:
-        raise CaravanError("key 'robot': robot 0 has no predecessor; set 'predecessor_topic'")
+        raise BadInput("key 'robot': robot 0 has no predecessor; set 'predecessor_topic'")
     if p.urdf is None:
-        raise CaravanError("key 'urdf': give the robot's URDF (its wheel radius and separation)")
+        raise BadInput("key 'urdf': give the robot's URDF (its wheel radius and separation)")
     i = p.robot
     r, sep = wheel_geometry(node.identity.resolve_path(p.urdf))
     own = node.subscriber(Pose2D, p.pose_topic or topics.pose_true(i))

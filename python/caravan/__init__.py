@@ -7,12 +7,13 @@ See docs/agents.md, section Python, and examples/python/follower.py.
 """
 
 from . import schemas
-from .identity import CaravanError, Identity, parse_duration, parse_rate
+from .identity import BadInput, CaravanError, Identity, parse_duration, parse_rate
 from .node import Node, Step, main
 from .ports import Publisher, Received, Subscriber
 from .schemas import topics
 
 __all__ = [
+    "BadInput",
     "CaravanError",
     "Identity",
     "Node",

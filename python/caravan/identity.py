@@ -47,6 +47,11 @@ class CaravanError(Exception):
     """Bad input or a transport failure, with a message meant for the person running it."""
 
 
+class BadInput(CaravanError):
+    """Bad params, environment or input files: the node did nothing (exit status 2, as
+    ``caravan::node_main``)."""
+
+
 # --- durations and rates -------------------------------------------------------------------
 
 _UNITS = {
@@ -74,19 +79,19 @@ def parse_duration(text: str) -> int:
     try:
         seconds = float(number) * _UNITS[unit]
     except (ValueError, KeyError):
-        raise CaravanError(
+        raise BadInput(
             f"'{text}' is not a duration; write a number and a unit: ns, us, ms, s, min or h "
             '("20ms", "180s")'
         ) from None
     if not math.isfinite(seconds) or seconds < 0:
-        raise CaravanError(f"'{text}' is not a duration")
+        raise BadInput(f"'{text}' is not a duration")
     return _round_ns(seconds)
 
 
 def parse_rate(rate: Any) -> int:
     """The period in nanoseconds of a rate: a number of Hz, ``"50Hz"``, ``"2.5 kHz"`` or a period
     such as ``"20ms"`` (as ``caravan::parse_rate``)."""
-    bad = CaravanError(
+    bad = BadInput(
         f'\'{rate}\' is not a rate; write a frequency like "50Hz" or a period like "20ms"'
     )
     if isinstance(rate, (int, float)) and not isinstance(rate, bool):
@@ -149,7 +154,7 @@ class Identity(SimpleNamespace):
         def required(var: str) -> str:
             value = env.get(var, "")
             if not value:
-                raise CaravanError(
+                raise BadInput(
                     f"{var} is not set; start this process with `caravan launch`, or set it by hand"
                 )
             return value
@@ -161,12 +166,12 @@ class Identity(SimpleNamespace):
         try:
             params = json.loads(params) if params else {}
         except json.JSONDecodeError as e:
-            raise CaravanError(f"{ENV_PARAMS} is not a JSON object: {e}") from None
+            raise BadInput(f"{ENV_PARAMS} is not a JSON object: {e}") from None
         if not isinstance(params, dict):
-            raise CaravanError(f"{ENV_PARAMS} is not a JSON object")
+            raise BadInput(f"{ENV_PARAMS} is not a JSON object")
         clock = optional(ENV_CLOCK) or "realtime"
         if clock not in ("realtime", "lockstep"):
-            raise CaravanError(
+            raise BadInput(
                 f"{ENV_CLOCK}: unknown clock '{clock}', expected 'realtime' or 'lockstep'"
             )
 
@@ -177,7 +182,7 @@ class Identity(SimpleNamespace):
             try:
                 return int(value)
             except ValueError:
-                raise CaravanError(f"{var}: '{value}' is not {what}") from None
+                raise BadInput(f"{var}: '{value}' is not {what}") from None
 
         host = optional(ENV_HOST) or "localhost"
         _warn_unemulated_network(optional(ENV_NETWORK), required(ENV_NODE), host)
@@ -226,13 +231,13 @@ def parse_params(node: str, given: dict, defaults: dict) -> SimpleNamespace:
         for key, value in given.items():
             path = prefix + key
             if key not in defaults:
-                raise CaravanError(
+                raise BadInput(
                     f"node '{node}': unknown key '{path}'; this node does not take it"
                 )
             default = defaults[key]
             if isinstance(default, dict):
                 if not isinstance(value, dict):
-                    raise CaravanError(f"node '{node}': key '{path}': expected a table")
+                    raise BadInput(f"node '{node}': key '{path}': expected a table")
                 out[key] = merge(default, value, path + ".")
             else:
                 out[key] = check(default, value, path)
@@ -240,7 +245,7 @@ def parse_params(node: str, given: dict, defaults: dict) -> SimpleNamespace:
 
     def check(default: Any, value: Any, path: str) -> Any:
         def wrong(expected: str) -> CaravanError:
-            return CaravanError(
+            return BadInput(
                 f"node '{node}': key '{path}': expected {expected}, found {value!r}"
             )
 
@@ -288,10 +293,10 @@ def group_prefix(group: str) -> str:
 
 def validate_group(group: str) -> None:
     if not 1 <= len(group) <= 40:
-        raise CaravanError(f"group name '{group}' must have 1 to 40 characters")
+        raise BadInput(f"group name '{group}' must have 1 to 40 characters")
     for c in group:
         if not ((c.isascii() and c.isalnum()) or c == "-"):
-            raise CaravanError(f"group name '{group}' contains '{c}'; use letters, digits and '-'")
+            raise BadInput(f"group name '{group}' contains '{c}'; use letters, digits and '-'")
 
 
 def group_config(group: str) -> Any:
@@ -316,4 +321,4 @@ def load_config(path: str) -> Any:
     try:
         return iox.config.from_file(iox.FilePath.new(path))
     except Exception as e:  # iceoryx2 raises its own error types
-        raise CaravanError(f"cannot read iceoryx2 config {path}: {e}") from None
+        raise BadInput(f"cannot read iceoryx2 config {path}: {e}") from None

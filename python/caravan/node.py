@@ -31,6 +31,7 @@ from . import schemas
 from .schemas import Done, Grant, Header, Hello, NodeStatus, lockstep, name_hash, topics
 
 from .identity import (
+    BadInput,
     CaravanError,
     Identity,
     STATUS_PERIOD_NS,
@@ -403,10 +404,11 @@ class _LockstepClient:
 
 
 def main(agent: Callable[[], Any]) -> None:
-    """Runs ``agent()`` and exits: status 0 on success, 1 with a one-line message on a
-    ``CaravanError`` (bad params, a mismatched topic…), as Rust processes do."""
+    """Runs ``agent()`` and exits as Rust nodes do: status 0 on success; with a one-line
+    message, 2 on ``BadInput`` (bad params or input files: nothing ran) and 1 on any other
+    ``CaravanError`` (a mismatched topic, a transport failure…)."""
     try:
         agent()
     except CaravanError as e:
         print(f"{os.path.basename(sys.argv[0])}: {e}", file=sys.stderr)
-        sys.exit(1)
+        sys.exit(2 if isinstance(e, BadInput) else 1)

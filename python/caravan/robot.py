@@ -5,7 +5,7 @@ it (processes/world/src/robot.rs): the two continuous joints are the wheels, eac
 
 import xml.etree.ElementTree as ET
 
-from .identity import CaravanError
+from .identity import BadInput
 
 
 def wheel_geometry(path):
@@ -13,7 +13,7 @@ def wheel_geometry(path):
     try:
         root = ET.parse(path).getroot()
     except (OSError, ET.ParseError) as e:
-        raise CaravanError(f"robot description {path}: {e}") from None
+        raise BadInput(f"robot description {path}: {e}") from None
     links = {link.get("name"): link for link in root.findall("link")}
     wheels = []
     for joint in root.findall("joint"):
@@ -22,7 +22,7 @@ def wheel_geometry(path):
         child = links.get(joint.find("child").get("link"))
         cylinder = None if child is None else child.find("collision/geometry/cylinder")
         if cylinder is None:
-            raise CaravanError(
+            raise BadInput(
                 f"robot description {path}: wheel joint '{joint.get('name')}' needs a child "
                 "link with a <cylinder> collision shape"
             )
@@ -30,7 +30,7 @@ def wheel_geometry(path):
         xyz = [float(v) for v in (origin.get("xyz") if origin is not None else "0 0 0").split()]
         wheels.append((xyz[1], float(cylinder.get("radius"))))
     if len(wheels) != 2:
-        raise CaravanError(
+        raise BadInput(
             f"robot description {path}: expected exactly two continuous (wheel) joints, "
             f"found {len(wheels)}"
         )

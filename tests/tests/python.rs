@@ -170,3 +170,36 @@ fn python_node_warns_that_it_does_not_emulate_links() {
     let alone = probe("pc");
     assert!(alone.stderr.is_empty(), "{}", text(&alone));
 }
+
+/// A Python agent with bad params exits 2 naming the key, as Rust nodes do, before it joins
+/// any group.
+#[test]
+fn python_agent_with_bad_params_exits_2() {
+    let root = workspace_root();
+    let run = |params: serde_json::Value| {
+        Command::new(python_env())
+            .arg(root.join("examples/python/follower.py"))
+            .env("PYTHONPATH", root.join("python"))
+            .env("CARAVAN_GROUP", caravan_tests::unique_group("py-bad"))
+            .env("CARAVAN_NODE", "follower-2")
+            .env("CARAVAN_PARAMS", params.to_string())
+            .env("CARAVAN_LAUNCH_DIR", root.join("launch/convoy"))
+            .output()
+            .unwrap()
+    };
+    let typo = run(
+        serde_json::json!({"robot": 2, "urdf": "robots/convoy_bot.urdf", "follower": {"k9": 1.0}}),
+    );
+    assert_eq!(typo.status.code(), Some(2), "{}", text(&typo));
+    assert!(text(&typo).contains("'follower.k9'"), "{}", text(&typo));
+    let no_urdf = run(serde_json::json!({"robot": 2}));
+    assert_eq!(no_urdf.status.code(), Some(2), "{}", text(&no_urdf));
+    assert!(text(&no_urdf).contains("key 'urdf'"), "{}", text(&no_urdf));
+    let bad_urdf = run(serde_json::json!({"robot": 2, "urdf": "robots/missing.urdf"}));
+    assert_eq!(bad_urdf.status.code(), Some(2), "{}", text(&bad_urdf));
+    assert!(
+        text(&bad_urdf).contains("missing.urdf"),
+        "{}",
+        text(&bad_urdf)
+    );
+}
