@@ -103,74 +103,23 @@ pub fn workspace_root() -> std::path::PathBuf {
         .to_path_buf()
 }
 
-/// The iceoryx2 Python package matching the workspace's iceoryx2 crate.
-pub const ICEORYX2_PYTHON: &str = "iceoryx2==0.10.0";
-
-/// The interpreter of `<workspace>/.venv`, the environment Python agents run in
-/// (`python/caravan-python` uses it). The first call creates it with `python3 -m venv` and
-/// installs [`ICEORYX2_PYTHON`] from the package registry, so tests need no set-up by hand.
-/// Safe when several test processes call it at once: one installs under a lock, the others wait
-/// for it; a marker file makes later calls instant.
+/// The interpreter of `<workspace>/.venv`, the environment Python agents run in. The first
+/// call has `python/caravan-python --setup` create it (with the iceoryx2 package from the
+/// package registry), the same set-up a launch file's Python agent gets on first use; it is
+/// safe when several test processes call it at once.
 pub fn python_env() -> std::path::PathBuf {
-    use std::os::fd::AsRawFd;
-    let venv = workspace_root().join(".venv");
-    let python = venv.join("bin/python");
-    let marker = venv.join(".caravan-ready");
-    let ready = || {
-        python.exists()
-            && std::fs::read_to_string(&marker).is_ok_and(|m| m.trim() == ICEORYX2_PYTHON)
-    };
-    if ready() {
-        return python;
-    }
-    std::fs::create_dir_all(&venv).expect("cannot create .venv");
-    let lock = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(venv.join(".caravan-lock"))
-        .expect("cannot open .venv/.caravan-lock");
-    // SAFETY: flock on a descriptor we own; the lock goes when `lock` is closed.
-    let locked = unsafe { libc::flock(lock.as_raw_fd(), libc::LOCK_EX) };
-    assert_eq!(locked, 0, "cannot lock .venv/.caravan-lock");
-    if !ready() {
-        let run = |program: &std::path::Path, args: &[&std::ffi::OsStr], hint: &str| {
-            let out = Command::new(program)
-                .args(args)
-                .stdin(Stdio::null())
-                .output()
-                .unwrap_or_else(|e| panic!("cannot run {}: {e}; {hint}", program.display()));
-            assert!(
-                out.status.success(),
-                "{} {:?} failed; {hint}\n{}{}",
-                program.display(),
-                args,
-                String::from_utf8_lossy(&out.stdout),
-                String::from_utf8_lossy(&out.stderr)
-            );
-        };
-        run(
-            std::path::Path::new("python3"),
-            &["-m".as_ref(), "venv".as_ref(), venv.as_os_str()],
-            "Python agents need python3 with its venv module (Debian: python3-venv)",
-        );
-        run(
-            &python,
-            &[
-                "-m".as_ref(),
-                "pip".as_ref(),
-                "install".as_ref(),
-                "--quiet".as_ref(),
-                "--disable-pip-version-check".as_ref(),
-                ICEORYX2_PYTHON.as_ref(),
-            ],
-            "installing the iceoryx2 Python package needs the package registry",
-        );
-        let tmp = venv.join(".caravan-ready.tmp");
-        std::fs::write(&tmp, ICEORYX2_PYTHON).expect("cannot write the .venv marker");
-        std::fs::rename(&tmp, &marker).expect("cannot write the .venv marker");
-    }
-    python
+    let root = workspace_root();
+    let out = Command::new(root.join("python/caravan-python"))
+        .arg("--setup")
+        .stdin(Stdio::null())
+        .output()
+        .expect("cannot run python/caravan-python");
+    assert!(
+        out.status.success(),
+        "python/caravan-python --setup failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    root.join(".venv/bin/python")
 }
 
 /// A finished lockstep convoy run; its run directory is removed when this is dropped.
