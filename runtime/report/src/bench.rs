@@ -117,8 +117,5 @@ pub fn write_results(
 
 /// The run directory the launcher left in `runs` (a bench launches one run per directory).
 pub fn run_dir_in(runs: &Path) -> Result<PathBuf> {
-    std::fs::read_dir(runs)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .find(|p| p.is_dir())
-        .context("the launcher wrote no run directory")
+    crate::latest_run_dir(runs).context("the launcher wrote no run directory")
 }

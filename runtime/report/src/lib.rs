@@ -59,6 +59,7 @@
 pub mod bench;
 mod facts;
 pub mod format;
+mod locate;
 pub mod plugin;
 mod recording;
 mod section;
@@ -67,6 +68,7 @@ pub use facts::{
     FACTS_FILE, HostFacts, Latency, ProcessRecord, RECORDING_FILE, RESOLVED_LAUNCH_FILE,
     ReportEntry, RunFacts,
 };
+pub use locate::{find_program, latest_run_dir};
 pub use plugin::{Inputs, ReportPlugin, Run};
 pub use recording::{RecordedMessage, read_all};
 pub use section::{RESERVED, SECTIONS_DIR, Section, written};

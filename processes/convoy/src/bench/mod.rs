@@ -13,15 +13,6 @@ use std::path::PathBuf;
 /// The `caravan` launcher: beside this program (the workspace's target directory), else on
 /// PATH.
 pub fn caravan() -> Result<PathBuf> {
-    let beside = std::env::current_exe()?.with_file_name("caravan");
-    if beside.is_file() {
-        return Ok(beside);
-    }
-    std::env::var_os("PATH")
-        .and_then(|paths| {
-            std::env::split_paths(&paths)
-                .map(|dir| dir.join("caravan"))
-                .find(|p| p.is_file())
-        })
+    caravan_report::find_program("caravan")
         .ok_or_else(|| anyhow!("cannot find the caravan launcher beside this program or on PATH"))
 }

@@ -7,15 +7,7 @@ use std::path::{Path, PathBuf};
 /// Where a bare executable name is found: beside the `caravan` binary (the workspace's
 /// target directory), then on PATH.
 pub fn resolve_exec(name: &str) -> Option<PathBuf> {
-    let beside = std::env::current_exe().ok()?.parent()?.join(name);
-    if beside.is_file() {
-        return Some(beside);
-    }
-    std::env::var_os("PATH").and_then(|paths| {
-        std::env::split_paths(&paths)
-            .map(|dir| dir.join(name))
-            .find(|p| p.is_file())
-    })
+    caravan_report::find_program(name)
 }
 
 /// The program of a command line whose first word is `first`, written in a launch file in

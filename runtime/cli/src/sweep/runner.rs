@@ -56,14 +56,7 @@ pub fn finished_run(dir: &Path) -> Option<(PathBuf, Value)> {
 
 /// The newest run directory under `dir` and its report, if it has one.
 fn last_run(dir: &Path) -> Option<(PathBuf, Option<Value>)> {
-    let mut runs: Vec<PathBuf> = std::fs::read_dir(dir)
-        .ok()?
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.is_dir())
-        .collect();
-    runs.sort();
-    let run_dir = runs.pop()?;
+    let run_dir = caravan_report::latest_run_dir(dir)?;
     let report = std::fs::read_to_string(run_dir.join("report.json"))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok());
