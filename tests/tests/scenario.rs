@@ -103,3 +103,29 @@ fn a_failing_plugin_fails_the_launch_but_keeps_the_report() {
         "{failed}"
     );
 }
+
+#[test]
+fn a_sweep_checks_report_plugin_params_before_starting() {
+    workspace_bin("caravan-count-report");
+    let s = Scenario::new("tiny-sweep", &tiny(r#"{ topic = "demo/ping" }"#));
+    let out_dir = s.dir.join("sweep");
+    let out = std::process::Command::new(workspace_bin("caravan"))
+        .arg("sweep")
+        .arg(&s.file)
+        .args([
+            "--grid",
+            "report.0.params.topic=demo/ping,\"\"",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains("caravan-count-report") && err.contains("key 'topic'"),
+        "{err}"
+    );
+    assert!(!out_dir.join("runs").exists(), "a run was started");
+}

@@ -1,7 +1,7 @@
 //! `caravan launch FILE`: load and check the launch file, start the group in a new run
 //! directory, supervise it until it ends, then write its facts and report.
 
-use super::load::LaunchError;
+use super::load::{LaunchError, Problem};
 use super::model::{Exec, LaunchFile};
 use crate::report;
 use crate::run::{self, output::Console};
@@ -37,7 +37,8 @@ pub struct LaunchArgs {
 /// Exit code for bad input: nothing was started.
 pub const EXIT_BAD_INPUT: u8 = 2;
 
-/// Loads and validates the launch file with the command line's overrides.
+/// Loads and validates the launch file with the command line's overrides, and has every
+/// report plugin check its params (`PROGRAM --check`), so that nothing bad gets started.
 pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
     let mut sets = args.set.clone();
     if let Some(d) = &args.duration {
@@ -49,7 +50,24 @@ pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
     if let Some(s) = args.seed {
         sets.push(format!("group.seed={s}"));
     }
-    super::load::load(&args.file, &sets, &run::exec::resolve_exec)
+    let lf = super::load::load(&args.file, &sets, &run::exec::resolve_exec)?;
+    let problems: Vec<Problem> = report_entries(&lf)
+        .iter()
+        .filter_map(|entry| {
+            let why = report::check(entry).err()?;
+            Some(Problem {
+                location: lf.path.display().to_string(),
+                line: None,
+                rank: 0,
+                message: format!("report '{}': {why}", entry.exec.join(" ")),
+            })
+        })
+        .collect();
+    if problems.is_empty() {
+        Ok(lf)
+    } else {
+        Err(LaunchError::Invalid(problems))
+    }
 }
 
 /// Runs the group; returns the process exit code.
@@ -62,18 +80,7 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
             return Ok(EXIT_BAD_INPUT);
         }
     };
-    // Report plugins check their params now, so bad ones start nothing.
     let reports = report_entries(&lf);
-    for entry in &reports {
-        if let Err(why) = report::check(entry) {
-            eprintln!(
-                "caravan: {}: report '{}': {why}",
-                lf.path.display(),
-                entry.exec.join(" ")
-            );
-            return Ok(EXIT_BAD_INPUT);
-        }
-    }
     let group = lf.group.name.clone();
     if crate::clean::group_is_running(&group)? {
         eprintln!(
