@@ -2,6 +2,7 @@
 //! world files (floor, walls, boxes, cylinders), robot descriptions from URDF, and the
 //! differential-drive kinematics of the convoy robots.
 
+pub mod description;
 pub mod geometry;
 pub mod kinematics;
 pub mod robot;

@@ -1,6 +1,8 @@
-//! Robot descriptions from URDF: a chassis (root link with a box), two driven wheels on
-//! continuous joints (cylinders), and a caster (a sphere on a fixed joint).
+//! The differential-drive view of a robot description (see [`crate::description`]): a chassis
+//! (root link with a box), two driven wheels on continuous joints (cylinders), and a caster
+//! (a sphere on a fixed joint). Sensors, planners and agents of wheeled robots read this.
 
+use crate::description::{Geometry, JointKind, Link, RobotDescription, load_description};
 use std::path::Path;
 
 #[derive(Debug, thiserror::Error)]
@@ -54,136 +56,112 @@ impl RobotModel {
 
 /// Reads a robot description and checks it has what the convoy robot needs.
 pub fn load_robot(path: &Path) -> Result<RobotModel, RobotError> {
-    let file = path.display().to_string();
-    let err = |message: String| RobotError {
-        file: file.clone(),
+    let d = load_description(path).map_err(|e| RobotError {
+        file: e.file,
+        message: match e.line {
+            Some(line) => format!("line {line}: {}", e.message),
+            None => e.message,
+        },
+    })?;
+    RobotModel::from_description(&d).map_err(|message| RobotError {
+        file: d.file.clone(),
         message,
-    };
-    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
-    let urdf =
-        urdf_rs::read_from_string(&text).map_err(|e| err(format!("not a valid URDF: {e}")))?;
-    model(&urdf).map_err(err)
+    })
 }
 
-fn body(link: &urdf_rs::Link, position: [f64; 3]) -> Result<Body, String> {
-    let i = &link.inertial;
-    if i.mass.value <= 0.0 {
-        return Err(format!(
-            "link '{}' needs an <inertial> with a positive mass",
-            link.name
-        ));
-    }
-    let inertia = [i.inertia.ixx, i.inertia.iyy, i.inertia.izz];
-    if inertia.iter().any(|&v| v <= 0.0) {
-        return Err(format!(
-            "link '{}' needs positive ixx, iyy and izz",
-            link.name
-        ));
-    }
+fn body(link: &Link, position: [f64; 3]) -> Result<Body, String> {
+    let i = link.inertial.as_ref().ok_or(format!(
+        "link '{}' needs an <inertial> with a positive mass",
+        link.name
+    ))?;
+    let inertia = [i.inertia[(0, 0)], i.inertia[(1, 1)], i.inertia[(2, 2)]];
     Ok(Body {
-        mass: i.mass.value,
+        mass: i.mass,
         inertia,
         position,
     })
 }
 
-fn model(urdf: &urdf_rs::Robot) -> Result<RobotModel, String> {
-    let link = |name: &str| {
-        urdf.links
-            .iter()
-            .find(|l| l.name == name)
-            .ok_or(format!("no link named '{name}'"))
-    };
-    let children: Vec<&str> = urdf.joints.iter().map(|j| j.child.link.as_str()).collect();
-    let root = urdf
-        .links
-        .iter()
-        .find(|l| !children.contains(&l.name.as_str()))
-        .ok_or("no root link (every link is some joint's child)")?;
-    let (chassis_half_extents, chassis_center) = root
-        .collision
-        .iter()
-        .find_map(|c| match &c.geometry {
-            urdf_rs::Geometry::Box { size } => {
-                Some(([size[0] / 2.0, size[1] / 2.0, size[2] / 2.0], *c.origin.xyz))
-            }
-            _ => None,
-        })
-        .ok_or(format!(
-            "root link '{}' needs a <box> collision shape (the chassis)",
-            root.name
-        ))?;
-    let chassis = body(root, [0.0; 3])?;
+fn xyz(p: &nalgebra::Isometry3<f64>) -> [f64; 3] {
+    p.translation.vector.into()
+}
 
-    let mut wheels = Vec::new();
-    for j in urdf
-        .joints
-        .iter()
-        .filter(|j| matches!(j.joint_type, urdf_rs::JointType::Continuous))
-    {
-        let child = link(&j.child.link)?;
-        let (radius, width) = child
-            .collision
+impl RobotModel {
+    /// The differential-drive view of a robot description: a root link with a box, two
+    /// continuous joints carrying cylinders (the wheels), a sphere on a fixed joint (the
+    /// caster).
+    pub fn from_description(d: &RobotDescription) -> Result<Self, String> {
+        let root = &d.links[d.root];
+        let (chassis_half_extents, chassis_center) = root
+            .collisions
             .iter()
-            .find_map(|c| match &c.geometry {
-                urdf_rs::Geometry::Cylinder { radius, length } => Some((*radius, *length)),
+            .find_map(|c| match c.geometry {
+                Geometry::Box { half_extents } => Some((half_extents, xyz(&c.origin))),
                 _ => None,
             })
             .ok_or(format!(
-                "wheel link '{}' (joint '{}') needs a <cylinder> collision shape",
-                child.name, j.name
+                "root link '{}' needs a <box> collision shape (the chassis)",
+                root.name
             ))?;
-        wheels.push((body(child, *j.origin.xyz)?, radius, width));
-    }
-    if wheels.len() != 2 {
-        return Err(format!(
-            "expected exactly two continuous (wheel) joints, found {}",
-            wheels.len()
-        ));
-    }
-    wheels.sort_by(|a, b| b.0.position[1].total_cmp(&a.0.position[1]));
-    let (right, left) = (wheels.pop().unwrap(), wheels.pop().unwrap());
-    if left.0.position[1] <= 0.0 || right.0.position[1] >= 0.0 {
-        return Err(
-            "wheels must sit on either side of base_link (one at y > 0, one at y < 0)".into(),
-        );
-    }
-    if (left.1 - right.1).abs() > 1e-9 {
-        return Err(format!("wheel radii differ: {} and {}", left.1, right.1));
-    }
+        let chassis = body(root, [0.0; 3])?;
 
-    let caster_joint = urdf
-        .joints
-        .iter()
-        .find(|j| {
-            matches!(j.joint_type, urdf_rs::JointType::Fixed)
-                && link(&j.child.link).is_ok_and(|l| {
-                    l.collision
-                        .iter()
-                        .any(|c| matches!(c.geometry, urdf_rs::Geometry::Sphere { .. }))
+        let mut wheels = Vec::new();
+        for j in d.joints.iter().filter(|j| j.kind == JointKind::Continuous) {
+            let child = &d.links[j.child];
+            let (radius, width) = child
+                .collisions
+                .iter()
+                .find_map(|c| match c.geometry {
+                    Geometry::Cylinder { radius, length } => Some((radius, length)),
+                    _ => None,
                 })
+                .ok_or(format!(
+                    "wheel link '{}' (joint '{}') needs a <cylinder> collision shape",
+                    child.name, j.name
+                ))?;
+            wheels.push((body(child, xyz(&j.origin))?, radius, width));
+        }
+        if wheels.len() != 2 {
+            return Err(format!(
+                "expected exactly two continuous (wheel) joints, found {}",
+                wheels.len()
+            ));
+        }
+        wheels.sort_by(|a, b| b.0.position[1].total_cmp(&a.0.position[1]));
+        let (right, left) = (wheels.pop().unwrap(), wheels.pop().unwrap());
+        if left.0.position[1] <= 0.0 || right.0.position[1] >= 0.0 {
+            return Err(
+                "wheels must sit on either side of base_link (one at y > 0, one at y < 0)".into(),
+            );
+        }
+        if (left.1 - right.1).abs() > 1e-9 {
+            return Err(format!("wheel radii differ: {} and {}", left.1, right.1));
+        }
+
+        let sphere = |l: &Link| {
+            l.collisions.iter().find_map(|c| match c.geometry {
+                Geometry::Sphere { radius } => Some(radius),
+                _ => None,
+            })
+        };
+        let (caster_joint, caster_radius) = d
+            .joints
+            .iter()
+            .filter(|j| j.kind == JointKind::Fixed)
+            .find_map(|j| sphere(&d.links[j.child]).map(|r| (j, r)))
+            .ok_or("no caster: expected a link with a <sphere> collision shape on a fixed joint")?;
+        Ok(RobotModel {
+            name: d.name.clone(),
+            chassis,
+            chassis_half_extents,
+            chassis_center,
+            wheel_radius: left.1,
+            wheel_width: left.2,
+            wheels: [left.0, right.0],
+            caster: body(&d.links[caster_joint.child], xyz(&caster_joint.origin))?,
+            caster_radius,
         })
-        .ok_or("no caster: expected a link with a <sphere> collision shape on a fixed joint")?;
-    let caster_link = link(&caster_joint.child.link)?;
-    let caster_radius = caster_link
-        .collision
-        .iter()
-        .find_map(|c| match c.geometry {
-            urdf_rs::Geometry::Sphere { radius } => Some(radius),
-            _ => None,
-        })
-        .expect("checked above");
-    Ok(RobotModel {
-        name: urdf.name.clone(),
-        chassis,
-        chassis_half_extents,
-        chassis_center,
-        wheel_radius: left.1,
-        wheel_width: left.2,
-        wheels: [left.0, right.0],
-        caster: body(caster_link, *caster_joint.origin.xyz)?,
-        caster_radius,
-    })
+    }
 }
 
 #[cfg(test)]
@@ -208,8 +186,8 @@ mod tests {
         let text = std::fs::read_to_string(convoy_bot())
             .unwrap()
             .replace("continuous", "fixed");
-        let urdf = urdf_rs::read_from_string(&text).unwrap();
-        let e = model(&urdf).unwrap_err();
+        let d = crate::description::parse(&text, "r.urdf", Path::new(".")).unwrap();
+        let e = RobotModel::from_description(&d).unwrap_err();
         assert!(e.contains("two continuous"), "{e}");
     }
 
