@@ -1,23 +1,25 @@
-//! Collisions of robots with obstacles and with each other, as start/stop events.
+//! Contacts: collision events between robots and with obstacles, and each robot's contact
+//! points with their normal forces.
 //!
 //! After every physics step the monitor reads rapier's contact graph for each robot's
 //! colliders and forms the set of touching (robot, other) pairs, `other` being another robot's
-//! index or −1 for the world (walls, boxes, cylinders, and the floor when the chassis itself
-//! touches it, i.e. the robot tipped over). Wheels and caster on the floor are how a robot
-//! stands, not collisions. Comparing the set with the previous one gives the events; a
-//! contact between robots i and j yields one event for each of them.
+//! index or −1 for the world (walls, boxes, cylinders, and the floor when the root link itself
+//! touches it, i.e. the robot tipped over). Wheels, casters and other links on the floor are
+//! how a robot stands, not collisions. Comparing the set with the previous one gives the
+//! events; a contact between robots i and j yields one event for each of them.
 //!
-//! The contact graph is read rather than rapier's collision events because a robot is four
+//! The contact graph is read rather than rapier's collision events because a robot is many
 //! colliders: the monitor reports a robot-level contact once, however many of its colliders
 //! touch, and sorted sets make the event order independent of rapier's internal order.
 
 use crate::scene::{Part, Scene};
 use caravan_schemas::Collision;
+use rapier3d::prelude::*;
 use std::collections::BTreeSet;
 
 /// Two colliders closer than this count as touching, m. rapier keeps speculative contact
 /// points up to its prediction distance (2 cm) apart; those are not collisions yet.
-pub const TOUCH_DISTANCE: f32 = 0.002;
+pub const TOUCH_DISTANCE: Real = 0.002;
 
 /// Remembers which pairs touch and reports changes.
 #[derive(Debug, Default, Clone)]
@@ -53,6 +55,15 @@ fn event(robot: u32, other_robot: i32, started: bool) -> Collision {
     }
 }
 
+/// The other collider of a contact pair with `handle`.
+fn other_of(pair: &ContactPair, handle: ColliderHandle) -> ColliderHandle {
+    if pair.collider1 == handle {
+        pair.collider2
+    } else {
+        pair.collider1
+    }
+}
+
 fn touching_pairs(scene: &Scene) -> BTreeSet<(u32, i32)> {
     let colliders = &scene.physics.colliders;
     let narrow = &scene.physics.narrow_phase;
@@ -60,24 +71,17 @@ fn touching_pairs(scene: &Scene) -> BTreeSet<(u32, i32)> {
     for (i, robot) in scene.robots.iter().enumerate() {
         for &handle in &robot.colliders {
             let mine = Part::decode(colliders[handle].user_data);
+            let is_root = matches!(mine, Part::Link { link, .. } if link == robot.root_link);
             for pair in narrow.contact_pairs_with(handle) {
-                let other = if pair.collider1 == handle {
-                    pair.collider2
-                } else {
-                    pair.collider1
-                };
-                let Some(other_collider) = colliders.get(other) else {
+                let Some(other_collider) = colliders.get(other_of(pair, handle)) else {
                     continue;
                 };
                 let theirs = Part::decode(other_collider.user_data);
                 let other_index = match theirs {
-                    Part::Floor if !matches!(mine, Part::Chassis(_)) => continue,
+                    Part::Floor if !is_root => continue,
                     Part::Floor | Part::Obstacle(_) => -1,
-                    _ => match theirs.robot() {
-                        Some(j) if j == i => continue,
-                        Some(j) => j as i32,
-                        None => -1,
-                    },
+                    Part::Link { robot: j, .. } if j == i => continue,
+                    Part::Link { robot: j, .. } => j as i32,
                 };
                 let close = pair
                     .manifolds()
@@ -90,4 +94,64 @@ fn touching_pairs(scene: &Scene) -> BTreeSet<(u32, i32)> {
         }
     }
     pairs
+}
+
+/// One contact point of a robot's link.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactPoint {
+    pub link: usize,
+    /// Other robot and its link, or −1, −1 for the world.
+    pub other_robot: i32,
+    pub other_link: i32,
+    /// World frame, m.
+    pub point: [f64; 3],
+    /// Unit normal pointing from the other body into this link.
+    pub normal: [f64; 3],
+    /// Normal force over the last step, N.
+    pub normal_force: f64,
+}
+
+/// Robot `i`'s contact points after the last step (`dt` s long), wheels' tyres included.
+pub fn points(scene: &Scene, i: usize, dt: f64) -> Vec<ContactPoint> {
+    let colliders = &scene.physics.colliders;
+    let narrow = &scene.physics.narrow_phase;
+    let robot = &scene.robots[i];
+    let mut out = Vec::new();
+    for &handle in robot.colliders.iter().chain(&robot.tyres) {
+        let Part::Link { link, .. } = Part::decode(colliders[handle].user_data) else {
+            continue;
+        };
+        for pair in narrow.contact_pairs_with(handle) {
+            let Some(other) = colliders.get(other_of(pair, handle)) else {
+                continue;
+            };
+            let (other_robot, other_link) = match Part::decode(other.user_data) {
+                Part::Link { robot, link } => (robot as i32, link as i32),
+                _ => (-1, -1),
+            };
+            let mine_first = pair.collider1 == handle;
+            let me = &colliders[handle];
+            for m in pair.manifolds() {
+                // rapier's normal points from collider 1 to collider 2.
+                let sign: Real = if mine_first { -1.0 } else { 1.0 };
+                let n = m.data.normal * sign;
+                for p in &m.points {
+                    if p.dist > TOUCH_DISTANCE {
+                        continue;
+                    }
+                    let local = if mine_first { p.local_p1 } else { p.local_p2 };
+                    let at = me.position().transform_point(local);
+                    out.push(ContactPoint {
+                        link,
+                        other_robot,
+                        other_link,
+                        point: [at.x as f64, at.y as f64, at.z as f64],
+                        normal: [n.x as f64, n.y as f64, n.z as f64],
+                        normal_force: p.data.impulse as f64 / dt,
+                    });
+                }
+            }
+        }
+    }
+    out
 }

@@ -7,11 +7,28 @@
 //! ```
 //!
 //! Every key is optional. The defaults are the reference convoy: five robots in the lab world
-//! at its start poses, and the fitted motor and PID constants.
+//! at its start poses, and the fitted motor and PID constants. The top-level robot keys
+//! (`urdf`, `count`, `poses`, `lifted`, `wheel_friction`, `motor`, `pid`) describe one kind
+//! of differential-drive robot; `robots = [...]` ([`RobotSpec`]) describes any robots, of
+//! several kinds, instead. Robots are numbered in order across kinds: robot i publishes on
+//! `robot/i/…`.
 
 use crate::firmware::FirmwareParams;
 use crate::motor::MotorParams;
+use crate::spec::RobotSpec;
 use serde::Deserialize;
+
+/// Floating-point precision of the physics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Precision {
+    /// rapier3d (f32): the fast default.
+    #[default]
+    F32,
+    /// rapier3d-f64 with parry3d-f64: for experiments whose accuracy needs it (an IMU read at
+    /// 1e-6 m/s²).
+    F64,
+}
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -33,6 +50,11 @@ pub struct Params {
     pub wheel_friction: f64,
     pub motor: MotorParams,
     pub pid: FirmwareParams,
+    /// Robots of any kind; replaces the top-level robot keys when given.
+    pub robots: Vec<RobotSpec>,
+    /// Gravitational acceleration, m/s², along −z.
+    pub gravity: f64,
+    pub precision: Precision,
 }
 
 impl Default for Params {
@@ -47,6 +69,9 @@ impl Default for Params {
             wheel_friction: 1.0,
             motor: MotorParams::default(),
             pid: FirmwareParams::default(),
+            robots: Vec::new(),
+            gravity: 9.81,
+            precision: Precision::F32,
         }
     }
 }
@@ -56,8 +81,59 @@ impl Default for Params {
 pub const MAX_ROBOTS: usize = (caravan_schemas::lockstep::MAX_TOPICS - 1) / 3;
 
 impl Params {
+    /// The kinds of robot, each with its count: `robots`, or the top-level keys' convoy robot.
+    pub fn robot_specs(&self) -> Vec<RobotSpec> {
+        if !self.robots.is_empty() {
+            return self.robots.clone();
+        }
+        vec![RobotSpec::convoy(
+            &self.urdf,
+            self.count,
+            &self.poses,
+            self.lifted,
+            self.wheel_friction,
+            self.motor,
+            self.pid,
+        )]
+    }
+
     /// Checks values serde cannot; the message names the key.
     pub fn validate(&self) -> Result<(), String> {
+        if !(self.gravity.is_finite() && self.gravity >= 0.0) {
+            return Err(format!(
+                "key 'gravity': must be zero or positive (m/s², pointing down), got {}",
+                self.gravity
+            ));
+        }
+        if !self.robots.is_empty() {
+            let defaults = Params::default();
+            let top_level_given = self.urdf != defaults.urdf
+                || self.count != defaults.count
+                || !self.poses.is_empty()
+                || self.lifted
+                || self.wheel_friction != defaults.wheel_friction
+                || self.motor != defaults.motor
+                || self.pid != defaults.pid;
+            if top_level_given {
+                return Err(
+                    "key 'robots': give the robots either in 'robots' or with the \
+                            top-level keys (urdf, count, poses, lifted, wheel_friction, motor, \
+                            pid), not both"
+                        .into(),
+                );
+            }
+            let total: usize = self.robots.iter().map(|r| r.count).sum();
+            if total > MAX_ROBOTS {
+                return Err(format!(
+                    "key 'robots': {total} robots in all; at most {MAX_ROBOTS}"
+                ));
+            }
+            for (k, r) in self.robots.iter().enumerate() {
+                r.validate()
+                    .map_err(|e| format!("key 'robots[{k}].{}", &e[1..]))?;
+            }
+            return self.validate_step();
+        }
         if self.count == 0 || self.count > MAX_ROBOTS {
             return Err(format!(
                 "key 'count': must be between 1 and {MAX_ROBOTS}, got {}",
@@ -79,12 +155,7 @@ impl Params {
         {
             return Err(format!("key 'poses[{i}]': values must be finite numbers"));
         }
-        if !(1..=100).contains(&self.substeps) {
-            return Err(format!(
-                "key 'substeps': must be between 1 and 100, got {}",
-                self.substeps
-            ));
-        }
+        self.validate_step()?;
         if !(self.wheel_friction.is_finite() && self.wheel_friction > 0.0) {
             return Err(format!(
                 "key 'wheel_friction': must be positive, got {}",
@@ -93,6 +164,16 @@ impl Params {
         }
         self.motor.validate().map_err(|e| format!("key {e}"))?;
         self.pid.validate().map_err(|e| format!("key {e}"))?;
+        Ok(())
+    }
+
+    fn validate_step(&self) -> Result<(), String> {
+        if !(1..=100).contains(&self.substeps) {
+            return Err(format!(
+                "key 'substeps': must be between 1 and 100, got {}",
+                self.substeps
+            ));
+        }
         Ok(())
     }
 }
@@ -132,6 +213,40 @@ mod tests {
     fn pose_count_mismatch_names_the_key() {
         let e = parse(json!({"count": 2, "poses": [[1.0, 1.0, 0.0]]})).unwrap_err();
         assert!(e.contains("'poses'") && e.contains("count = 2"), "{e}");
+    }
+
+    #[test]
+    fn robots_of_several_kinds() {
+        let p = parse(json!({"robots": [
+            {"urdf": "arm.urdf", "base": "fixed", "actuators": [
+                {"type": "position", "joints": ["*"], "kp": 50.0}]},
+            {"urdf": "drone.urdf", "base": "kinematic", "count": 2,
+             "poses": [[1.0, 1.0, 2.0, 0.0, 0.0, 0.0], [2.0, 1.0, 0.0]]}]}))
+        .unwrap();
+        let specs = p.robot_specs();
+        assert_eq!(specs.len(), 2);
+        assert_eq!(specs[1].count, 2);
+        assert_eq!(specs[0].joint_model(), crate::spec::JointModel::Multibody);
+        assert_eq!(specs[1].joint_model(), crate::spec::JointModel::Impulse);
+    }
+
+    #[test]
+    fn robot_kind_errors_name_the_key() {
+        let e = parse(json!({"robots": [{"urdf": "a.urdf", "poses": [[1.0, 2.0]]}]})).unwrap_err();
+        assert!(e.contains("key 'robots[0].poses[0]'"), "{e}");
+        let e = parse(json!({"robots": [{"urdf": "a.urdf",
+            "actuators": [{"type": "position", "joints": ["j"], "kp": -1.0}]}]}))
+        .unwrap_err();
+        assert!(
+            e.contains("'robots[0].actuators[0]'") && e.contains("kp"),
+            "{e}"
+        );
+        let e = parse(json!({"robots": [{"urdf": "a.urdf",
+            "actuators": [{"type": "torque", "joints": ["j"]}]}]}))
+        .unwrap_err();
+        assert!(e.contains("torque"), "{e}");
+        let e = parse(json!({"count": 2, "robots": [{"urdf": "a.urdf"}]})).unwrap_err();
+        assert!(e.contains("not both"), "{e}");
     }
 
     #[test]

@@ -1,25 +1,30 @@
-//! The rapier world: a floor, the world file's obstacles as fixed colliders, and each robot as
-//! a chassis body with two wheel bodies on revolute joints and a caster.
+//! The rapier world: a floor, the world file's obstacles as fixed colliders, and each robot's
+//! bodies ([`crate::plan`]) with their colliders and joints.
 //!
-//! Frames follow REP 103 with z up; rapier's gravity points along −z. A robot's chassis body
-//! frame is its `base_link` (at axle height, midway between the wheels), so the body pose is
-//! the robot pose. Wheel bodies keep the chassis orientation at rest, so their spin axis is
-//! their local y, which is also rapier's cylinder axis.
+//! Frames follow REP 103 with z up; rapier's gravity points along −z. A body's frame is its
+//! own link's frame, so a root body's pose is the robot's base_link pose.
 //!
-//! Each wheel has two colliders. Its *tyre* is a ball of the wheel's radius that touches only
-//! the floor: rapier's cylinder–box contacts put the support point slightly off the wheel's
-//! lowest point, which on a flat floor pushes a robot with idle motors steadily (about
-//! 0.06 m/s², in a direction that depends on the step size), and a flat tread moves the load
-//! to its inner edge and shortens the track by a wheel width. A ball touches a flat floor
-//! exactly below its centre, in the wheel's mid-plane. Its *rim*, a cylinder of the wheel's
-//! true size, collides with everything but the floor, so wheels hit walls and other robots
-//! where a real wheel would.
+//! Each link's `<inertial>` rides on its first collider (mass properties in that collider's
+//! frame), or on the body itself when the link has no collider; the link's other colliders
+//! have no mass. A wheel ([`crate::plan::is_wheel`]) has two colliders. Its *tyre* is a ball
+//! of the wheel's radius that touches only the floor: rapier's cylinder–box contacts put the
+//! support point slightly off the wheel's lowest point, which on a flat floor pushes a robot
+//! with idle motors steadily (about 0.06 m/s², in a direction that depends on the step
+//! size), and a flat tread moves the load to its inner edge and shortens the track by a
+//! wheel width. A ball touches a flat floor exactly below its centre, in the wheel's
+//! mid-plane. Its *rim*, the cylinder of the wheel's true size, collides with everything but
+//! the floor, so wheels hit walls and other robots where a real wheel would.
 //!
-//! The wheel joints have no rapier motor: [`crate::motor`] computes the torque and the
-//! simulation applies it to the wheel and, reversed, to the chassis, so the motor pushes
+//! No joint has a rapier motor: [`crate::actuator`] computes each joint's torque and the
+//! simulation applies it to the child body and, reversed, to the parent, so a motor pushes
 //! against the body it is bolted to.
 
-use caravan_world::{Obstacle, ObstacleKind, RobotModel, Shape, World};
+use crate::plan::RobotPlan;
+use crate::shapes;
+use crate::spec::{Base, JointModel, RobotSpec};
+use caravan_world::description::{Geometry, JointKind, RobotDescription};
+use caravan_world::{Obstacle, ObstacleKind, Shape, World};
+use nalgebra::Isometry3;
 use rapier3d::parry::query::intersection_test;
 use rapier3d::prelude::*;
 
@@ -29,38 +34,37 @@ pub enum Part {
     Floor,
     /// Index into [`World::obstacles`].
     Obstacle(usize),
-    Chassis(usize),
-    Wheel(usize),
-    Caster(usize),
+    /// Link `link` of robot `robot`.
+    Link {
+        robot: usize,
+        link: usize,
+    },
 }
 
 impl Part {
     fn encode(self) -> u128 {
-        let (kind, index) = match self {
-            Part::Floor => (0, 0),
-            Part::Obstacle(i) => (1, i),
-            Part::Chassis(i) => (2, i),
-            Part::Wheel(i) => (3, i),
-            Part::Caster(i) => (4, i),
-        };
-        (kind << 64) | index as u128
+        match self {
+            Part::Floor => 0,
+            Part::Obstacle(i) => (1 << 64) | i as u128,
+            Part::Link { robot, link } => (2 << 64) | ((robot as u128) << 32) | link as u128,
+        }
     }
 
     pub fn decode(data: u128) -> Self {
-        let index = data as u64 as usize;
         match data >> 64 {
             0 => Part::Floor,
-            1 => Part::Obstacle(index),
-            2 => Part::Chassis(index),
-            3 => Part::Wheel(index),
-            _ => Part::Caster(index),
+            1 => Part::Obstacle(data as u64 as usize),
+            _ => Part::Link {
+                robot: (data >> 32) as u32 as usize,
+                link: data as u32 as usize,
+            },
         }
     }
 
     /// The robot this collider belongs to, if any.
     pub fn robot(self) -> Option<usize> {
         match self {
-            Part::Chassis(i) | Part::Wheel(i) | Part::Caster(i) => Some(i),
+            Part::Link { robot, .. } => Some(robot),
             Part::Floor | Part::Obstacle(_) => None,
         }
     }
@@ -72,7 +76,7 @@ mod groups {
 
     const FLOOR: Group = Group::GROUP_1;
     const WORLD: Group = Group::GROUP_2;
-    /// Chassis and caster.
+    /// Every robot collider but wheels.
     const BODY: Group = Group::GROUP_3;
     const RIM: Group = Group::GROUP_4;
     const TYRE: Group = Group::GROUP_5;
@@ -88,24 +92,11 @@ mod groups {
     pub const TYRE_GROUPS: InteractionGroups = g(TYRE, FLOOR);
 }
 
-/// Surface and mounting choices that are not in the world file or the URDF.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SceneOptions {
-    /// Coulomb friction coefficient of the wheels on the floor.
-    pub wheel_friction: f64,
-    /// Friction of the chassis against anything (it should rarely touch).
-    pub chassis_friction: f64,
-    /// Added to each wheel's inertia about its axle: the motor rotor seen through the gear.
-    pub wheel_extra_inertia: f64,
-    /// Hold the chassis fixed in the air so the wheels spin freely (bench test).
-    pub lifted: bool,
-}
-
 /// Solver iterations (substeps of rapier's soft-TGS solver) per physics step. With rapier's
-/// default of 4 and a 2 ms step, the light wheel (40 g) chatters between its joint and the
-/// floor under the 1.4 kg chassis: its speed jitters by 0.06 rad/s rms about the rolling
-/// speed. With 8 the jitter is 0.004 rad/s, as with 4 at a 1 ms step, for a third more
-/// compute than 4 and two thirds less than halving the step.
+/// default of 4 and a 2 ms step, the convoy robot's light wheel (40 g) chatters between its
+/// joint and the floor under the 1.4 kg chassis: its speed jitters by 0.06 rad/s rms about
+/// the rolling speed. With 8 the jitter is 0.004 rad/s, as with 4 at a 1 ms step, for a
+/// third more compute than 4 and two thirds less than halving the step.
 pub const SOLVER_ITERATIONS: usize = 8;
 
 /// Natural frequency of contacts with fixed colliders (floor, walls), Hz; rapier's default
@@ -114,22 +105,63 @@ pub const SOLVER_ITERATIONS: usize = 8;
 /// 60 Hz the tyres sink 1 mm into the floor: the rolling radius shrinks by 1.5 % (wheel
 /// angles then overstate the distance travelled) and the chassis pitches by 0.6°. At 150 Hz
 /// they sink 0.16 mm (0.24 %); stiffer contacts let a standing robot slowly drift in yaw.
-pub const STATIC_CONTACT_HZ: f32 = 150.0;
+pub const STATIC_CONTACT_HZ: Real = 150.0;
 
-/// Height at which a lifted chassis is held above its normal standing height, m.
+/// Height at which a lifted base is held above its normal standing height, m.
 pub const LIFT_HEIGHT: f64 = 0.1;
 
-/// Handles of one robot's bodies and colliders.
+/// Friction of a robot surface whose URDF gives no `<gazebo><mu1>`.
+pub const DEFAULT_FRICTION: f64 = 0.5;
+
+/// Friction of obstacles. Robot parts combine with `Min`, so their own coefficients decide.
+const OBSTACLE_FRICTION: Real = 0.5;
+
+/// A robot to place: its description, its kind's spec and its start pose.
+pub struct RobotSetup<'a> {
+    pub description: &'a RobotDescription,
+    pub spec: &'a RobotSpec,
+    pub pose: StartPose,
+    /// Inertia added to each joint's child link about the joint axis (an actuator's rotor
+    /// seen through its gear), kg·m²; one per joint.
+    pub reflected_inertia: Vec<f64>,
+}
+
+/// Where a robot starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StartPose {
+    /// On the floor (a floating base stands on it; a fixed base sits at z = 0).
+    Planar { x: f64, y: f64, yaw: f64 },
+    /// The base link's full pose.
+    Full(Isometry3<f64>),
+}
+
+/// How a robot's joint is solved in rapier.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JointHandle {
+    Impulse(ImpulseJointHandle),
+    Multibody(MultibodyJointHandle),
+}
+
+/// One robot's rapier handles.
 #[derive(Debug, Clone)]
 pub struct RobotBodies {
-    pub chassis: RigidBodyHandle,
-    /// Left then right.
-    pub wheels: [RigidBodyHandle; 2],
-    /// Chassis box, caster, left wheel rim, right wheel rim: what can hit obstacles and
-    /// other robots.
-    pub colliders: [ColliderHandle; 4],
-    /// Left and right tyres, which touch only the floor.
-    pub tyres: [ColliderHandle; 2],
+    pub plan: RobotPlan,
+    /// One per [`RobotPlan::bodies`]; the first is the base.
+    pub bodies: Vec<RigidBodyHandle>,
+    /// Per description joint: its rapier joint, for movable joints.
+    pub joints: Vec<Option<JointHandle>>,
+    /// Colliders that can hit obstacles and other robots (everything but tyres).
+    pub colliders: Vec<ColliderHandle>,
+    /// Tyres, which touch only the floor.
+    pub tyres: Vec<ColliderHandle>,
+    /// Link index of the root link.
+    pub root_link: usize,
+}
+
+impl RobotBodies {
+    pub fn base(&self) -> RigidBodyHandle {
+        self.bodies[0]
+    }
 }
 
 /// The rapier state and the handles needed to drive and read it.
@@ -141,7 +173,7 @@ pub struct Scene {
 }
 
 fn v(x: f64, y: f64, z: f64) -> Vector {
-    Vector::new(x as f32, y as f32, z as f32)
+    Vector::new(x as Real, y as Real, z as Real)
 }
 
 fn obstacle_collider(index: usize, o: &Obstacle) -> ColliderBuilder {
@@ -149,24 +181,24 @@ fn obstacle_collider(index: usize, o: &Obstacle) -> ColliderBuilder {
     let centre = v(o.center[0], o.center[1], half_h);
     let builder = match o.shape {
         Shape::Box { half_x, half_y } => {
-            ColliderBuilder::cuboid(half_x as f32, half_y as f32, half_h as f32)
+            ColliderBuilder::cuboid(half_x as Real, half_y as Real, half_h as Real)
                 .rotation(v(0.0, 0.0, o.yaw))
         }
         // rapier's cylinders stand along y; a quarter turn about x stands them along z.
-        Shape::Cylinder { radius } => ColliderBuilder::cylinder(half_h as f32, radius as f32)
+        Shape::Cylinder { radius } => ColliderBuilder::cylinder(half_h as Real, radius as Real)
             .rotation(v(std::f64::consts::FRAC_PI_2, 0.0, 0.0)),
     };
     builder
         .translation(centre)
-        .friction(0.5)
+        .friction(OBSTACLE_FRICTION)
         .collision_groups(groups::WORLD_GROUPS)
         .user_data(Part::Obstacle(index).encode())
 }
 
-/// Builds the scene with one robot per start pose `[x, y, theta]`.
-pub fn build(world: &World, robot: &RobotModel, poses: &[[f64; 3]], opt: &SceneOptions) -> Scene {
+/// Builds the scene: the world, then each robot in order.
+pub fn build(world: &World, robots: &[RobotSetup], gravity: f64) -> Result<Scene, String> {
     let mut physics = PhysicsWorld::new();
-    physics.gravity = Vector::new(0.0, 0.0, -9.81);
+    physics.gravity = Vector::new(0.0, 0.0, -gravity as Real);
     // Recycled contact pairs keep stale distances; the contact monitor needs current ones,
     // and a small scene barely benefits from recycling.
     physics.integration_parameters.contact_recycling = false;
@@ -179,7 +211,7 @@ pub fn build(world: &World, robot: &RobotModel, poses: &[[f64; 3]], opt: &SceneO
     // The floor: a slab whose top face is z = 0, a metre wider than the world on each side.
     let [sx, sy] = world.size;
     physics.insert_collider(
-        ColliderBuilder::cuboid((sx / 2.0 + 1.0) as f32, (sy / 2.0 + 1.0) as f32, 0.05)
+        ColliderBuilder::cuboid((sx / 2.0 + 1.0) as Real, (sy / 2.0 + 1.0) as Real, 0.05)
             .translation(v(sx / 2.0, sy / 2.0, -0.05))
             // Robot parts combine with `Min`, so their own coefficients decide their grip.
             .friction(10.0)
@@ -194,112 +226,202 @@ pub fn build(world: &World, robot: &RobotModel, poses: &[[f64; 3]], opt: &SceneO
         .map(|(i, o)| physics.insert_collider(obstacle_collider(i, o), None))
         .collect();
 
-    let robots = poses
-        .iter()
-        .enumerate()
-        .map(|(i, pose)| add_robot(&mut physics, i, robot, *pose, opt))
-        .collect();
-    Scene {
-        physics,
-        robots,
-        obstacles,
+    let mut out = Vec::with_capacity(robots.len());
+    for (i, r) in robots.iter().enumerate() {
+        out.push(add_robot(&mut physics, i, r)?);
     }
+    Ok(Scene {
+        physics,
+        robots: out,
+        obstacles,
+    })
 }
 
-fn mass_props(mass: f64, inertia: [f64; 3]) -> MassProperties {
-    MassProperties::new(
-        Vector::ZERO,
-        mass as f32,
-        v(inertia[0], inertia[1], inertia[2]),
-    )
+/// The base pose: a planar start stands a floating robot on its wheels (or, without wheels,
+/// on its lowest point) and sits a fixed one at z = 0. Body poses are composed in rapier's
+/// precision, as the solver will hold them.
+fn base_pose(r: &RobotSetup, plan: &RobotPlan) -> Pose {
+    let (x, y, yaw) = match r.pose {
+        StartPose::Full(pose) => return shapes::pose(&pose),
+        StartPose::Planar { x, y, yaw } => (x, y, yaw),
+    };
+    let z = if r.spec.base == Base::Fixed {
+        0.0
+    } else {
+        standing_height(r.description, plan)
+    } + if r.spec.lifted { LIFT_HEIGHT } else { 0.0 };
+    Pose::from_parts(v(x, y, z), Rotation::from_rotation_z(yaw as Real))
+}
+
+/// Height of the base link above the floor when the robot stands at rest, m.
+pub fn standing_height(d: &RobotDescription, plan: &RobotPlan) -> f64 {
+    let rest = d.rest_poses();
+    let mut wheel_bottom = f64::INFINITY;
+    let mut lowest = f64::INFINITY;
+    for (l, link) in d.links.iter().enumerate() {
+        for c in &link.collisions {
+            let pose = rest[l] * c.origin;
+            let z = pose.translation.vector.z;
+            if let (true, Geometry::Cylinder { radius, .. }) = (plan.wheels[l], &c.geometry) {
+                wheel_bottom = wheel_bottom.min(z - radius);
+            }
+            lowest = lowest.min(shapes::lowest_point(&c.geometry, &pose));
+        }
+    }
+    -if wheel_bottom.is_finite() {
+        wheel_bottom
+    } else if lowest.is_finite() {
+        lowest
+    } else {
+        0.0
+    }
 }
 
 fn add_robot(
     physics: &mut PhysicsWorld,
     index: usize,
-    m: &RobotModel,
-    [x, y, theta]: [f64; 3],
-    opt: &SceneOptions,
-) -> RobotBodies {
-    let z = m.base_height() + if opt.lifted { LIFT_HEIGHT } else { 0.0 };
-    let base = Pose::from_parts(v(x, y, z), Rotation::from_rotation_z(theta as f32));
-    let chassis_body = if opt.lifted {
-        RigidBodyBuilder::fixed()
-    } else {
-        RigidBodyBuilder::dynamic()
-    };
-    // Robots must never fall asleep: a sleeping robot would ignore its motor torques.
-    let chassis = physics.insert_body(chassis_body.pose(base).can_sleep(false));
+    r: &RobotSetup,
+) -> Result<RobotBodies, String> {
+    let d = r.description;
+    let plan = RobotPlan::new(d);
+    let multibody = r.spec.joint_model() == JointModel::Multibody;
+    let base = base_pose(r, &plan);
+    let friction_of = |l: usize| d.links[l].friction.unwrap_or(DEFAULT_FRICTION);
 
-    // The URDF's chassis inertial and collision origins coincide for the convoy robot;
-    // RobotModel exposes the collision one, so the chassis mass sits at the box centre.
-    let [cx, cy, cz] = m.chassis_center;
-    let [hx, hy, hz] = m.chassis_half_extents;
-    let chassis_collider = physics.insert_collider(
-        ColliderBuilder::cuboid(hx as f32, hy as f32, hz as f32)
-            .translation(v(cx, cy, cz))
-            .mass_properties(mass_props(m.chassis.mass, m.chassis.inertia))
-            .friction(opt.chassis_friction as f32)
-            .friction_combine_rule(CoefficientCombineRule::Min)
-            .collision_groups(groups::BODY_GROUPS)
-            .user_data(Part::Chassis(index).encode()),
-        Some(chassis),
-    );
-    // The caster is a frictionless ball: it carries weight but never steers or brakes.
-    let [kx, ky, kz] = m.caster.position;
-    let caster_collider = physics.insert_collider(
-        ColliderBuilder::ball(m.caster_radius as f32)
-            .translation(v(kx, ky, kz))
-            .mass_properties(mass_props(m.caster.mass, m.caster.inertia))
-            .friction(0.0)
-            .friction_combine_rule(CoefficientCombineRule::Min)
-            .collision_groups(groups::BODY_GROUPS)
-            .user_data(Part::Caster(index).encode()),
-        Some(chassis),
-    );
-
-    let mut wheels = [chassis; 2];
-    let mut rims = [chassis_collider; 2];
-    let mut tyres = [chassis_collider; 2];
-    for (side, wheel) in m.wheels.iter().enumerate() {
-        let offset = v(wheel.position[0], wheel.position[1], wheel.position[2]);
-        let pose = Pose::from_parts(base.transform_point(offset), base.rotation);
-        let body = physics.insert_body(RigidBodyBuilder::dynamic().pose(pose).can_sleep(false));
-        let [ixx, iyy, izz] = wheel.inertia;
-        rims[side] = physics.insert_collider(
-            ColliderBuilder::cylinder((m.wheel_width / 2.0) as f32, m.wheel_radius as f32)
-                .mass_properties(mass_props(
-                    wheel.mass,
-                    [ixx, iyy + opt.wheel_extra_inertia, izz],
-                ))
-                .friction(0.5)
-                .friction_combine_rule(CoefficientCombineRule::Min)
-                .collision_groups(groups::RIM_GROUPS)
-                .user_data(Part::Wheel(index).encode()),
-            Some(body),
-        );
-        tyres[side] = physics.insert_collider(
-            ColliderBuilder::ball(m.wheel_radius as f32)
-                .density(0.0)
-                .friction(opt.wheel_friction as f32)
-                .friction_combine_rule(CoefficientCombineRule::Min)
-                .collision_groups(groups::TYRE_GROUPS)
-                .user_data(Part::Wheel(index).encode()),
-            Some(body),
-        );
-        // The wheel overlaps the chassis box; contacts between the joined bodies are off.
-        let joint = RevoluteJointBuilder::new(Vector::Y)
-            .local_anchor1(offset)
-            .local_anchor2(Vector::ZERO)
-            .contacts_enabled(false);
-        physics.impulse_joints.insert(chassis, body, joint, true);
-        wheels[side] = body;
+    let mut bodies: Vec<RigidBodyHandle> = Vec::with_capacity(plan.bodies.len());
+    let mut world_poses: Vec<Pose> = Vec::with_capacity(plan.bodies.len());
+    let mut joints = vec![None; d.joints.len()];
+    let mut colliders = Vec::new();
+    let mut tyres = Vec::new();
+    for body_plan in &plan.bodies {
+        let (pose, builder) = match &body_plan.joint {
+            None => {
+                let builder = match (r.spec.base, r.spec.lifted) {
+                    (Base::Fixed, _) | (Base::Floating, true) => RigidBodyBuilder::fixed(),
+                    (Base::Kinematic, _) => RigidBodyBuilder::kinematic_velocity_based(),
+                    (Base::Floating, false) => RigidBodyBuilder::dynamic(),
+                };
+                (base, builder)
+            }
+            Some(j) => (
+                world_poses[j.parent_body] * shapes::pose(&j.frame),
+                RigidBodyBuilder::dynamic(),
+            ),
+        };
+        // Robots must never fall asleep: a sleeping robot would ignore its actuators.
+        let handle = physics.insert_body(builder.pose(pose).can_sleep(false));
+        let mut massless_links = Vec::new();
+        for (link, link_pose) in &body_plan.links {
+            let l = &d.links[*link];
+            let part = Part::Link {
+                robot: index,
+                link: *link,
+            };
+            let extra = r.reflected_inertia_of(*link);
+            let mut inertial = l.inertial.clone();
+            if let (Some(i), Some((axis, j))) = (&mut inertial, extra) {
+                i.inertia += shapes::axis_inertia(&i.origin, &axis, j);
+            }
+            let wheel = plan.wheels[*link];
+            for (k, c) in l.collisions.iter().enumerate() {
+                let at = link_pose * c.origin;
+                let shape = shapes::shape(
+                    &c.geometry,
+                    r.spec.base == Base::Fixed && body_plan.joint.is_none(),
+                )
+                .map_err(|e| format!("link '{}' of {}: {e}", l.name, d.file))?;
+                let is_rim = wheel && matches!(c.geometry, Geometry::Cylinder { .. });
+                let mut builder = ColliderBuilder::new(shape)
+                    .position(shapes::collider_pose(&c.geometry, &at))
+                    .friction(friction_of(*link) as Real)
+                    .friction_combine_rule(CoefficientCombineRule::Min)
+                    .collision_groups(if is_rim {
+                        groups::RIM_GROUPS
+                    } else {
+                        groups::BODY_GROUPS
+                    })
+                    .user_data(part.encode());
+                builder = match (&inertial, k) {
+                    (Some(i), 0) => builder.mass_properties(shapes::mass_properties(
+                        i,
+                        &shapes::collider_iso(&c.geometry, &at),
+                        link_pose,
+                    )),
+                    _ => builder.density(0.0),
+                };
+                colliders.push(physics.insert_collider(builder, Some(handle)));
+                if is_rim && let Geometry::Cylinder { radius, .. } = c.geometry {
+                    tyres.push(
+                        physics.insert_collider(
+                            // A ball needs no rotation; leaving it out keeps its frame the body's.
+                            ColliderBuilder::ball(radius as Real)
+                                .translation(shapes::vector(&at.translation.vector))
+                                .density(0.0)
+                                .friction(r.spec.wheel_friction as Real)
+                                .friction_combine_rule(CoefficientCombineRule::Min)
+                                .collision_groups(groups::TYRE_GROUPS)
+                                .user_data(part.encode()),
+                            Some(handle),
+                        ),
+                    );
+                }
+            }
+            if l.collisions.is_empty()
+                && let Some(i) = inertial
+            {
+                massless_links.push((i, *link_pose));
+            }
+        }
+        // Links without colliders still weigh: their mass goes on the body itself.
+        if !massless_links.is_empty() {
+            let mut props = MassProperties::default();
+            for (i, link_pose) in &massless_links {
+                props += shapes::mass_properties(i, link_pose, link_pose)
+                    .transform_by(&shapes::pose(link_pose));
+            }
+            physics.bodies[handle].set_additional_mass_properties(props, true);
+        }
+        if let Some(j) = &body_plan.joint {
+            let joint = &d.joints[j.joint];
+            let parent = bodies[j.parent_body];
+            let generic = shapes::joint(joint, &j.frame);
+            joints[j.joint] = Some(if multibody {
+                JointHandle::Multibody(
+                    physics
+                        .multibody_joints
+                        .insert(parent, handle, generic, true)
+                        .ok_or_else(|| {
+                            format!(
+                                "joint '{}' of {}: rapier refused it in a multibody",
+                                joint.name, d.file
+                            )
+                        })?,
+                )
+            } else {
+                JointHandle::Impulse(physics.impulse_joints.insert(parent, handle, generic, true))
+            });
+        }
+        bodies.push(handle);
+        world_poses.push(pose);
     }
-    RobotBodies {
-        chassis,
-        wheels,
-        colliders: [chassis_collider, caster_collider, rims[0], rims[1]],
+    Ok(RobotBodies {
+        plan,
+        bodies,
+        joints,
+        colliders,
         tyres,
+        root_link: d.root,
+    })
+}
+
+impl RobotSetup<'_> {
+    /// The joint axis (in the link frame) and the inertia an actuator adds about it, for
+    /// the link a joint moves.
+    fn reflected_inertia_of(&self, link: usize) -> Option<(nalgebra::Vector3<f64>, f64)> {
+        let j = self.description.parent_joint(link)?;
+        let joint = &self.description.joints[j];
+        let extra = self.reflected_inertia.get(j).copied().unwrap_or(0.0);
+        (joint.kind != JointKind::Fixed && extra > 0.0).then_some((joint.axis, extra))
     }
 }
 

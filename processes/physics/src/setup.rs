@@ -1,11 +1,16 @@
-//! From params to a running simulation, with every input checked: the world file, the robot
-//! description, the number of start poses, and that no robot starts inside an obstacle, off
-//! the floor, or inside another robot. Errors are one paragraph naming the file or key.
+//! From params to a running simulation, with every input checked: the world file, each
+//! robot description and its actuators, the start poses, and that no robot starts inside an
+//! obstacle, off the floor, or inside another robot. Errors are one paragraph naming the
+//! file or key.
 
+use crate::actuator::Actuator;
 use crate::params::Params;
-use crate::scene::{self, Overlap};
-use crate::sim::{SimConfig, Simulation};
-use caravan_world::{load_robot, load_world};
+use crate::scene::{self, Overlap, RobotSetup, StartPose};
+use crate::sim::{RobotBuild, SimConfig, Simulation};
+use crate::spec::{Drive, RobotSpec};
+use caravan_world::description::{JointKind, RobotDescription, load_description};
+use caravan_world::{RobotModel, load_world};
+use nalgebra::{Isometry3, Vector3};
 use std::fmt;
 use std::path::Path;
 
@@ -21,7 +26,16 @@ impl fmt::Display for SetupError {
 
 impl std::error::Error for SetupError {}
 
-/// Loads the world and the robot named in `params` (paths relative to `launch_dir`) and
+/// The key prefix of robot kind `k`: `robots[k].` or nothing for the top-level form.
+fn key(params: &Params, k: usize, name: &str) -> String {
+    if params.robots.is_empty() {
+        name.to_string()
+    } else {
+        format!("robots[{k}].{name}")
+    }
+}
+
+/// Loads the world and the robots named in `params` (paths relative to `launch_dir`) and
 /// builds the simulation with physics step `dt_ns`.
 pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation, SetupError> {
     params.validate().map_err(SetupError)?;
@@ -32,34 +46,57 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
             params.world
         ))
     })?;
-    let robot_path = launch_dir.join(&params.urdf);
-    let robot = load_robot(&robot_path).map_err(|e| {
-        SetupError(format!(
-            "robot description (key 'urdf' = \"{}\"): {e}",
-            params.urdf
-        ))
-    })?;
-    // Without `poses`, the robots start where the world file says.
-    let poses: Vec<[f64; 3]> = if params.poses.is_empty() {
-        if world.starts.len() < params.count {
-            return Err(SetupError(format!(
-                "key 'poses': not given, and world file {} has {} [[start]] pose(s) for \
-                 count = {}; give one [x, y, theta] per robot in either",
-                world_path.display(),
-                world.starts.len(),
-                params.count
-            )));
+    let specs = params.robot_specs();
+    let mut descriptions = Vec::with_capacity(specs.len());
+    for (k, spec) in specs.iter().enumerate() {
+        let d = load_description(&launch_dir.join(&spec.urdf)).map_err(|e| {
+            SetupError(format!(
+                "robot description (key '{}' = \"{}\"): {e}",
+                key(params, k, "urdf"),
+                spec.urdf
+            ))
+        })?;
+        check_masses(&d, spec).map_err(|e| {
+            SetupError(format!(
+                "robot description (key '{}' = \"{}\"): {e}",
+                key(params, k, "urdf"),
+                spec.urdf
+            ))
+        })?;
+        descriptions.push(d);
+    }
+
+    // Start poses: each kind's own, else the world's [[start]] poses in robot order.
+    let total: usize = specs.iter().map(|s| s.count).sum();
+    let mut poses: Vec<(String, Vec<f64>)> = Vec::with_capacity(total);
+    for (k, spec) in specs.iter().enumerate() {
+        for n in 0..spec.count {
+            let name = key(params, k, &format!("poses[{n}]"));
+            let pose = match spec.poses.get(n) {
+                Some(p) => p.clone(),
+                None => {
+                    let g = poses.len();
+                    let start = world.starts.get(g).ok_or_else(|| {
+                        SetupError(format!(
+                            "key '{}': not given, and world file {} has {} [[start]] pose(s) \
+                             for {total} robot(s); give one pose per robot in either",
+                            key(params, k, "poses"),
+                            world_path.display(),
+                            world.starts.len(),
+                        ))
+                    })?;
+                    start.to_vec()
+                }
+            };
+            poses.push((name, pose));
         }
-        world.starts[..params.count].to_vec()
-    } else {
-        params.poses.clone()
-    };
-    for (i, &[x, y, _]) in poses.iter().enumerate() {
+    }
+    for (g, (name, p)) in poses.iter().enumerate() {
+        let (x, y) = (p[0], p[1]);
         if !(0.0..=world.size[0]).contains(&x) || !(0.0..=world.size[1]).contains(&y) {
             return Err(SetupError(format!(
-                "key 'poses[{i}]' = {:?}: robot {i} would start off the floor of world '{}' \
+                "key '{name}' = {p:?}: robot {g} would start off the floor of world '{}' \
                  ({}), which spans x ∈ [0, {}] and y ∈ [0, {}] m",
-                poses[i],
                 world.name,
                 world_path.display(),
                 world.size[0],
@@ -67,22 +104,55 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
             )));
         }
     }
+
+    let mut builds = Vec::with_capacity(total);
+    let mut pose_iter = poses.iter();
+    for (k, (spec, d)) in specs.iter().zip(&descriptions).enumerate() {
+        // Spec errors start with the quoted key below the robot kind: 'actuators[0]…'.
+        let actuators = actuators(spec, d)
+            .map_err(|e| SetupError(format!("key '{}{}", key(params, k, ""), &e[1..])))?;
+        let drive = match spec.drive {
+            Some(Drive::Diff) => Some(diff_drive(d).map_err(|e| {
+                SetupError(format!(
+                    "key '{}': {e} (robot description {})",
+                    key(params, k, "drive"),
+                    d.file
+                ))
+            })?),
+            None => None,
+        };
+        for _ in 0..spec.count {
+            let (_, p) = pose_iter.next().expect("one pose per robot");
+            let reflected_inertia = actuators
+                .iter()
+                .map(|a| a.as_ref().map_or(0.0, Actuator::reflected_inertia))
+                .collect();
+            builds.push(RobotBuild {
+                setup: RobotSetup {
+                    description: d,
+                    spec,
+                    pose: start_pose(p),
+                    reflected_inertia,
+                },
+                actuators: actuators.clone(),
+                drive,
+            });
+        }
+    }
     let cfg = SimConfig {
         dt_ns,
-        motor: params.motor,
-        pid: params.pid,
-        wheel_friction: params.wheel_friction,
-        lifted: params.lifted,
+        gravity: params.gravity,
     };
-    let sim = Simulation::new(&world, &robot, &poses, cfg);
+    let sim = Simulation::new(&world, builds, cfg).map_err(SetupError)?;
     match scene::first_overlap(sim.scene()) {
         None => Ok(sim),
         Some(Overlap::Obstacle { robot: i, obstacle }) => {
             let o = &world.obstacles[obstacle];
             Err(SetupError(format!(
-                "key 'poses[{i}]' = {:?}: robot {i} would start inside the {} centred at \
-                 ({}, {}) of world file {}; move it to free floor",
-                poses[i],
+                "key '{}' = {:?}: robot {i} would start inside the {} centred at ({}, {}) of \
+                 world file {}; move it to free floor",
+                poses[i].0,
+                poses[i].1,
                 scene::kind_name(o.kind),
                 o.center[0],
                 o.center[1],
@@ -90,9 +160,78 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
             )))
         }
         Some(Overlap::Robot { robot: i, other: j }) => Err(SetupError(format!(
-            "keys 'poses[{i}]' = {:?} and 'poses[{j}]' = {:?}: robots {i} and {j} would \
-             start inside each other; space them further apart",
-            poses[i], poses[j]
+            "keys '{}' = {:?} and '{}' = {:?}: robots {i} and {j} would start inside each \
+             other; space them further apart",
+            poses[i].0, poses[i].1, poses[j].0, poses[j].1
         ))),
     }
+}
+
+fn start_pose(p: &[f64]) -> StartPose {
+    match *p {
+        [x, y, yaw] => StartPose::Planar { x, y, yaw },
+        [x, y, z, roll, pitch, yaw] => StartPose::Full(Isometry3::new(
+            Vector3::new(x, y, z),
+            nalgebra::UnitQuaternion::from_euler_angles(roll, pitch, yaw).scaled_axis(),
+        )),
+        _ => unreachable!("validated: 3 or 6 numbers"),
+    }
+}
+
+/// Every link that moves needs mass: a body of massless links cannot be simulated.
+fn check_masses(d: &RobotDescription, spec: &RobotSpec) -> Result<(), String> {
+    let plan = crate::plan::RobotPlan::new(d);
+    for (b, body) in plan.bodies.iter().enumerate() {
+        let moves = b > 0 || spec.base == crate::spec::Base::Floating && !spec.lifted;
+        let massive = body
+            .links
+            .iter()
+            .any(|(l, _)| d.links[*l].inertial.is_some());
+        if moves && !massive {
+            let link = &d.links[body.links[0].0];
+            let why = match &body.joint {
+                Some(j) => format!("it moves on joint '{}'", d.joints[j.joint].name),
+                None => "it is the floating base".to_string(),
+            };
+            return Err(d
+                .error(
+                    link.line,
+                    format!(
+                        "link '{}' needs an <inertial> with a positive mass: {why}",
+                        link.name
+                    ),
+                )
+                .to_string());
+        }
+    }
+    Ok(())
+}
+
+/// One actuator per description joint, as the spec assigns them; errors start with the key
+/// suffix after the robot's prefix.
+pub(crate) fn actuators(
+    spec: &RobotSpec,
+    d: &RobotDescription,
+) -> Result<Vec<Option<Actuator>>, String> {
+    let assigned = spec.assign(d)?;
+    Ok(assigned
+        .iter()
+        .zip(&d.joints)
+        .map(|(a, j)| a.and_then(|a| Actuator::new(a, j.limits)))
+        .collect())
+}
+
+/// The left and right wheel joints of a differential drive.
+pub(crate) fn diff_drive(d: &RobotDescription) -> Result<[usize; 2], String> {
+    let model = RobotModel::from_description(d)?;
+    let find = |y: f64| {
+        d.joints
+            .iter()
+            .position(|j| j.kind == JointKind::Continuous && j.origin.translation.vector.y == y)
+            .expect("the model found it")
+    };
+    Ok([
+        find(model.wheels[0].position[1]),
+        find(model.wheels[1].position[1]),
+    ])
 }

@@ -1,104 +1,136 @@
-//! The simulation loop of one physics step: firmware tick (when due), motor torques, rapier
-//! step, wheel bookkeeping, contact events. Time is counted in whole nanoseconds so that the
-//! firmware ticks on exact simulated times and two runs with the same inputs agree bit for bit.
+//! The simulation loop of one physics step: actuator targets and firmware ticks, joint
+//! torques and applied wrenches, the rapier step, joint readings, contact events. Time is
+//! counted in whole nanoseconds so that firmware ticks on exact simulated times and two runs
+//! with the same inputs agree bit for bit.
 
+use crate::actuator::{Actuator, Target};
 use crate::contacts::ContactMonitor;
-use crate::firmware::{FirmwareParams, SpeedPid};
-use crate::motor::{self, MotorOutput, MotorParams};
-use crate::scene::{self, Scene, SceneOptions};
+use crate::joint_state::{JointIo, Loads};
+use crate::scene::{self, RobotSetup, Scene};
+use crate::spec::{Base, CmdVelFrame};
+use crate::wrench::{ActiveWrench, WrenchCommand};
 use caravan_schemas::{Collision, Pose2D, Twist, Vector3, WheelSetpoint, WheelState};
-use caravan_world::{RobotModel, World};
+use caravan_world::World;
+use caravan_world::description::RobotDescription;
 use rapier3d::prelude::*;
 
-/// Everything that shapes the dynamics besides the world and the robot description.
+/// Everything that shapes the dynamics besides the world and the robots.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimConfig {
     /// Physics step, ns.
     pub dt_ns: u64,
-    pub motor: MotorParams,
-    pub pid: FirmwareParams,
-    pub wheel_friction: f64,
-    /// Chassis held in the air, wheels spinning freely.
-    pub lifted: bool,
+    /// Gravitational acceleration along −z, m/s².
+    pub gravity: f64,
 }
 
 impl SimConfig {
-    /// Fitted defaults with physics step `dt_ns`.
     pub fn with_dt_ns(dt_ns: u64) -> Self {
         Self {
             dt_ns,
-            motor: MotorParams::default(),
-            pid: FirmwareParams::default(),
-            wheel_friction: 1.0,
-            lifted: false,
+            gravity: 9.81,
         }
     }
 }
 
-/// Per-robot drive state.
-#[derive(Debug, Clone)]
-struct Drive {
-    setpoint: [f64; 2],
-    pid: [SpeedPid; 2],
-    /// Accumulated wheel angle relative to the chassis, rad.
-    angle: [f64; 2],
-    /// Angles at the last firmware tick, for the speed estimate.
-    angle_at_tick: [f64; 2],
-    /// Speed the firmware measured at its last tick, rad/s.
-    measured: [f64; 2],
-    /// Wheel speed relative to the chassis after the last step, rad/s.
-    speed: [f64; 2],
-    motor: [MotorOutput; 2],
+/// One robot's runtime state besides its rapier bodies.
+struct RobotState {
+    description: RobotDescription,
+    /// Movable joints in description order (the robot's joint order on its topics).
+    joints: Vec<JointIo>,
+    /// The actuator of each entry of `joints`, if any.
+    actuators: Vec<Option<Actuator>>,
+    /// Entries of `joints` driven by `wheel_setpoint` (left, right).
+    drive: Option<[usize; 2]>,
+    base: Base,
+    cmd_vel_frame: CmdVelFrame,
+    cmd_vel: Twist,
+    wrenches: Vec<ActiveWrench>,
 }
 
-/// N robots in a world, stepped at a fixed physics rate.
+/// Robots in a world, stepped at a fixed physics rate.
 pub struct Simulation {
     scene: Scene,
     cfg: SimConfig,
-    drives: Vec<Drive>,
+    robots: Vec<RobotState>,
+    loads: Loads,
     contacts: ContactMonitor,
     events: Vec<Collision>,
     time_ns: u64,
-    last_tick_ns: Option<u64>,
-    next_tick_ns: u64,
+}
+
+/// A robot to build: its setup and its actuators (one per description joint).
+pub struct RobotBuild<'a> {
+    pub setup: RobotSetup<'a>,
+    pub actuators: Vec<Option<Actuator>>,
+    /// Description joint indices of the left and right wheel of a differential drive.
+    pub drive: Option<[usize; 2]>,
 }
 
 impl Simulation {
-    /// A simulation of one robot per start pose. Poses are not checked here; see
-    /// [`crate::setup`] for the checked entry point.
-    pub fn new(world: &World, robot: &RobotModel, poses: &[[f64; 3]], cfg: SimConfig) -> Self {
-        let options = SceneOptions {
-            wheel_friction: cfg.wheel_friction,
-            chassis_friction: 0.3,
-            wheel_extra_inertia: cfg.motor.reflected_inertia(),
-            lifted: cfg.lifted,
-        };
-        let mut scene = scene::build(world, robot, poses, &options);
-        scene.physics.integration_parameters.dt = cfg.dt_ns as f32 * 1e-9;
-        let pid = SpeedPid::new(&cfg.pid, cfg.motor.supply_v);
-        let drive = Drive {
-            setpoint: [0.0; 2],
-            pid: [pid.clone(), pid],
-            angle: [0.0; 2],
-            angle_at_tick: [0.0; 2],
-            measured: [0.0; 2],
-            speed: [0.0; 2],
-            motor: [MotorOutput::default(); 2],
-        };
-        Self {
-            drives: vec![drive; poses.len()],
+    /// A simulation of the given robots. Inputs are not checked here; see [`crate::setup`].
+    pub fn new(world: &World, builds: Vec<RobotBuild>, cfg: SimConfig) -> Result<Self, String> {
+        let setups: Vec<&RobotSetup> = builds.iter().map(|b| &b.setup).collect();
+        let setups: Vec<RobotSetup> = setups
+            .into_iter()
+            .map(|s| RobotSetup {
+                description: s.description,
+                spec: s.spec,
+                pose: s.pose,
+                reflected_inertia: s.reflected_inertia.clone(),
+            })
+            .collect();
+        let mut scene = scene::build(world, &setups, cfg.gravity)?;
+        scene.physics.integration_parameters.dt = cfg.dt_ns as Real * 1e-9;
+        let mut robots = Vec::with_capacity(builds.len());
+        for (i, build) in builds.into_iter().enumerate() {
+            let d = build.setup.description;
+            let bodies = &scene.robots[i];
+            let mut joints = Vec::new();
+            let mut actuators = Vec::new();
+            let mut index_of = vec![usize::MAX; d.joints.len()];
+            let mut build_actuators = build.actuators;
+            for j in d.movable_joints() {
+                let body = bodies
+                    .plan
+                    .body_of_joint(j)
+                    .expect("a movable joint has a body");
+                let plan = bodies.plan.bodies[body].joint.as_ref().expect("joined");
+                let mut io = JointIo::new(
+                    j,
+                    &d.joints[j],
+                    bodies.bodies[plan.parent_body],
+                    bodies.bodies[body],
+                    plan.frame,
+                );
+                io.read(&scene.physics.bodies);
+                index_of[j] = joints.len();
+                joints.push(io);
+                actuators.push(build_actuators[j].take());
+            }
+            robots.push(RobotState {
+                description: d.clone(),
+                joints,
+                actuators,
+                drive: build.drive.map(|[l, r]| [index_of[l], index_of[r]]),
+                base: build.setup.spec.base,
+                cmd_vel_frame: build.setup.spec.cmd_vel_frame,
+                cmd_vel: Twist::default(),
+                wrenches: Vec::new(),
+            });
+        }
+        Ok(Self {
             scene,
             cfg,
+            robots,
+            loads: Loads::default(),
             contacts: ContactMonitor::default(),
             events: Vec::new(),
             time_ns: 0,
-            last_tick_ns: None,
-            next_tick_ns: 0,
-        }
+        })
     }
 
     pub fn robot_count(&self) -> usize {
-        self.drives.len()
+        self.robots.len()
     }
 
     pub fn config(&self) -> &SimConfig {
@@ -114,43 +146,93 @@ impl Simulation {
         self.time_ns
     }
 
+    pub fn description(&self, i: usize) -> &RobotDescription {
+        &self.robots[i].description
+    }
+
     /// Sets robot `i`'s wheel-speed set-points (rad/s); held until the next call. A
     /// non-finite value counts as zero, so a faulty publisher cannot poison the solver.
     pub fn set_setpoint(&mut self, i: usize, sp: &WheelSetpoint) {
         let clean = |x: f64| if x.is_finite() { x } else { 0.0 };
-        self.drives[i].setpoint = [clean(sp.left_rad_s), clean(sp.right_rad_s)];
+        let r = &mut self.robots[i];
+        let Some(drive) = r.drive else { return };
+        for (k, speed) in drive.into_iter().zip([sp.left_rad_s, sp.right_rad_s]) {
+            if let Some(a) = &mut r.actuators[k] {
+                a.target.velocity = clean(speed);
+            }
+        }
+    }
+
+    /// Updates robot `i`'s joint targets, in joint order; NaN fields leave a target as it was.
+    pub fn set_targets(&mut self, i: usize, targets: &[Target]) {
+        for (a, t) in self.robots[i].actuators.iter_mut().zip(targets) {
+            if let Some(a) = a {
+                a.target.merge(*t);
+            }
+        }
+    }
+
+    /// Sets a kinematic robot's velocity command; ignored for other bases.
+    pub fn set_cmd_vel(&mut self, i: usize, cmd: &Twist) {
+        self.robots[i].cmd_vel = *cmd;
+    }
+
+    /// Starts a wrench on robot `i`; replaces the one acting on the same link. Errors name
+    /// an unknown link.
+    pub fn apply_wrench(&mut self, i: usize, w: &WrenchCommand) -> Result<(), String> {
+        let r = &mut self.robots[i];
+        let bodies = &self.scene.robots[i];
+        let active = ActiveWrench::start(
+            w,
+            &r.description,
+            &bodies.plan,
+            &bodies.bodies,
+            &self.scene.physics.bodies,
+            self.time_ns,
+        )?;
+        r.wrenches.retain(|a| a.link != active.link);
+        r.wrenches.push(active);
+        Ok(())
     }
 
     /// Advances by one physics step.
     pub fn step(&mut self) {
         let dt = self.cfg.dt_ns as f64 * 1e-9;
-        if self.time_ns >= self.next_tick_ns {
-            self.firmware_tick();
-        }
-        for (i, drive) in self.drives.iter_mut().enumerate() {
-            let bodies = &self.scene.robots[i];
-            let axle = axle(&self.scene.physics.bodies[bodies.chassis]);
-            for side in 0..2 {
-                let out =
-                    motor::torque(&self.cfg.motor, drive.pid[side].output(), drive.speed[side]);
-                drive.motor[side] = out;
-                let t = axle * out.torque as f32;
-                let wheel = &mut self.scene.physics.bodies[bodies.wheels[side]];
-                wheel.reset_torques(false);
-                wheel.add_torque(t, true);
+        let bodies = &mut self.scene.physics.bodies;
+        for (r, rb) in self.robots.iter_mut().zip(&self.scene.robots) {
+            for a in r.actuators.iter_mut().flatten() {
+                a.firmware_tick(self.time_ns);
             }
-            let chassis = &mut self.scene.physics.bodies[bodies.chassis];
-            chassis.reset_torques(false);
-            let reaction = drive.motor[0].torque + drive.motor[1].torque;
-            chassis.add_torque(axle * -(reaction as f32), true);
+            for h in &rb.bodies {
+                let b = &mut bodies[*h];
+                b.reset_torques(false);
+                b.reset_forces(false);
+            }
+            for (io, a) in r.joints.iter().zip(&mut r.actuators) {
+                if let Some(a) = a {
+                    let tau = a.torque(io.reading, dt);
+                    io.push(bodies, tau, &mut self.loads);
+                }
+            }
+            r.wrenches
+                .retain(|w| w.until_ns.is_none_or(|t| self.time_ns < t));
+            for w in &r.wrenches {
+                w.push(bodies, &mut self.loads);
+            }
+            if r.base == Base::Kinematic {
+                drive_kinematic(&mut bodies[rb.base()], &r.cmd_vel, r.cmd_vel_frame);
+            }
         }
+        self.loads.apply(bodies);
         self.scene.physics.step();
         self.time_ns += self.cfg.dt_ns;
-        for (i, drive) in self.drives.iter_mut().enumerate() {
-            let speeds = relative_speeds(&self.scene, i);
-            drive.speed = speeds;
-            for (angle, speed) in drive.angle.iter_mut().zip(speeds) {
-                *angle += speed * dt;
+        let bodies = &self.scene.physics.bodies;
+        for r in &mut self.robots {
+            for (io, a) in r.joints.iter_mut().zip(&mut r.actuators) {
+                io.read(bodies);
+                if let Some(a) = a {
+                    a.after_step(io.reading.velocity, dt);
+                }
             }
         }
         self.contacts.update(&self.scene, &mut self.events);
@@ -167,26 +249,13 @@ impl Simulation {
         n
     }
 
-    /// The firmware of every robot: measure speeds over the last period, update the PIDs.
-    fn firmware_tick(&mut self) {
-        let elapsed = self.last_tick_ns.map(|t| (self.time_ns - t) as f64 * 1e-9);
-        for d in &mut self.drives {
-            for side in 0..2 {
-                d.measured[side] = match elapsed {
-                    Some(e) if e > 0.0 => (d.angle[side] - d.angle_at_tick[side]) / e,
-                    _ => 0.0,
-                };
-                d.angle_at_tick[side] = d.angle[side];
-                d.pid[side].update(d.setpoint[side], d.measured[side]);
-            }
-        }
-        self.last_tick_ns = Some(self.time_ns);
-        self.next_tick_ns += self.cfg.pid.period_ns();
+    fn base(&self, i: usize) -> &RigidBody {
+        &self.scene.physics.bodies[self.scene.robots[i].base()]
     }
 
-    /// Ground-truth pose of robot `i`'s base_link in the map frame.
+    /// Ground-truth pose of robot `i`'s base link in the map frame.
     pub fn pose(&self, i: usize) -> Pose2D {
-        let body = &self.scene.physics.bodies[self.scene.robots[i].chassis];
+        let body = self.base(i);
         let p = body.translation();
         Pose2D {
             x: p.x as f64,
@@ -195,45 +264,85 @@ impl Simulation {
         }
     }
 
-    /// Height of robot `i`'s base_link above the floor, m (for tests and diagnostics).
+    /// Height of robot `i`'s base link above the floor, m (for tests and diagnostics).
     pub fn base_height(&self, i: usize) -> f64 {
-        let body = &self.scene.physics.bodies[self.scene.robots[i].chassis];
-        body.translation().z as f64
+        self.base(i).translation().z as f64
     }
 
-    /// Ground-truth velocity of robot `i`: base_link's linear velocity and the chassis'
-    /// angular velocity, both in the map frame.
+    /// Ground-truth velocity of robot `i`: the base link origin's linear velocity and the
+    /// base's angular velocity, both in the map frame.
     pub fn twist(&self, i: usize) -> Twist {
-        let body = &self.scene.physics.bodies[self.scene.robots[i].chassis];
-        let lin = body.velocity_at_point(body.translation());
-        let ang = body.angvel();
-        let v3 = |v: Vector| Vector3 {
-            x: v.x as f64,
-            y: v.y as f64,
-            z: v.z as f64,
-        };
-        Twist {
-            linear: v3(lin),
-            angular: v3(ang),
-        }
+        let body = self.base(i);
+        twist_of(body.velocity_at_point(body.translation()), body.angvel())
     }
 
-    /// Robot `i`'s wheels: accumulated angles, speeds relative to the chassis, voltages.
+    /// Robot `i`'s joints in joint order: (name, position, velocity, effort).
+    pub fn joints(&self, i: usize) -> impl Iterator<Item = (&str, f64, f64, f64)> + '_ {
+        let r = &self.robots[i];
+        r.joints.iter().zip(&r.actuators).map(|(io, a)| {
+            (
+                r.description.joints[io.joint].name.as_str(),
+                io.reading.position,
+                io.reading.velocity,
+                a.as_ref().map_or(0.0, |a| a.effort),
+            )
+        })
+    }
+
+    /// Pose (world frame) and twist of every link of robot `i`, in description order.
+    pub fn link_states(&self, i: usize) -> Vec<(caravan_schemas::Pose3D, Twist)> {
+        let rb = &self.scene.robots[i];
+        let bodies = &self.scene.physics.bodies;
+        rb.plan
+            .link_body
+            .iter()
+            .map(|(b, in_body)| {
+                let body = &bodies[rb.bodies[*b]];
+                let pose = *body.position() * crate::shapes::pose(in_body);
+                let origin = pose.translation;
+                let q = pose.rotation;
+                let p3 = caravan_schemas::Pose3D {
+                    position: v3(origin),
+                    orientation: caravan_schemas::Quaternion {
+                        x: q.x as f64,
+                        y: q.y as f64,
+                        z: q.z as f64,
+                        w: q.w as f64,
+                    },
+                };
+                (p3, twist_of(body.velocity_at_point(origin), body.angvel()))
+            })
+            .collect()
+    }
+
+    /// Robot `i`'s wheels: angles, speeds relative to the chassis, voltages. Zero for a robot
+    /// without a differential drive on DC motors.
     pub fn wheel_state(&self, i: usize) -> WheelState {
-        let d = &self.drives[i];
+        let r = &self.robots[i];
+        let motor = |k: usize| r.actuators[k].as_ref().and_then(|a| a.dc_motor());
+        let Some((Some(l), Some(rt))) = r.drive.map(|[a, b]| (motor(a), motor(b))) else {
+            return WheelState::default();
+        };
         WheelState {
-            left_angle_rad: d.angle[0],
-            right_angle_rad: d.angle[1],
-            left_rad_s: d.speed[0],
-            right_rad_s: d.speed[1],
-            left_voltage: d.motor[0].voltage,
-            right_voltage: d.motor[1].voltage,
+            left_angle_rad: l.angle,
+            right_angle_rad: rt.angle,
+            left_rad_s: l.speed,
+            right_rad_s: rt.speed,
+            left_voltage: l.output.voltage,
+            right_voltage: rt.output.voltage,
         }
     }
 
     /// Wheel speeds (left, right) the firmware measured at its last tick, rad/s.
     pub fn measured_speeds(&self, i: usize) -> [f64; 2] {
-        self.drives[i].measured
+        let r = &self.robots[i];
+        let m = |k: usize| {
+            r.actuators[k]
+                .as_ref()
+                .and_then(|a| a.dc_motor())
+                .map_or(0.0, |m| m.measured)
+        };
+        r.drive.map_or([0.0; 2], |[a, b]| [m(a), m(b)])
     }
 
     /// Contact events since the last call, in the order they happened.
@@ -245,21 +354,47 @@ impl Simulation {
     pub fn touching(&self) -> Vec<(u32, i32)> {
         self.contacts.touching().collect()
     }
+
+    /// Contact points of robot `i`'s links after the last step.
+    pub fn contact_points(&self, i: usize) -> Vec<crate::contacts::ContactPoint> {
+        crate::contacts::points(&self.scene, i, self.cfg.dt_ns as f64 * 1e-9)
+    }
 }
 
-/// The wheel axle direction (the chassis' y axis) in the world frame.
-fn axle(chassis: &RigidBody) -> Vector {
-    *chassis.rotation() * Vector::Y
+fn v3(v: Vector) -> Vector3 {
+    Vector3 {
+        x: v.x as f64,
+        y: v.y as f64,
+        z: v.z as f64,
+    }
 }
 
-/// Wheel speeds relative to the chassis about the axle, rad/s; positive rolls forward.
-fn relative_speeds(scene: &Scene, i: usize) -> [f64; 2] {
-    let bodies = &scene.physics.bodies;
-    let r = &scene.robots[i];
-    let chassis = &bodies[r.chassis];
-    let axle = axle(chassis);
-    r.wheels
-        .map(|w| (bodies[w].angvel() - chassis.angvel()).dot(axle) as f64)
+fn twist_of(linear: Vector, angular: Vector) -> Twist {
+    Twist {
+        linear: v3(linear),
+        angular: v3(angular),
+    }
+}
+
+/// Sets a kinematic base's velocities from a command in the body or world frame.
+fn drive_kinematic(body: &mut RigidBody, cmd: &Twist, frame: CmdVelFrame) {
+    let clean = |x: f64| if x.is_finite() { x as Real } else { 0.0 };
+    let lin = Vector::new(
+        clean(cmd.linear.x),
+        clean(cmd.linear.y),
+        clean(cmd.linear.z),
+    );
+    let ang = Vector::new(
+        clean(cmd.angular.x),
+        clean(cmd.angular.y),
+        clean(cmd.angular.z),
+    );
+    let (lin, ang) = match frame {
+        CmdVelFrame::World => (lin, ang),
+        CmdVelFrame::Body => (*body.rotation() * lin, *body.rotation() * ang),
+    };
+    body.set_linvel(lin, true);
+    body.set_angvel(ang, true);
 }
 
 /// Yaw (rotation about z) of a unit quaternion, rad.

@@ -51,11 +51,12 @@
 //! oscillation period when a peak crosses the band edge (kp = 0.18 gives 3.4 s at 1.5 rad/s),
 //! so retuning should check several set-points.
 
-use crate::sim::{SimConfig, Simulation};
+use crate::convoy::ConvoyConfig;
 #[cfg(doc)]
 use crate::{firmware::FirmwareParams, motor::MotorParams};
 use caravan_schemas::WheelSetpoint;
-use caravan_world::{RobotModel, World};
+use caravan_world::World;
+use caravan_world::description::RobotDescription;
 
 /// The settling band: within ±5 % of the set-point.
 pub const BAND: f64 = 0.05;
@@ -90,8 +91,13 @@ pub fn empty_world() -> World {
 /// Steps both wheels of one robot from rest to `setpoint` rad/s and records the left
 /// wheel's speed as the firmware measures it (every control period) for `duration` s.
 /// `cfg.lifted` chooses wheels free (chassis held in the air) or the robot on the floor.
-pub fn record_step(robot: &RobotModel, cfg: SimConfig, setpoint: f64, duration: f64) -> Samples {
-    let mut sim = Simulation::new(&empty_world(), robot, &[[5.0, 5.0, 0.0]], cfg);
+pub fn record_step(
+    robot: &RobotDescription,
+    cfg: ConvoyConfig,
+    setpoint: f64,
+    duration: f64,
+) -> Samples {
+    let mut sim = crate::convoy::simulation(&empty_world(), robot, &[[5.0, 5.0, 0.0]], cfg);
     // Let the robot settle onto its wheels before the step.
     let settle_ns = 500_000_000;
     sim.advance_to(settle_ns, u64::MAX);

@@ -1,4 +1,6 @@
-use caravan_physics::{SimConfig, Simulation};
+use caravan_physics::Simulation;
+use caravan_physics::convoy::ConvoyConfig;
+use caravan_world::description::{RobotDescription, load_description};
 use caravan_world::{Obstacle, ObstacleKind, RobotModel, Shape, World};
 use std::path::{Path, PathBuf};
 
@@ -7,13 +9,13 @@ pub fn launch_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch/convoy")
 }
 
-pub fn convoy_bot() -> RobotModel {
-    caravan_world::load_robot(&launch_dir().join("robots/convoy_bot.urdf")).unwrap()
+pub fn convoy_bot() -> RobotDescription {
+    load_description(&launch_dir().join("robots/convoy_bot.urdf")).unwrap()
 }
 
 /// Wheel radius and separation of the convoy robot.
 pub fn geometry() -> (f64, f64) {
-    let m = convoy_bot();
+    let m = RobotModel::from_description(&convoy_bot()).unwrap();
     (m.wheel_radius, m.wheel_separation())
 }
 
@@ -43,12 +45,12 @@ pub fn room(wall_x: Option<f64>) -> World {
 }
 
 /// The default physics: 2 ms steps (100 Hz node × 5 substeps).
-pub fn config() -> SimConfig {
-    SimConfig::with_dt_ns(2_000_000)
+pub fn config() -> ConvoyConfig {
+    ConvoyConfig::with_dt_ns(2_000_000)
 }
 
 pub fn sim(world: &World, poses: &[[f64; 3]]) -> Simulation {
-    Simulation::new(world, &convoy_bot(), poses, config())
+    caravan_physics::convoy::simulation(world, &convoy_bot(), poses, config())
 }
 
 /// Runs for `seconds` of simulated time.

@@ -5,7 +5,7 @@ use crate::common::{config, convoy_bot};
 use caravan_physics::step_response::{BAND, record_step, settling_time};
 
 fn settling(lifted: bool, setpoint: f64, duration: f64) -> f64 {
-    let cfg = caravan_physics::SimConfig { lifted, ..config() };
+    let cfg = caravan_physics::convoy::ConvoyConfig { lifted, ..config() };
     let samples = record_step(&convoy_bot(), cfg, setpoint, duration);
     settling_time(&samples, setpoint, BAND)
         .unwrap_or_else(|| panic!("never settled (lifted = {lifted}): {samples:?}"))

@@ -89,6 +89,9 @@ pub struct Link {
     /// whose mass its parent already carries.
     pub inertial: Option<Inertial>,
     pub collisions: Vec<Collision>,
+    /// Friction coefficient of its surfaces, from `<gazebo reference="…"><mu1>`; `None`:
+    /// the simulator's default.
+    pub friction: Option<f64>,
     /// Line of `<link` in the file, for messages.
     pub line: Option<usize>,
 }
@@ -271,8 +274,29 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<RobotDescription, Des
             name: l.name.clone(),
             inertial,
             collisions,
+            friction: None,
             line,
         });
+    }
+    for (line, link, value) in source::gazebo_mu1(text) {
+        let l = links.iter_mut().find(|l| l.name == link).ok_or_else(|| {
+            err(
+                Some(line),
+                format!("<gazebo reference=\"{link}\">: no link named '{link}'"),
+            )
+        })?;
+        match value.parse::<f64>() {
+            Ok(mu) if mu.is_finite() && mu >= 0.0 => l.friction = Some(mu),
+            _ => {
+                return Err(err(
+                    Some(line),
+                    format!(
+                        "<gazebo reference=\"{link}\"><mu1>{value}</mu1>: a friction \
+                         coefficient is a number ≥ 0"
+                    ),
+                ));
+            }
+        }
     }
     let index = |name: &str| links.iter().position(|l| l.name == name);
 

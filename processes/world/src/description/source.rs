@@ -65,6 +65,29 @@ pub fn line_of(text: &str, element: &str, name: &str) -> Option<usize> {
         .map(|t| t.line)
 }
 
+/// Friction coefficients from Gazebo extensions, `<gazebo reference="link"><mu1>μ</mu1>`:
+/// (line, link, the text of mu1).
+pub fn gazebo_mu1(text: &str) -> Vec<(usize, String, String)> {
+    let mut out = Vec::new();
+    for tag in elements(text, "gazebo") {
+        let Some(link) = tag.attribute("reference") else {
+            continue;
+        };
+        let start = tag.body.as_ptr() as usize - text.as_ptr() as usize;
+        let end = text[start..]
+            .find("</gazebo>")
+            .map_or(text.len(), |e| start + e);
+        let inner = &text[start..end];
+        if let Some(open) = inner.find("<mu1>") {
+            let value = &inner[open + 5..];
+            if let Some(close) = value.find("</mu1>") {
+                out.push((tag.line, link, value[..close].trim().to_string()));
+            }
+        }
+    }
+    out
+}
+
 fn in_comment(text: &str, at: usize) -> bool {
     match text[..at].rfind("<!--") {
         Some(open) => !text[open..at].contains("-->"),

@@ -205,3 +205,17 @@ fn stl_and_obj_meshes_load_scaled() {
         .to_string();
     assert!(e.contains("STL and OBJ"), "{e}");
 }
+
+#[test]
+fn gazebo_friction_is_read_and_checked() {
+    let with = |mu: &str| {
+        arm(ELBOW).replace(
+            "</robot>",
+            &format!(r#"<gazebo reference="upper"><mu1>{mu}</mu1></gazebo></robot>"#),
+        )
+    };
+    let d = parse_str(&with("0.25")).unwrap();
+    assert_eq!(d.links[d.link("upper").unwrap()].friction, Some(0.25));
+    let e = error(&with("-1"));
+    assert!(e.contains("mu1") && e.contains("upper"), "{e}");
+}

@@ -1,0 +1,190 @@
+//! Reading a joint's position and speed from its two bodies, and applying a joint torque or
+//! force to them. The same code serves impulse joints and multibody joints: positions come
+//! from body poses through the joint frame, not from either solver's internal coordinates.
+
+use crate::actuator::JointReading;
+use crate::shapes;
+use caravan_world::description::{Joint, JointKind};
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use rapier3d::prelude::*;
+
+/// One movable joint as the simulation sees it.
+#[derive(Debug, Clone)]
+pub struct JointIo {
+    /// Index in the description's joints.
+    pub joint: usize,
+    pub kind: JointKind,
+    /// Parent and child bodies.
+    pub body1: RigidBodyHandle,
+    pub body2: RigidBodyHandle,
+    /// The joint frame in the parent body frame (f64 for positions).
+    pub frame: Isometry3<f64>,
+    /// The axis in the child frame.
+    pub axis: Vector3<f64>,
+    /// The axis in the parent body frame, as rapier computes with it.
+    axis1: Vector,
+    /// Position and speed after the last step.
+    pub reading: JointReading,
+}
+
+fn iso(p: &Pose) -> Isometry3<f64> {
+    let t = p.translation;
+    let q = p.rotation;
+    Isometry3::from_parts(
+        nalgebra::Translation3::new(t.x as f64, t.y as f64, t.z as f64),
+        UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+            q.w as f64, q.x as f64, q.y as f64, q.z as f64,
+        )),
+    )
+}
+
+impl JointIo {
+    pub fn new(
+        joint: usize,
+        j: &Joint,
+        body1: RigidBodyHandle,
+        body2: RigidBodyHandle,
+        frame: Isometry3<f64>,
+    ) -> Self {
+        let axis1 = if frame.rotation == UnitQuaternion::identity() {
+            shapes::vector(&j.axis)
+        } else {
+            shapes::vector(&(frame.rotation * j.axis))
+        };
+        Self {
+            joint,
+            kind: j.kind,
+            body1,
+            body2,
+            frame,
+            axis: j.axis,
+            axis1,
+            reading: JointReading::default(),
+        }
+    }
+
+    /// The joint axis in the world frame.
+    pub fn world_axis(&self, bodies: &RigidBodySet) -> Vector {
+        *bodies[self.body1].rotation() * self.axis1
+    }
+
+    /// Reads position and speed from the bodies; continuous joints keep counting turns.
+    pub fn read(&mut self, bodies: &RigidBodySet) {
+        let (b1, b2) = (&bodies[self.body1], &bodies[self.body2]);
+        let axis_w = self.world_axis(bodies);
+        let joint_w = iso(b1.position()) * self.frame;
+        let child = iso(b2.position());
+        self.reading = match self.kind {
+            JointKind::Prismatic => {
+                let p = child.translation.vector;
+                let offset = joint_w.inverse_transform_point(&p.into()).coords;
+                let at = shapes::vector(&p);
+                JointReading {
+                    position: offset.dot(&self.axis),
+                    velocity: (b2.velocity_at_point(at) - b1.velocity_at_point(at)).dot(axis_w)
+                        as f64,
+                }
+            }
+            _ => {
+                let q = joint_w.rotation.inverse() * child.rotation;
+                let angle = 2.0 * q.imag().dot(&self.axis).atan2(q.w);
+                let angle = wrap(angle);
+                let position = if self.kind == JointKind::Continuous {
+                    let previous = self.reading.position;
+                    previous + wrap(angle - wrap(previous))
+                } else {
+                    angle
+                };
+                JointReading {
+                    position,
+                    velocity: (b2.angvel() - b1.angvel()).dot(axis_w) as f64,
+                }
+            }
+        };
+    }
+
+    /// Queues torque (or force) `effort` on the child and its reaction on the parent.
+    pub fn push(&self, bodies: &RigidBodySet, effort: f64, loads: &mut Loads) {
+        let axis_w = self.world_axis(bodies);
+        match self.kind {
+            JointKind::Prismatic => {
+                let at = bodies[self.body2].translation();
+                loads.force(self.body2, axis_w, effort, at);
+                loads.force(self.body1, axis_w, -effort, at);
+            }
+            _ => {
+                loads.torque(self.body2, axis_w, effort);
+                loads.torque(self.body1, axis_w, -effort);
+            }
+        }
+    }
+}
+
+/// An angle in (−π, π].
+fn wrap(a: f64) -> f64 {
+    let tau = std::f64::consts::TAU;
+    let w = a - tau * (a / tau).round();
+    if w <= -std::f64::consts::PI {
+        w + tau
+    } else {
+        w
+    }
+}
+
+/// Torques and forces for this step, summed per body before they reach rapier. Torques about
+/// the same axis add as numbers first, so a chassis carrying two motors gets one torque of
+/// their summed magnitudes.
+#[derive(Debug, Default)]
+pub struct Loads {
+    torques: Vec<(RigidBodyHandle, Vector, f64)>,
+    forces: Vec<(RigidBodyHandle, Vector, Vector)>,
+}
+
+impl Loads {
+    pub fn torque(&mut self, body: RigidBodyHandle, axis: Vector, magnitude: f64) {
+        match self
+            .torques
+            .iter_mut()
+            .find(|(b, a, _)| *b == body && *a == axis)
+        {
+            Some((_, _, m)) => *m += magnitude,
+            None => self.torques.push((body, axis, magnitude)),
+        }
+    }
+
+    pub fn force(&mut self, body: RigidBodyHandle, axis: Vector, magnitude: f64, at: Vector) {
+        self.forces.push((body, axis * magnitude as Real, at));
+    }
+
+    /// A force `f` (world frame) at world point `at` and a free torque `t`.
+    pub fn wrench(&mut self, body: RigidBodyHandle, f: Vector, at: Vector, t: Vector) {
+        self.forces.push((body, f, at));
+        if t != Vector::ZERO {
+            let n = t.length();
+            self.torques.push((body, t / n, n as f64));
+        }
+    }
+
+    /// Hands everything to rapier and empties the queue.
+    pub fn apply(&mut self, bodies: &mut RigidBodySet) {
+        for (body, axis, m) in self.torques.drain(..) {
+            bodies[body].add_torque(axis * m as Real, true);
+        }
+        for (body, f, at) in self.forces.drain(..) {
+            bodies[body].add_force_at_point(f, at, true);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wrap;
+
+    #[test]
+    fn wrap_keeps_angles_in_half_open_range() {
+        let pi = std::f64::consts::PI;
+        assert!((wrap(3.0 * pi) - pi).abs() < 1e-12);
+        assert!((wrap(-pi) - pi).abs() < 1e-12);
+        assert!((wrap(0.5) - 0.5).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,333 @@
+//! One kind of robot in the physics params: its URDF, how many, where, how its base is held,
+//! which joint solver it uses and which actuators drive its joints.
+//!
+//! ```toml
+//! robots = [
+//!   { urdf = "robots/arm.urdf", base = "fixed", poses = [[0.0, 0.0, 0.0]],
+//!     actuators = [{ type = "position", joints = ["*"], kp = 200.0, kd = 5.0 }],
+//!     link_states = true, contacts = true },
+//!   { urdf = "robots/drone.urdf", base = "kinematic", count = 2 },
+//! ]
+//! ```
+
+use crate::firmware::FirmwareParams;
+use crate::motor::MotorParams;
+use caravan_world::description::{JointKind, RobotDescription};
+use serde::Deserialize;
+
+/// How a robot's root link is held.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Base {
+    /// A free body under gravity and contacts (a wheeled robot, a thrown box).
+    #[default]
+    Floating,
+    /// Bolted to the world at its start pose (an arm on a table).
+    Fixed,
+    /// Moved at commanded velocities (`robot/i/cmd_vel`), pushed by nothing (a drone flown
+    /// by its autopilot, no aerodynamics).
+    Kinematic,
+}
+
+/// How joints are solved.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointModel {
+    /// Multibody for a fixed base, impulse joints otherwise.
+    #[default]
+    Auto,
+    /// Reduced coordinates (rapier multibody): joints hold exactly, link poses and joint
+    /// torques carry no constraint drift. Right for arms.
+    Multibody,
+    /// Bodies in maximal coordinates held by impulse constraints: the convoy's wheels, whose
+    /// motor constants were fitted this way.
+    Impulse,
+}
+
+/// A frame of velocity commands for a kinematic base.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CmdVelFrame {
+    /// Velocities in the base link's frame, as ROS `cmd_vel`.
+    #[default]
+    Body,
+    /// Velocities in the world (map) frame.
+    World,
+}
+
+/// An actuator model and the joints it drives. `joints = ["*"]` means every movable joint;
+/// later entries override earlier ones for the same joint. Torques are bounded by the URDF's
+/// `<limit effort>`, speed targets by `<limit velocity>`, position targets by the joint's
+/// position limits.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ActuatorSpec {
+    /// The convoy's DC gear motor under its wheel-speed firmware (incremental PID at
+    /// `pid.rate_hz`); takes velocity targets.
+    DcMotor {
+        joints: Vec<String>,
+        #[serde(default)]
+        motor: MotorParams,
+        #[serde(default)]
+        pid: FirmwareParams,
+    },
+    /// A speed loop: τ = kp·(ω* − ω) + ki·∫(ω* − ω)dt, every physics step.
+    Velocity {
+        joints: Vec<String>,
+        /// N·m·s/rad (N·s/m for prismatic joints), ≥ 0.
+        #[serde(default = "default_velocity_kp")]
+        kp: f64,
+        /// N·m/rad (N/m), ≥ 0.
+        #[serde(default)]
+        ki: f64,
+    },
+    /// A position loop as ros2_control's effort-interface PID:
+    /// τ = kp·e + ki·∫e dt + kd·(ω* − ω) + τ_ff, every physics step.
+    Position {
+        joints: Vec<String>,
+        /// N·m/rad (N/m), ≥ 0.
+        #[serde(default = "default_position_kp")]
+        kp: f64,
+        /// N·m/(rad·s) (N/(m·s)), ≥ 0.
+        #[serde(default)]
+        ki: f64,
+        /// N·m·s/rad (N·s/m), ≥ 0.
+        #[serde(default = "default_position_kd")]
+        kd: f64,
+    },
+    /// The commanded effort, bounded by the URDF's.
+    Effort { joints: Vec<String> },
+    /// A passive joint: no actuator (the default for every joint).
+    None { joints: Vec<String> },
+}
+
+fn default_velocity_kp() -> f64 {
+    1.0
+}
+fn default_position_kp() -> f64 {
+    100.0
+}
+fn default_position_kd() -> f64 {
+    2.0
+}
+
+impl ActuatorSpec {
+    pub fn joints(&self) -> &[String] {
+        match self {
+            ActuatorSpec::DcMotor { joints, .. }
+            | ActuatorSpec::Velocity { joints, .. }
+            | ActuatorSpec::Position { joints, .. }
+            | ActuatorSpec::Effort { joints }
+            | ActuatorSpec::None { joints } => joints,
+        }
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let gains: &[(&str, f64)] = match self {
+            ActuatorSpec::DcMotor { motor, pid, .. } => {
+                motor.validate()?;
+                return pid.validate();
+            }
+            ActuatorSpec::Velocity { kp, ki, .. } => &[("kp", *kp), ("ki", *ki)],
+            ActuatorSpec::Position { kp, ki, kd, .. } => &[("kp", *kp), ("ki", *ki), ("kd", *kd)],
+            ActuatorSpec::Effort { .. } | ActuatorSpec::None { .. } => &[],
+        };
+        for (key, v) in gains {
+            if !(v.is_finite() && *v >= 0.0) {
+                return Err(format!("{key} must be zero or positive, got {v}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One kind of robot and its instances.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// Robot description (URDF), relative to the launch file's directory.
+    pub urdf: String,
+    /// Number of robots of this kind.
+    #[serde(default = "one")]
+    pub count: usize,
+    /// Start pose of each: `[x, y, yaw]` (m, m, rad; a floating base then stands on the
+    /// floor, a fixed one sits at z = 0) or `[x, y, z, roll, pitch, yaw]`. Empty: the world
+    /// file's `[[start]]` poses.
+    #[serde(default)]
+    pub poses: Vec<Vec<f64>>,
+    #[serde(default)]
+    pub base: Base,
+    /// Hold the base fixed 0.1 m above its standing height so wheels spin freely (the
+    /// motor bench test).
+    #[serde(default)]
+    pub lifted: bool,
+    #[serde(default)]
+    pub joints: JointModel,
+    #[serde(default)]
+    pub actuators: Vec<ActuatorSpec>,
+    /// `"diff"`: the robot is a differential drive; its two wheel joints follow
+    /// `robot/i/wheel_setpoint` and report on `robot/i/wheel_state`.
+    #[serde(default)]
+    pub drive: Option<Drive>,
+    /// Friction coefficient of wheels (cylinders on continuous joints) on the floor.
+    #[serde(default = "default_wheel_friction")]
+    pub wheel_friction: f64,
+    /// Frame of `robot/i/cmd_vel` for a kinematic base.
+    #[serde(default)]
+    pub cmd_vel_frame: CmdVelFrame,
+    /// Publish `robot/i/link_states` (every link's pose and velocity).
+    #[serde(default)]
+    pub link_states: bool,
+    /// Publish `robot/i/contacts` (contact points and normal forces).
+    #[serde(default)]
+    pub contacts: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Drive {
+    Diff,
+}
+
+fn one() -> usize {
+    1
+}
+fn default_wheel_friction() -> f64 {
+    1.0
+}
+
+impl RobotSpec {
+    /// The joint solver this robot gets.
+    pub fn joint_model(&self) -> JointModel {
+        match (self.joints, self.base) {
+            (JointModel::Auto, Base::Fixed) => JointModel::Multibody,
+            (JointModel::Auto, _) => JointModel::Impulse,
+            (m, _) => m,
+        }
+    }
+
+    /// Checks values serde cannot; messages name the key relative to this spec.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.count == 0 {
+            return Err("'count' must be at least 1".into());
+        }
+        if !self.poses.is_empty() && self.poses.len() != self.count {
+            return Err(format!(
+                "'poses': {} start pose(s) for count = {}; give one per robot, or none to \
+                 use the world file's [[start]] poses",
+                self.poses.len(),
+                self.count
+            ));
+        }
+        for (i, p) in self.poses.iter().enumerate() {
+            if p.len() != 3 && p.len() != 6 {
+                return Err(format!(
+                    "'poses[{i}]': give [x, y, yaw] or [x, y, z, roll, pitch, yaw], got {} \
+                     numbers",
+                    p.len()
+                ));
+            }
+            if p.iter().any(|v| !v.is_finite()) {
+                return Err(format!("'poses[{i}]': values must be finite numbers"));
+            }
+        }
+        if !(self.wheel_friction.is_finite() && self.wheel_friction > 0.0) {
+            return Err(format!(
+                "'wheel_friction': must be positive, got {}",
+                self.wheel_friction
+            ));
+        }
+        if self.lifted && self.base != Base::Floating {
+            return Err(
+                "'lifted' holds a floating base in the air; this base is not floating".into(),
+            );
+        }
+        for (k, a) in self.actuators.iter().enumerate() {
+            a.validate().map_err(|e| format!("'actuators[{k}]': {e}"))?;
+        }
+        Ok(())
+    }
+
+    /// The actuator of each joint of `d` (`None`: passive), after checking that every named
+    /// joint exists and moves.
+    pub fn assign<'a>(
+        &'a self,
+        d: &RobotDescription,
+    ) -> Result<Vec<Option<&'a ActuatorSpec>>, String> {
+        let mut out = vec![None; d.joints.len()];
+        for (k, a) in self.actuators.iter().enumerate() {
+            if a.joints().is_empty() {
+                return Err(format!("'actuators[{k}].joints' is empty"));
+            }
+            for name in a.joints() {
+                let chosen: Vec<usize> = if name == "*" {
+                    d.movable_joints()
+                } else {
+                    let j = d.joint(name).ok_or_else(|| {
+                        format!(
+                            "'actuators[{k}].joints': no joint named '{name}' in {} (joints: {})",
+                            d.file,
+                            names(d)
+                        )
+                    })?;
+                    if d.joints[j].kind == JointKind::Fixed {
+                        return Err(format!(
+                            "'actuators[{k}].joints': joint '{name}' of {} is fixed; an \
+                             actuator needs a revolute, continuous or prismatic joint",
+                            d.file
+                        ));
+                    }
+                    vec![j]
+                };
+                for j in chosen {
+                    out[j] = match a {
+                        ActuatorSpec::None { .. } => None,
+                        _ => Some(a),
+                    };
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+fn names(d: &RobotDescription) -> String {
+    d.joints
+        .iter()
+        .map(|j| j.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+impl RobotSpec {
+    /// The convoy robot as the params' top-level keys describe it: a differential drive on
+    /// the fitted DC motors.
+    pub fn convoy(
+        urdf: &str,
+        count: usize,
+        poses: &[[f64; 3]],
+        lifted: bool,
+        wheel_friction: f64,
+        motor: MotorParams,
+        pid: FirmwareParams,
+    ) -> Self {
+        RobotSpec {
+            urdf: urdf.to_string(),
+            count,
+            poses: poses.iter().map(|p| p.to_vec()).collect(),
+            base: Base::Floating,
+            lifted,
+            joints: JointModel::Impulse,
+            actuators: vec![ActuatorSpec::DcMotor {
+                joints: vec!["*".into()],
+                motor,
+                pid,
+            }],
+            drive: Some(Drive::Diff),
+            wheel_friction,
+            cmd_vel_frame: CmdVelFrame::Body,
+            link_states: false,
+            contacts: false,
+        }
+    }
+}
