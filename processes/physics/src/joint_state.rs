@@ -23,6 +23,9 @@ pub struct JointIo {
     pub axis: Vector3<f64>,
     /// The axis in the parent body frame, as rapier computes with it.
     axis1: Vector,
+    /// The multibody joint, when the robot is a multibody: its generalized velocity is the
+    /// joint speed (rapier does not keep the link bodies' velocities in step with it).
+    pub multibody: Option<MultibodyJointHandle>,
     /// Position and speed after the last step.
     pub reading: JointReading,
 }
@@ -59,6 +62,7 @@ impl JointIo {
             frame,
             axis: j.axis,
             axis1,
+            multibody: None,
             reading: JointReading::default(),
         }
     }
@@ -69,11 +73,18 @@ impl JointIo {
     }
 
     /// Reads position and speed from the bodies; continuous joints keep counting turns.
-    pub fn read(&mut self, bodies: &RigidBodySet) {
+    pub fn read(&mut self, bodies: &RigidBodySet, multibodies: &MultibodyJointSet) {
         let (b1, b2) = (&bodies[self.body1], &bodies[self.body2]);
         let axis_w = self.world_axis(bodies);
         let joint_w = iso(b1.position()) * self.frame;
         let child = iso(b2.position());
+        let generalized = self.multibody.and_then(|h| {
+            let (mb, link) = multibodies.get(h)?;
+            mb.joint_velocity(mb.link(link)?)
+                .iter()
+                .next()
+                .map(|v| *v as f64)
+        });
         self.reading = match self.kind {
             JointKind::Prismatic => {
                 let p = child.translation.vector;
@@ -81,8 +92,9 @@ impl JointIo {
                 let at = shapes::vector(&p);
                 JointReading {
                     position: offset.dot(&self.axis),
-                    velocity: (b2.velocity_at_point(at) - b1.velocity_at_point(at)).dot(axis_w)
-                        as f64,
+                    velocity: generalized.unwrap_or_else(|| {
+                        (b2.velocity_at_point(at) - b1.velocity_at_point(at)).dot(axis_w) as f64
+                    }),
                 }
             }
             _ => {
@@ -97,7 +109,8 @@ impl JointIo {
                 };
                 JointReading {
                     position,
-                    velocity: (b2.angvel() - b1.angvel()).dot(axis_w) as f64,
+                    velocity: generalized
+                        .unwrap_or_else(|| (b2.angvel() - b1.angvel()).dot(axis_w) as f64),
                 }
             }
         };

@@ -102,7 +102,10 @@ impl Simulation {
                     bodies.bodies[body],
                     plan.frame,
                 );
-                io.read(&scene.physics.bodies);
+                if let Some(scene::JointHandle::Multibody(h)) = bodies.joints[j] {
+                    io.multibody = Some(h);
+                }
+                io.read(&scene.physics.bodies, &scene.physics.multibody_joints);
                 index_of[j] = joints.len();
                 joints.push(io);
                 actuators.push(build_actuators[j].take());
@@ -227,9 +230,10 @@ impl Simulation {
         self.scene.physics.step();
         self.time_ns += self.cfg.dt_ns;
         let bodies = &self.scene.physics.bodies;
+        let multibodies = &self.scene.physics.multibody_joints;
         for r in &mut self.robots {
             for (io, a) in r.joints.iter_mut().zip(&mut r.actuators) {
-                io.read(bodies);
+                io.read(bodies, multibodies);
                 if let Some(a) = a {
                     a.after_step(io.reading.velocity, dt);
                 }

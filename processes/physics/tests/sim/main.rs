@@ -1,6 +1,7 @@
 //! In-process tests of the physics: the simulation is driven directly, without iceoryx2.
 //! Every time is simulated time.
 
+mod articulated;
 mod bad_input;
 mod collisions;
 mod common;

@@ -1,0 +1,232 @@
+//! Articulated robots against analytic mechanics: a pendulum's period, an arm's static joint
+//! torques under gravity, and the torques a known wrench adds (Jᵀ·F).
+
+use caravan_physics::actuator::Target;
+use caravan_physics::wrench::WrenchCommand;
+use caravan_physics::{Params, Simulation, load};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use std::path::{Path, PathBuf};
+
+const G: f64 = 9.81;
+/// 1 ms physics steps.
+const DT_NS: u64 = 1_000_000;
+
+fn robots_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots")
+}
+
+fn sim(robots: serde_json::Value) -> Simulation {
+    let params: Params = caravan::parse_params(
+        "physics",
+        &serde_json::json!({ "world": "empty.toml", "robots": robots }),
+    )
+    .unwrap();
+    load(&params, &robots_dir(), DT_NS).unwrap()
+}
+
+fn run(sim: &mut Simulation, seconds: f64) {
+    let t = sim.time_ns() + (seconds * 1e9).round() as u64;
+    sim.advance_to(t, u64::MAX);
+}
+
+#[test]
+fn a_pendulum_swings_at_two_pi_root_l_over_g() {
+    let mut s = sim(
+        serde_json::json!([{ "urdf": "pendulum.urdf", "base": "fixed",
+        "poses": [[2.0, 2.0, 0.0]] }]),
+    );
+    // A 20 ms, 1 N push starts a swing of about 0.02 rad.
+    let push = WrenchCommand {
+        link: "bob".into(),
+        in_link_frame: true,
+        point: [0.0, 0.0, -1.0],
+        force: [1.0, 0.0, 0.0],
+        torque: [0.0; 3],
+        duration_s: 0.02,
+    };
+    s.apply_wrench(0, &push).unwrap();
+    run(&mut s, 0.1);
+    // Upward zero crossings of the joint angle, interpolated between steps.
+    let mut crossings = Vec::new();
+    let mut last = s.joints(0).next().unwrap().1;
+    let mut amplitude: f64 = 0.0;
+    while crossings.len() < 6 {
+        s.step();
+        let q = s.joints(0).next().unwrap().1;
+        amplitude = amplitude.max(q.abs());
+        if last < 0.0 && q >= 0.0 {
+            let t = s.time_ns() as f64 * 1e-9 - (q / (q - last)) * DT_NS as f64 * 1e-9;
+            crossings.push(t);
+        }
+        last = q;
+    }
+    let period = (crossings[5] - crossings[0]) / 5.0;
+    let expected = 2.0 * std::f64::consts::PI * (1.0 / G).sqrt();
+    assert!(
+        amplitude > 0.005 && amplitude < 0.05,
+        "small swing: {amplitude} rad"
+    );
+    let error = (period / expected - 1.0).abs();
+    eprintln!(
+        "pendulum: period {period:.6} s, 2π√(L/g) = {expected:.6} s, error {:.4} %",
+        error * 100.0
+    );
+    assert!(
+        error < 0.005,
+        "period {period} s vs {expected} s ({:.3} %)",
+        error * 100.0
+    );
+}
+
+/// The arm's links: (name, centre of mass along the link's x, mass).
+const ARM: [(&str, f64, f64); 3] = [
+    ("upper", 0.25, 2.0),
+    ("fore", 0.2, 1.0),
+    ("hand", 0.15, 0.5),
+];
+
+fn arm() -> Simulation {
+    sim(
+        serde_json::json!([{ "urdf": "arm3.urdf", "base": "fixed", "poses": [[2.0, 2.0, 0.0]],
+        // Damping ratios about 0.5 for each joint's load; kd·dt/I stays far below 1.
+        "actuators": [
+            { "type": "position", "joints": ["upper_joint"], "kp": 300.0, "ki": 300.0, "kd": 15.0 },
+            { "type": "position", "joints": ["fore_joint"], "kp": 300.0, "ki": 300.0, "kd": 8.0 },
+            { "type": "position", "joints": ["hand_joint"], "kp": 300.0, "ki": 300.0, "kd": 3.0 }],
+        "link_states": true }]),
+    )
+}
+
+/// World pose of every link of robot 0: (origin, rotation).
+fn link_frames(s: &Simulation) -> Vec<(Vector3<f64>, UnitQuaternion<f64>)> {
+    s.link_states(0)
+        .iter()
+        .map(|(p, _)| {
+            let o = p.orientation;
+            (
+                Vector3::new(p.position.x, p.position.y, p.position.z),
+                UnitQuaternion::from_quaternion(Quaternion::new(o.w, o.x, o.y, o.z)),
+            )
+        })
+        .collect()
+}
+
+/// Torque about each joint (axis y of its child link) of force `f` acting at world point `p`
+/// on link `on` (1-based link index along the chain) or beyond.
+fn torques_of(
+    frames: &[(Vector3<f64>, UnitQuaternion<f64>)],
+    forces: &[(usize, Vector3<f64>, Vector3<f64>)],
+) -> [f64; 3] {
+    let mut tau = [0.0; 3];
+    for (j, t) in tau.iter_mut().enumerate() {
+        let (origin, rot) = frames[j + 1];
+        let axis = rot * Vector3::y();
+        for (on, p, f) in forces {
+            if *on > j {
+                *t += axis.dot(&(p - origin).cross(f));
+            }
+        }
+    }
+    tau
+}
+
+fn efforts(s: &Simulation) -> [f64; 3] {
+    let e: Vec<f64> = s.joints(0).map(|(_, _, _, effort)| effort).collect();
+    [e[0], e[1], e[2]]
+}
+
+fn hold(s: &mut Simulation, q: [f64; 3]) {
+    let targets: Vec<Target> = q
+        .iter()
+        .map(|&position| Target {
+            position,
+            ..Target::default()
+        })
+        .collect();
+    s.set_targets(0, &targets);
+    run(s, 8.0);
+}
+
+fn gravity_forces(
+    frames: &[(Vector3<f64>, UnitQuaternion<f64>)],
+) -> Vec<(usize, Vector3<f64>, Vector3<f64>)> {
+    ARM.iter()
+        .enumerate()
+        .map(|(k, (_, com, m))| {
+            let (o, r) = frames[k + 1];
+            (
+                k + 1,
+                o + r * Vector3::new(*com, 0.0, 0.0),
+                Vector3::new(0.0, 0.0, -m * G),
+            )
+        })
+        .collect()
+}
+
+fn assert_close(measured: [f64; 3], expected: [f64; 3], what: &str) {
+    let worst = (0..3)
+        .map(|j| ((measured[j] - expected[j]) / expected[j]).abs())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "{what}: {measured:?} vs {expected:?}, worst {:.4} %",
+        worst * 100.0
+    );
+    for j in 0..3 {
+        let rel = ((measured[j] - expected[j]) / expected[j]).abs();
+        assert!(
+            rel < 0.01,
+            "{what}, joint {j}: {measured:?} vs {expected:?}"
+        );
+    }
+}
+
+#[test]
+fn an_arm_holding_a_pose_carries_its_weight_in_its_joint_torques() {
+    let mut s = arm();
+    let q = [0.3, -0.5, 0.4];
+    hold(&mut s, q);
+    let measured: Vec<f64> = s.joints(0).map(|j| j.1).collect();
+    for (m, t) in measured.iter().zip(q) {
+        assert!(
+            (m - t).abs() < 1e-3,
+            "holds the pose: {measured:?} vs {q:?}"
+        );
+    }
+    let frames = link_frames(&s);
+    // The actuators balance gravity: τ = −Σ Jᵀ·m·g.
+    let expected = torques_of(&frames, &gravity_forces(&frames)).map(|t| -t);
+    assert_close(efforts(&s), expected, "static torques");
+}
+
+#[test]
+fn a_wrench_on_the_third_link_adds_j_transpose_f() {
+    let mut s = arm();
+    let q = [0.2, -0.3, 0.5];
+    hold(&mut s, q);
+    let before = efforts(&s);
+    let point = [0.2, 0.0, 0.0];
+    let force = Vector3::new(6.0, 0.0, -15.0);
+    s.apply_wrench(
+        0,
+        &WrenchCommand {
+            link: "hand".into(),
+            in_link_frame: false,
+            point: {
+                let (o, r) = link_frames(&s)[3];
+                (o + r * Vector3::from(point)).into()
+            },
+            force: force.into(),
+            torque: [0.0; 3],
+            duration_s: 0.0,
+        },
+    )
+    .unwrap();
+    run(&mut s, 8.0);
+    let after = efforts(&s);
+    let frames = link_frames(&s);
+    let (o, r) = frames[3];
+    let at = o + r * Vector3::from(point);
+    let expected = torques_of(&frames, &[(3, at, force)]).map(|t| -t);
+    let change = [0, 1, 2].map(|j| after[j] - before[j]);
+    assert_close(change, expected, "torque change");
+}
