@@ -230,3 +230,79 @@ fn a_wrench_on_the_third_link_adds_j_transpose_f() {
     let change = [0, 1, 2].map(|j| after[j] - before[j]);
     assert_close(change, expected, "torque change");
 }
+
+#[test]
+fn a_kinematic_base_flies_at_its_commanded_velocity() {
+    let mut s = sim(
+        serde_json::json!([{ "urdf": "box.urdf", "base": "kinematic",
+        "cmd_vel_frame": "body", "poses": [[1.0, 1.0, 1.5, 0.0, 0.0, std::f64::consts::FRAC_PI_2]] }]),
+    );
+    let cmd = caravan_schemas::Twist::planar(0.5, 0.0);
+    s.set_cmd_vel(0, &cmd);
+    run(&mut s, 2.0);
+    // Forward in the body frame is +y in the world at yaw 90°; no gravity on a kinematic body.
+    let p = s.pose(0);
+    // rapier moves a velocity-based kinematic body from the step after the command: one
+    // step's travel (0.5 mm) short.
+    let step = 0.5 * DT_NS as f64 * 1e-9;
+    assert!(
+        (p.x - 1.0).abs() < 1e-4 && (p.y - 2.0 + step).abs() < 1e-4,
+        "{p:?}"
+    );
+    assert!((s.base_height(0) - 1.5).abs() < 1e-6);
+}
+
+#[test]
+fn bad_robot_kinds_are_refused_with_the_key() {
+    let error = |robots: serde_json::Value| {
+        let params: Params = caravan::parse_params(
+            "physics",
+            &serde_json::json!({ "world": "empty.toml", "robots": robots }),
+        )
+        .unwrap();
+        match load(&params, &robots_dir(), DT_NS) {
+            Ok(_) => panic!("accepted {robots}"),
+            Err(e) => e.to_string(),
+        }
+    };
+    let e = error(serde_json::json!([{ "urdf": "arm3.urdf", "base": "fixed",
+        "poses": [[2.0, 2.0, 0.0]], "actuators": [{ "type": "effort", "joints": ["elbow"] }] }]));
+    assert!(
+        e.contains("robots[0].actuators[0].joints") && e.contains("no joint named 'elbow'"),
+        "{e}"
+    );
+    let e = error(
+        serde_json::json!([{ "urdf": "arm3.urdf", "base": "floating",
+        "poses": [[2.0, 2.0, 0.0]] }]),
+    );
+    assert!(
+        e.contains("link 'post'") && e.contains("floating base") && e.contains("arm3.urdf:5"),
+        "{e}"
+    );
+    let e = error(
+        serde_json::json!([{ "urdf": "pendulum.urdf", "base": "fixed",
+        "poses": [[2.0, 2.0, 0.0]], "drive": "diff" }]),
+    );
+    assert!(e.contains("robots[0].drive"), "{e}");
+    let e = error(serde_json::json!([{ "urdf": "missing.urdf" }]));
+    assert!(
+        e.contains("robots[0].urdf") && e.contains("missing.urdf"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_actuator_on_a_fixed_joint_is_refused() {
+    let params: Params = caravan::parse_params(
+        "physics",
+        &serde_json::json!({ "world": "empty.toml", "robots": [{ "urdf": "fixed_actuated.urdf",
+            "base": "fixed", "poses": [[2.0, 2.0, 0.0]],
+            "actuators": [{ "type": "velocity", "joints": ["weld"] }] }] }),
+    )
+    .unwrap();
+    let e = load(&params, &robots_dir(), DT_NS)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("joint 'weld'") && e.contains("is fixed"), "{e}");
+}
