@@ -18,6 +18,12 @@ SCAN_MAX_BEAMS = 1081
 MAP_MAX_SIDE = 1024
 MAP_MAX_CELLS = 1048576
 PATH_MAX_POSES = 1024
+NAME_BYTES = 60
+MAX_JOINTS = 64
+MAX_LINKS = 64
+MAX_CONTACTS = 64
+WRENCH_WORLD = 0
+WRENCH_LINK = 1
 
 
 def fixed_str(msg: ctypes.Structure, field: str) -> str:
@@ -445,6 +451,179 @@ class Collision(ctypes.Structure):
         return "caravan::Collision"
 
 
+class JointValue(ctypes.Structure):
+    """``caravan::JointValue``: 88 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("name_len", ctypes.c_uint32),
+        ("name", ctypes.c_uint8 * 60),
+        ("position", ctypes.c_double),
+        ("velocity", ctypes.c_double),
+        ("effort", ctypes.c_double),
+    ]
+    SIZE = 88
+    ALIGN = 8
+    OFFSETS = {"name_len": 0, "name": 4, "position": 64, "velocity": 72, "effort": 80}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::JointValue"
+
+
+class JointState(ctypes.Structure):
+    """``caravan::JointState``: 5640 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("joints_len", ctypes.c_uint32),
+        ("joints", JointValue * 64),
+    ]
+    SIZE = 5640
+    ALIGN = 8
+    OFFSETS = {"joints_len": 0, "joints": 8}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::JointState"
+
+
+class JointCommand(ctypes.Structure):
+    """``caravan::JointCommand``: 5640 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("joints_len", ctypes.c_uint32),
+        ("joints", JointValue * 64),
+    ]
+    SIZE = 5640
+    ALIGN = 8
+    OFFSETS = {"joints_len": 0, "joints": 8}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::JointCommand"
+
+
+class LinkState(ctypes.Structure):
+    """``caravan::LinkState``: 168 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("name_len", ctypes.c_uint32),
+        ("name", ctypes.c_uint8 * 60),
+        ("pose", Pose3D),
+        ("twist", Twist),
+    ]
+    SIZE = 168
+    ALIGN = 8
+    OFFSETS = {"name_len": 0, "name": 4, "pose": 64, "twist": 120}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::LinkState"
+
+
+class LinkStates(ctypes.Structure):
+    """``caravan::LinkStates``: 10760 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("links_len", ctypes.c_uint32),
+        ("links", LinkState * 64),
+    ]
+    SIZE = 10760
+    ALIGN = 8
+    OFFSETS = {"links_len": 0, "links": 8}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::LinkStates"
+
+
+class Contact(ctypes.Structure):
+    """``caravan::Contact``: 192 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("link_len", ctypes.c_uint32),
+        ("link", ctypes.c_uint8 * 60),
+        ("other_robot", ctypes.c_int32),
+        ("other_link_len", ctypes.c_uint32),
+        ("other_link", ctypes.c_uint8 * 60),
+        ("_reserved", ctypes.c_uint32),
+        ("point", Vector3),
+        ("normal", Vector3),
+        ("normal_force", ctypes.c_double),
+    ]
+    SIZE = 192
+    ALIGN = 8
+    OFFSETS = {
+        "link_len": 0,
+        "link": 4,
+        "other_robot": 64,
+        "other_link_len": 68,
+        "other_link": 72,
+        "_reserved": 132,
+        "point": 136,
+        "normal": 160,
+        "normal_force": 184,
+    }
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::Contact"
+
+
+class Contacts(ctypes.Structure):
+    """``caravan::Contacts``: 12296 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("contacts_len", ctypes.c_uint32),
+        ("contacts", Contact * 64),
+    ]
+    SIZE = 12296
+    ALIGN = 8
+    OFFSETS = {"contacts_len": 0, "contacts": 8}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::Contacts"
+
+
+class Wrench(ctypes.Structure):
+    """``caravan::Wrench``: 152 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("link_len", ctypes.c_uint32),
+        ("link", ctypes.c_uint8 * 60),
+        ("frame", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
+        ("point", Vector3),
+        ("force", Vector3),
+        ("torque", Vector3),
+        ("duration_s", ctypes.c_double),
+    ]
+    SIZE = 152
+    ALIGN = 8
+    OFFSETS = {
+        "link_len": 0,
+        "link": 4,
+        "frame": 64,
+        "_reserved": 68,
+        "point": 72,
+        "force": 96,
+        "torque": 120,
+        "duration_s": 144,
+    }
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::Wrench"
+
+
 class Hello(ctypes.Structure):
     """``caravan::lockstep::Hello``: 4184 bytes, aligned to 8."""
 
@@ -522,6 +701,11 @@ MESSAGE_TYPES = (
     Goal,
     NodeStatus,
     Collision,
+    JointState,
+    JointCommand,
+    LinkStates,
+    Contacts,
+    Wrench,
 )
 BY_TYPE_NAME = {t.type_name(): t for t in MESSAGE_TYPES}
 # Every generated structure, the header and lockstep messages included.
@@ -543,6 +727,14 @@ ALL_TYPES = (
     Goal,
     NodeStatus,
     Collision,
+    JointValue,
+    JointState,
+    JointCommand,
+    LinkState,
+    LinkStates,
+    Contact,
+    Contacts,
+    Wrench,
     Hello,
     Grant,
     Done,
@@ -600,6 +792,26 @@ class topics:
     @staticmethod
     def path(i: int) -> str:
         return f"robot/{i}/path"
+
+    @staticmethod
+    def joint_states(i: int) -> str:
+        return f"robot/{i}/joint_states"
+
+    @staticmethod
+    def joint_command(i: int) -> str:
+        return f"robot/{i}/joint_command"
+
+    @staticmethod
+    def link_states(i: int) -> str:
+        return f"robot/{i}/link_states"
+
+    @staticmethod
+    def contacts(i: int) -> str:
+        return f"robot/{i}/contacts"
+
+    @staticmethod
+    def wrench(i: int) -> str:
+        return f"robot/{i}/wrench"
 
 
 class lockstep:

@@ -14,9 +14,10 @@
 
 use crate::lockstep::{Done, Grant, Hello};
 use crate::{
-    Collision, EncoderTicks, FixedString, FixedVec, Goal, Header, Imu, LaserScan, NodeStatus,
+    Collision, Contact, Contacts, EncoderTicks, FixedString, FixedVec, Goal, Header, Imu,
+    JointCommand, JointState, JointValue, LaserScan, LinkState, LinkStates, NodeStatus,
     OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Quaternion, Twist, Vector3, WheelSetpoint,
-    WheelState,
+    WheelState, Wrench,
 };
 use core::mem::{align_of, offset_of, size_of};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
@@ -273,6 +274,14 @@ describe! {
         sim_time_ns, running, _reserved,
     }
     Collision { robot, other_robot, started, _reserved }
+    JointValue { name, position, velocity, effort }
+    JointState { joints }
+    JointCommand { joints }
+    LinkState { name, pose, twist }
+    LinkStates { links }
+    Contact { link, other_robot, other_link, _reserved, point, normal, normal_force }
+    Contacts { contacts }
+    Wrench { link, frame, _reserved, point, force, torque, duration_s }
     Hello { node, period_ns, triggers }
     Grant { now_ns, tick_ns, stop, _reserved }
     Done { node_hash, now_ns, wake_ns, published }
@@ -316,6 +325,11 @@ pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
     encoder_ticks,
     cmd_vel,
     path,
+    joint_states,
+    joint_command,
+    link_states,
+    contacts,
+    wrench,
 ];
 
 /// Alignment of a field's element: a scalar's size, or a described struct's alignment.

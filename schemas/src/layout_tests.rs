@@ -19,6 +19,11 @@ const _: () = {
     assert!(size_of::<Path2D>() == 8 + 24 * PATH_MAX_POSES);
     assert!(size_of::<Goal>() == 40);
     assert!(size_of::<Collision>() == 16);
+    assert!(size_of::<JointValue>() == 64 + 24);
+    assert!(size_of::<JointState>() == 8 + 88 * MAX_JOINTS);
+    assert!(size_of::<LinkState>() == 64 + 56 + 48);
+    assert!(size_of::<Contact>() == 64 + 4 + 64 + 4 + 24 + 24 + 8);
+    assert!(size_of::<Wrench>() == 64 + 8 + 3 * 24 + 8);
     assert!(offset_of!(LaserScan, ranges) == 32);
     assert!(offset_of!(OccupancyGrid, data) == 40);
 };

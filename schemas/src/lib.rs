@@ -5,6 +5,7 @@
 //! type name (`caravan::<Name>`) that iceoryx2 uses to reject mismatched publishers and
 //! subscribers. The stamped [`Header`] travels as iceoryx2's user header, beside the payload.
 
+mod articulated;
 pub mod describe;
 mod fixed;
 mod geometry;
@@ -20,6 +21,10 @@ mod status;
 mod topic;
 pub mod topics;
 
+pub use articulated::{
+    Contact, Contacts, JointCommand, JointState, JointValue, LinkState, LinkStates, MAX_CONTACTS,
+    MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Wrench,
+};
 pub use fixed::{FixedString, FixedVec};
 pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3};
 pub use header::Header;
@@ -95,10 +100,28 @@ pub fn wire_size<T: Message>(message: &T) -> usize {
     } else if let Some(map) = any.downcast_ref::<OccupancyGrid>() {
         header + 48 + map.cells().len()
     } else if let Some(path) = any.downcast_ref::<Path2D>() {
-        header + 8 + path.poses.len() * core::mem::size_of::<Pose2D>()
+        header + held(&path.poses)
+    } else if let Some(m) = any.downcast_ref::<JointState>() {
+        header + held(&m.joints)
+    } else if let Some(m) = any.downcast_ref::<JointCommand>() {
+        header + held(&m.joints)
+    } else if let Some(m) = any.downcast_ref::<LinkStates>() {
+        header + held(&m.links)
+    } else if let Some(m) = any.downcast_ref::<Contacts>() {
+        header + held(&m.contacts)
     } else {
         header + core::mem::size_of::<T>()
     }
+}
+
+/// Wire bytes of a fixed-capacity vector: its length and the items it holds.
+fn held<
+    T: Copy + iceoryx2::prelude::PlacementDefault + iceoryx2::prelude::ZeroCopySend,
+    const N: usize,
+>(
+    v: &FixedVec<T, N>,
+) -> usize {
+    8 + v.len() * core::mem::size_of::<T>()
 }
 
 #[cfg(test)]

@@ -12,7 +12,8 @@ macro_rules! with_message_type {
     ($name:expr, |$T:ident| $body:expr) => {
         $crate::with_message_type!(@arms $name, $T, $body;
             Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
-            LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision)
+            LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision JointState JointCommand
+            LinkStates Contacts Wrench)
     };
     (@arms $name:expr, $T:ident, $body:expr; $($ty:ident)*) => {{
         let name: &str = $name;
@@ -32,5 +33,6 @@ pub fn message_type_names() -> Vec<&'static str> {
         ($($ty:ident)*) => { vec![$(crate::type_name::<crate::$ty>()),*] };
     }
     names!(Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
-        LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision)
+        LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision JointState JointCommand
+        LinkStates Contacts Wrench)
 }

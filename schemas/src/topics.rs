@@ -7,8 +7,9 @@
 //! Where only the name is needed (matching recorded messages), use [`Topic::name`].
 
 use crate::{
-    Collision, EncoderTicks, Goal, Imu, LaserScan, NodeStatus, OccupancyGrid, Odometry, Path2D,
-    Pose2D, Topic, Twist, WheelSetpoint, WheelState,
+    Collision, Contacts, EncoderTicks, Goal, Imu, JointCommand, JointState, LaserScan, LinkStates,
+    NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Topic, Twist, WheelSetpoint, WheelState,
+    Wrench,
 };
 
 /// Per-node execution statistics, published by every node (`status`).
@@ -76,6 +77,26 @@ pub fn cmd_vel(i: usize) -> Topic<Twist> {
 pub fn path(i: usize) -> Topic<Path2D> {
     robot(i, "path")
 }
+/// Robot `i`'s joint readings (`robot/i/joint_states`).
+pub fn joint_states(i: usize) -> Topic<JointState> {
+    robot(i, "joint_states")
+}
+/// Targets for robot `i`'s joint actuators (`robot/i/joint_command`).
+pub fn joint_command(i: usize) -> Topic<JointCommand> {
+    robot(i, "joint_command")
+}
+/// Ground-truth poses and velocities of robot `i`'s links (`robot/i/link_states`).
+pub fn link_states(i: usize) -> Topic<LinkStates> {
+    robot(i, "link_states")
+}
+/// Robot `i`'s contact points and normal forces (`robot/i/contacts`).
+pub fn contacts(i: usize) -> Topic<Contacts> {
+    robot(i, "contacts")
+}
+/// Forces applied to robot `i`'s links (`robot/i/wrench`).
+pub fn wrench(i: usize) -> Topic<Wrench> {
+    robot(i, "wrench")
+}
 
 #[cfg(test)]
 mod tests {
@@ -101,6 +122,11 @@ mod tests {
         check::<EncoderTicks>(encoder_ticks(3), "robot/3/encoder_ticks");
         check::<Twist>(cmd_vel(3), "robot/3/cmd_vel");
         check::<Path2D>(path(3), "robot/3/path");
+        check::<JointState>(joint_states(3), "robot/3/joint_states");
+        check::<JointCommand>(joint_command(3), "robot/3/joint_command");
+        check::<LinkStates>(link_states(3), "robot/3/link_states");
+        check::<Contacts>(contacts(3), "robot/3/contacts");
+        check::<Wrench>(wrench(3), "robot/3/wrench");
         assert_eq!(scan(0).name(), "robot/0/scan");
     }
 

@@ -203,6 +203,12 @@ pub fn python_module() -> Result<String> {
         ("MAP_MAX_SIDE", caravan_schemas::MAP_MAX_SIDE),
         ("MAP_MAX_CELLS", caravan_schemas::MAP_MAX_CELLS),
         ("PATH_MAX_POSES", caravan_schemas::PATH_MAX_POSES),
+        ("NAME_BYTES", caravan_schemas::NAME_BYTES),
+        ("MAX_JOINTS", caravan_schemas::MAX_JOINTS),
+        ("MAX_LINKS", caravan_schemas::MAX_LINKS),
+        ("MAX_CONTACTS", caravan_schemas::MAX_CONTACTS),
+        ("WRENCH_WORLD", caravan_schemas::Wrench::WORLD as usize),
+        ("WRENCH_LINK", caravan_schemas::Wrench::LINK as usize),
     ] {
         writeln!(py, "{name} = {value}")?;
     }
