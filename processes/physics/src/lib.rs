@@ -8,6 +8,7 @@ pub mod contacts;
 pub mod convoy;
 pub mod firmware;
 pub mod joint_state;
+pub mod messages;
 pub mod motor;
 pub mod params;
 pub mod plan;

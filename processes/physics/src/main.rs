@@ -1,15 +1,22 @@
 //! `caravan-physics`: simulates the group's robots and publishes their ground truth.
 //!
-//! Per robot i it subscribes `robot/i/wheel_setpoint` (the latest value is held; zero before
-//! the first) and publishes `robot/i/pose_true`, `robot/i/twist_true` and
-//! `robot/i/wheel_state` every step; contact events go to `collisions`. The node steps at
+//! Per robot i it publishes `robot/i/pose_true` and `robot/i/twist_true` every step, and as
+//! the robot's params ask `robot/i/wheel_state` (a differential drive, which follows
+//! `robot/i/wheel_setpoint`), `robot/i/joint_states` (which takes `robot/i/joint_command`),
+//! `robot/i/link_states` and `robot/i/contacts`. It takes `robot/i/cmd_vel` for a kinematic
+//! base and every `robot/i/wrench`. Commands are held until changed. Contact events go to
+//! `collisions`. The node steps at
 //! 100 Hz unless the launch file gives a `rate`; each step runs `substeps` physics steps.
 //! Params and inputs are checked before the node joins the group, so bad input never leaves
 //! anything behind in shared memory.
 
 use caravan::{Node, NodeIdentity, Publisher, Subscriber, Trigger};
+use caravan_physics::messages::{self, CommandReader};
 use caravan_physics::{Params, Simulation};
-use caravan_schemas::{Pose2D, Twist, WheelSetpoint, WheelState, topics};
+use caravan_schemas::{
+    Contacts, JointCommand, JointState, LinkStates, Pose2D, Twist, WheelSetpoint, WheelState,
+    Wrench, topics,
+};
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -66,22 +73,105 @@ fn period(identity: &NodeIdentity) -> Result<Duration, String> {
     }
 }
 
-/// One robot's topics.
+/// One robot's topics; the optional ones as its `Outputs` say.
 struct RobotPorts {
-    setpoint: Subscriber<WheelSetpoint>,
     pose: Publisher<Pose2D>,
     twist: Publisher<Twist>,
-    wheels: Publisher<WheelState>,
+    wheels: Option<(Subscriber<WheelSetpoint>, Publisher<WheelState>)>,
+    joints: Option<(Subscriber<JointCommand>, Publisher<JointState>)>,
+    links: Option<Publisher<LinkStates>>,
+    contacts: Option<Publisher<Contacts>>,
+    cmd_vel: Option<Subscriber<Twist>>,
+    wrench: Subscriber<Wrench>,
 }
 
 impl RobotPorts {
-    fn open(node: &Node, i: usize) -> Result<Self, caravan::Error> {
+    fn open(node: &Node, sim: &Simulation, i: usize) -> Result<Self, caravan::Error> {
+        let out = sim.outputs(i);
+        let wheels = out.wheels.then(|| -> Result<_, caravan::Error> {
+            Ok((
+                node.subscriber(&topics::wheel_setpoint(i))?,
+                node.publisher(&topics::wheel_state(i))?,
+            ))
+        });
+        let joints = out.joint_states.then(|| -> Result<_, caravan::Error> {
+            Ok((
+                node.subscriber(&topics::joint_command(i))?,
+                node.publisher(&topics::joint_states(i))?,
+            ))
+        });
+        let links = out
+            .link_states
+            .then(|| node.publisher(&topics::link_states(i)));
+        let contacts = out.contacts.then(|| node.publisher(&topics::contacts(i)));
+        let cmd_vel = out.cmd_vel.then(|| node.subscriber(&topics::cmd_vel(i)));
         Ok(Self {
-            setpoint: node.subscriber(&topics::wheel_setpoint(i))?,
             pose: node.publisher(&topics::pose_true(i))?,
             twist: node.publisher(&topics::twist_true(i))?,
-            wheels: node.publisher(&topics::wheel_state(i))?,
+            wheels: wheels.transpose()?,
+            joints: joints.transpose()?,
+            links: links.transpose()?,
+            contacts: contacts.transpose()?,
+            cmd_vel: cmd_vel.transpose()?,
+            wrench: node.subscriber(&topics::wrench(i))?,
         })
+    }
+
+    /// Hands robot `i`'s latest commands and every new wrench to the simulation.
+    fn take_commands(
+        &self,
+        sim: &mut Simulation,
+        i: usize,
+        commands: &mut CommandReader,
+    ) -> Result<(), caravan::Error> {
+        if let Some((setpoint, _)) = &self.wheels
+            && let Some(sp) = setpoint.latest()?
+        {
+            sim.set_setpoint(i, &sp);
+        }
+        if let Some((command, _)) = &self.joints {
+            while let Some(cmd) = command.receive()? {
+                let targets = commands.targets(sim, i, &cmd);
+                sim.set_targets(i, &targets);
+            }
+        }
+        if let Some(cmd_vel) = &self.cmd_vel
+            && let Some(cmd) = cmd_vel.latest()?
+        {
+            sim.set_cmd_vel(i, &cmd);
+        }
+        while let Some(w) = self.wrench.receive()? {
+            let applied = messages::wrench_command(&w).and_then(|w| sim.apply_wrench(i, &w));
+            if let Err(e) = applied {
+                eprintln!("caravan-physics: robot/{i}/wrench ignored: {e}");
+            }
+        }
+        Ok(())
+    }
+
+    /// Publishes robot `i`'s state after a step.
+    fn publish(&self, sim: &Simulation, i: usize) -> Result<(), caravan::Error> {
+        self.pose.publish(&sim.pose(i))?;
+        self.twist.publish(&sim.twist(i))?;
+        if let Some((_, state)) = &self.wheels {
+            state.publish(&sim.wheel_state(i))?;
+        }
+        if let Some((_, state)) = &self.joints {
+            let mut m = state.loan()?;
+            messages::joint_state(sim, i, &mut m);
+            m.send()?;
+        }
+        if let Some(p) = &self.links {
+            let mut m = p.loan()?;
+            messages::link_states(sim, i, &mut m);
+            m.send()?;
+        }
+        if let Some(p) = &self.contacts {
+            let mut m = p.loan()?;
+            messages::contacts(sim, i, &mut m);
+            m.send()?;
+        }
+        Ok(())
     }
 }
 
@@ -93,25 +183,22 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         max_steps,
     } = ready;
     let ports = (0..sim.robot_count())
-        .map(|i| RobotPorts::open(&node, i))
+        .map(|i| RobotPorts::open(&node, &sim, i))
         .collect::<Result<Vec<_>, _>>()?;
     let collisions = node.publisher(&topics::collisions())?;
+    let mut commands = CommandReader::default();
 
     let mut slip_ns = 0u64;
     node.run(Trigger::Every(Duration::from_nanos(period_ns)), |step| {
         for (i, p) in ports.iter().enumerate() {
-            if let Some(sp) = p.setpoint.latest()? {
-                sim.set_setpoint(i, &sp);
-            }
+            p.take_commands(&mut sim, i, &mut commands)?;
         }
         let target = step.now_ns().saturating_sub(slip_ns);
         sim.advance_to(target, max_steps);
         // Still behind after the catch-up limit: let simulated time slip.
         slip_ns += target.saturating_sub(sim.time_ns()) / dt_ns * dt_ns;
         for (i, p) in ports.iter().enumerate() {
-            p.pose.publish(&sim.pose(i))?;
-            p.twist.publish(&sim.twist(i))?;
-            p.wheels.publish(&sim.wheel_state(i))?;
+            p.publish(&sim, i)?;
         }
         for c in sim.take_collisions() {
             collisions.publish(&c)?;

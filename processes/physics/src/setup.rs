@@ -63,6 +63,15 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                 spec.urdf
             ))
         })?;
+        if spec.joint_states != Some(false) || spec.link_states || spec.contacts {
+            crate::messages::check_fits(&d, spec.link_states).map_err(|e| {
+                SetupError(format!(
+                    "robot description (key '{}' = \"{}\"): {e}",
+                    key(params, k, "urdf"),
+                    spec.urdf
+                ))
+            })?;
+        }
         descriptions.push(d);
     }
 
@@ -144,6 +153,18 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
         gravity: params.gravity,
     };
     let sim = Simulation::new(&world, builds, cfg).map_err(SetupError)?;
+    let topics: usize = 1
+        + (0..sim.robot_count())
+            .map(|i| sim.outputs(i).topic_count())
+            .sum::<usize>();
+    if topics > caravan_schemas::lockstep::MAX_TOPICS {
+        return Err(SetupError(format!(
+            "key 'robots': the robots would publish {topics} topics per step, more than the \
+             {} one process may; switch off link_states or contacts, or split the robots \
+             over two physics processes",
+            caravan_schemas::lockstep::MAX_TOPICS
+        )));
+    }
     match scene::first_overlap(sim.scene()) {
         None => Ok(sim),
         Some(Overlap::Obstacle { robot: i, obstacle }) => {

@@ -32,8 +32,37 @@ impl SimConfig {
     }
 }
 
+/// The topics a robot publishes besides its pose and twist.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Outputs {
+    /// `wheel_state` (and `wheel_setpoint` in): the robot is a differential drive.
+    pub wheels: bool,
+    /// `joint_states` (and `joint_command` in).
+    pub joint_states: bool,
+    pub link_states: bool,
+    pub contacts: bool,
+    /// Takes `cmd_vel`: a kinematic base.
+    pub cmd_vel: bool,
+}
+
+impl Outputs {
+    /// Topics published per step: pose, twist and each output switched on.
+    pub fn topic_count(&self) -> usize {
+        2 + [
+            self.wheels,
+            self.joint_states,
+            self.link_states,
+            self.contacts,
+        ]
+        .iter()
+        .filter(|on| **on)
+        .count()
+    }
+}
+
 /// One robot's runtime state besides its rapier bodies.
 struct RobotState {
+    outputs: Outputs,
     description: RobotDescription,
     /// Movable joints in description order (the robot's joint order on its topics).
     joints: Vec<JointIo>,
@@ -110,7 +139,16 @@ impl Simulation {
                 joints.push(io);
                 actuators.push(build_actuators[j].take());
             }
+            let spec = build.setup.spec;
+            let outputs = Outputs {
+                wheels: build.drive.is_some(),
+                joint_states: spec.joint_states.unwrap_or(!joints.is_empty()),
+                link_states: spec.link_states,
+                contacts: spec.contacts,
+                cmd_vel: spec.base == Base::Kinematic,
+            };
             robots.push(RobotState {
+                outputs,
                 description: d.clone(),
                 joints,
                 actuators,
@@ -147,6 +185,11 @@ impl Simulation {
     /// Simulated time, ns.
     pub fn time_ns(&self) -> u64 {
         self.time_ns
+    }
+
+    /// What robot `i` publishes.
+    pub fn outputs(&self, i: usize) -> Outputs {
+        self.robots[i].outputs
     }
 
     pub fn description(&self, i: usize) -> &RobotDescription {

@@ -175,6 +175,10 @@ pub struct RobotSpec {
     /// Frame of `robot/i/cmd_vel` for a kinematic base.
     #[serde(default)]
     pub cmd_vel_frame: CmdVelFrame,
+    /// Publish `robot/i/joint_states` and take `robot/i/joint_command`. Default: when the
+    /// robot has a movable joint.
+    #[serde(default)]
+    pub joint_states: Option<bool>,
     /// Publish `robot/i/link_states` (every link's pose and velocity).
     #[serde(default)]
     pub link_states: bool,
@@ -326,6 +330,7 @@ impl RobotSpec {
             drive: Some(Drive::Diff),
             wheel_friction,
             cmd_vel_frame: CmdVelFrame::Body,
+            joint_states: Some(false),
             link_states: false,
             contacts: false,
         }

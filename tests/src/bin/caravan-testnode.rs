@@ -9,6 +9,7 @@
 //! - `lockstep-source` / `lockstep-sink`: see the lockstep protocol test.
 //! - `hang`: steps at 10 Hz and hangs in its step after `count` steps.
 //! - `wrong-type`: after `count` ms, publishes `WheelSetpoint`s on `topic` (type-mismatch tests).
+//! - `arm-commands`: the physics topics test's commands, see [`arm_commands`].
 
 use caravan::{Error, Node, Topic, Trigger};
 use caravan_schemas::Pose2D;
@@ -110,6 +111,7 @@ fn run(mode: &str) -> Result<(), Error> {
                 publisher.publish(&Default::default())
             })?;
         }
+        "arm-commands" => arm_commands(&mut node)?,
         other => return Err(Error::Step(format!("unknown mode '{other}'"))),
     }
     Ok(())
@@ -154,5 +156,61 @@ fn subscribe(node: &mut Node, p: &Params) -> Result<(), Error> {
         expected_seq - 1,
         subscriber.missed()
     );
+    Ok(())
+}
+
+/// Commands for the physics topics test, by simulated time: from 0.5 s robot 0's joints
+/// `upper_joint`, `fore_joint`, `hand_joint` to positions 0.2, −0.2, 0 rad and robot 2 (a
+/// kinematic base) to 0.5 m/s along x; at 3 s a 10 N downward force on robot 0's `hand`,
+/// 0.3 m along the link, for 1 s.
+fn arm_commands(node: &mut Node) -> Result<(), Error> {
+    use caravan_schemas::{JointCommand, JointValue, Name, Twist, Vector3, Wrench, topics};
+    let joints = node.publisher(&topics::joint_command(0))?;
+    let wrench = node.publisher(&topics::wrench(0))?;
+    let cmd_vel = node.publisher(&topics::cmd_vel(2))?;
+    let mut pushed = false;
+    node.run(Trigger::every_hz(10.0), |step| {
+        let t = step.now().as_secs_f64();
+        if t >= 0.5 {
+            let mut cmd = caravan_schemas::placement_new::<JointCommand>();
+            for (name, position) in [
+                ("upper_joint", 0.2),
+                ("fore_joint", -0.2),
+                ("hand_joint", 0.0),
+            ] {
+                let value = JointValue {
+                    name: Name::new(name),
+                    position,
+                    velocity: 0.0,
+                    effort: f64::NAN,
+                };
+                let _ = cmd.joints.push(value);
+            }
+            joints.publish(&cmd)?;
+            let mut v = Twist::default();
+            v.linear.x = 0.5;
+            cmd_vel.publish(&v)?;
+        }
+        if t >= 3.0 && !pushed {
+            pushed = true;
+            wrench.publish(&Wrench {
+                link: Name::new("hand"),
+                frame: Wrench::LINK,
+                point: Vector3 {
+                    x: 0.3,
+                    y: 0.0,
+                    z: 0.0,
+                },
+                force: Vector3 {
+                    x: 0.0,
+                    y: 0.0,
+                    z: -10.0,
+                },
+                duration_s: 1.0,
+                ..Wrench::default()
+            })?;
+        }
+        Ok(())
+    })?;
     Ok(())
 }

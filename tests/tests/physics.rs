@@ -1,0 +1,169 @@
+//! The physics process's per-robot topics in a real group: an arm on a fixed base follows
+//! joint commands and reports joint efforts that answer an applied wrench as Jᵀ·F, a box
+//! resting on the floor reports contacts carrying its weight, and a kinematic box flies at
+//! its commanded velocity. Commands come from `caravan-testnode arm-commands`.
+
+use caravan_tests::{Scenario, workspace_root};
+use serde_json::Value;
+
+/// The group: physics at 100 Hz (5 substeps) and the commander at 10 Hz, in lockstep. The
+/// position loops' gains suit each joint's inertia: an explicit damping term kd·dt/I above 2
+/// would make a light hand oscillate.
+fn launch() -> String {
+    let robots = workspace_root().join("processes/physics/tests/robots");
+    let r = |f: &str| robots.join(f).display().to_string();
+    format!(
+        r#"clock = "lockstep"
+duration = "5s"
+record = ["robot/**"]
+
+[[process]]
+name = "physics"
+exec = "caravan-physics"
+rate = "100Hz"
+[process.params]
+world = "{world}"
+robots = [
+  {{ urdf = "{arm}", base = "fixed", poses = [[1.0, 1.0, 0.0]], link_states = true,
+     actuators = [
+       {{ type = "position", joints = ["upper_joint"], kp = 400.0, ki = 1000.0, kd = 20.0 }},
+       {{ type = "position", joints = ["fore_joint"], kp = 200.0, ki = 500.0, kd = 10.0 }},
+       {{ type = "position", joints = ["hand_joint"], kp = 20.0, ki = 50.0, kd = 0.5 }},
+     ] }},
+  {{ urdf = "{box_}", poses = [[3.0, 3.0, 0.0]], contacts = true }},
+  {{ urdf = "{box_}", base = "kinematic", poses = [[3.0, 1.0, 1.5, 0.0, 0.0, 0.0]] }},
+]
+
+[[process]]
+name = "commander"
+exec = "caravan-testnode arm-commands"
+rate = "10Hz"
+"#,
+        world = r("empty.toml"),
+        arm = r("arm3.urdf"),
+        box_ = r("box.urdf"),
+    )
+}
+
+/// Recorded messages of `topic`: (log time ns, JSON).
+fn messages(s: &Scenario, topic: &str) -> Vec<(u64, Value)> {
+    let bytes = std::fs::read(s.run_dirs()[0].join("record.mcap")).unwrap();
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == topic)
+        .map(|m| (m.log_time, serde_json::from_slice(&m.data).unwrap()))
+        .collect()
+}
+
+/// The last message of `topic` at or before `t_s`.
+fn at(msgs: &[(u64, Value)], t_s: f64) -> &Value {
+    &msgs
+        .iter()
+        .rev()
+        .find(|(t, _)| *t as f64 <= t_s * 1e9)
+        .expect("a message before the time")
+        .1
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap()
+}
+
+#[test]
+fn joints_links_contacts_wrenches_and_kinematic_bases_on_topics() {
+    let s = Scenario::new("physics-topics", &launch());
+    let out = s.run(&[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    // Joint states: by name, in URDF order, at the commanded positions.
+    let states = messages(&s, "robot/0/joint_states");
+    assert!(states.len() >= 490, "{} joint states", states.len());
+    let before = &at(&states, 2.95)["joints"];
+    let names: Vec<&str> = before
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["upper_joint", "fore_joint", "hand_joint"]);
+    for (k, target) in [0.2, -0.2, 0.0].iter().enumerate() {
+        let q = f(&before[k]["position"]);
+        assert!(
+            (q - target).abs() < 0.01,
+            "joint {k} at {q}, target {target}"
+        );
+    }
+
+    // A 10 N downward force 0.3 m along the hand: each joint's effort changes by the
+    // force times the point's horizontal distance from the joint (Jᵀ·F), opposing it.
+    let during = &at(&states, 3.95)["joints"];
+    let after = &at(&states, 4.95)["joints"];
+    let q: Vec<f64> = (0..3).map(|k| f(&during[k]["position"])).collect();
+    let (c1, c12, c123) = (q[0].cos(), (q[0] + q[1]).cos(), (q[0] + q[1] + q[2]).cos());
+    let reach = [
+        0.5 * c1 + 0.4 * c12 + 0.3 * c123,
+        0.4 * c12 + 0.3 * c123,
+        0.3 * c123,
+    ];
+    for k in 0..3 {
+        let delta = f(&during[k]["effort"]) - f(&before[k]["effort"]);
+        let expected = -10.0 * reach[k];
+        assert!(
+            (delta - expected).abs() < 0.02 * expected.abs(),
+            "joint {k}: effort changed by {delta}, Jᵀ·F gives {expected}"
+        );
+        // The wrench ended after 1 s: the effort is back to holding the arm.
+        let back = f(&after[k]["effort"]) - f(&before[k]["effort"]);
+        assert!(back.abs() < 0.02 * expected.abs(), "joint {k}: {back}");
+    }
+
+    // Link states: the hand joint sits 0.9 m out along the arm from the upper joint.
+    let links = messages(&s, "robot/0/link_states");
+    let hand = at(&links, 2.95)["links"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|l| l["name"] == "hand")
+        .unwrap()
+        .clone();
+    let x = f(&hand["pose"]["position"]["x"]);
+    let expected_x = 1.0 + 0.5 * q[0].cos() + 0.4 * (q[0] + q[1]).cos();
+    assert!(
+        (x - expected_x).abs() < 0.01,
+        "hand at x = {x}, expected {expected_x}"
+    );
+
+    // Contacts: the resting box's normal forces carry its weight, 5 kg × 9.81 m/s².
+    let contacts = messages(&s, "robot/1/contacts");
+    let resting = at(&contacts, 4.95)["contacts"].as_array().unwrap().clone();
+    assert!(!resting.is_empty());
+    let total: f64 = resting.iter().map(|c| f(&c["normal_force"])).sum();
+    assert!(
+        (total - 49.05).abs() < 0.02 * 49.05,
+        "normal forces sum to {total} N"
+    );
+    for c in &resting {
+        assert_eq!(
+            (c["link"].as_str(), c["other_robot"].as_i64()),
+            (Some("body"), Some(-1))
+        );
+        assert!(f(&c["normal"]["z"]) > 0.99, "{c}");
+    }
+    // Robots without the option publish no contacts; the arm publishes no wheel state.
+    assert!(messages(&s, "robot/0/contacts").is_empty());
+    assert!(messages(&s, "robot/0/wheel_state").is_empty());
+
+    // The kinematic box flies at 0.5 m/s along x and does not fall.
+    let twist = messages(&s, "robot/2/twist_true");
+    let v = &at(&twist, 4.95)["linear"];
+    assert!((f(&v["x"]) - 0.5).abs() < 1e-6, "{v}");
+    assert!(f(&v["z"]).abs() < 1e-9, "{v}");
+    let pose = messages(&s, "robot/2/pose_true");
+    let moved = f(&at(&pose, 4.95)["x"]) - f(&at(&pose, 1.0)["x"]);
+    assert!((moved - 0.5 * 3.95).abs() < 0.02, "moved {moved} m");
+}
