@@ -3,8 +3,8 @@
 
 use crate::firmware::FirmwareParams;
 use crate::motor::MotorParams;
-use crate::scene::{RobotSetup, StartPose};
-use crate::sim::{RobotBuild, SimConfig, Simulation};
+use crate::robot::{RobotBuild, RobotSetup, SimConfig, StartPose};
+use crate::simulation::Simulation;
 use crate::spec::RobotSpec;
 use caravan_world::World;
 use caravan_world::description::RobotDescription;
@@ -72,6 +72,7 @@ pub fn simulation(
     let sim_cfg = SimConfig {
         dt_ns: cfg.dt_ns,
         gravity: 9.81,
+        precision: crate::params::Precision::F32,
     };
     Simulation::new(world, builds, sim_cfg).expect("the convoy robot builds")
 }

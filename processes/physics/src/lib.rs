@@ -4,22 +4,22 @@
 //! drive it in-process.
 
 pub mod actuator;
-pub mod contacts;
 pub mod convoy;
+pub mod engine_f32;
+pub mod engine_f64;
 pub mod firmware;
-pub mod joint_state;
 pub mod messages;
 pub mod motor;
 pub mod params;
 pub mod plan;
-pub mod scene;
+pub mod robot;
 pub mod setup;
-pub mod shapes;
-pub mod sim;
+pub mod simulation;
 pub mod spec;
 pub mod step_response;
 pub mod wrench;
 
 pub use params::Params;
+pub use robot::SimConfig;
 pub use setup::{SetupError, load};
-pub use sim::{SimConfig, Simulation};
+pub use simulation::Simulation;

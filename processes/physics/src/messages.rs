@@ -3,7 +3,7 @@
 //! their URDF names; `main.rs` only moves these messages.
 
 use crate::actuator::Target;
-use crate::sim::Simulation;
+use crate::simulation::Simulation;
 use crate::wrench::WrenchCommand;
 use caravan_schemas::{
     Contact, Contacts, JointCommand, JointState, JointValue, LinkState, LinkStates, MAX_CONTACTS,

@@ -5,8 +5,8 @@
 
 use crate::actuator::Actuator;
 use crate::params::Params;
-use crate::scene::{self, Overlap, RobotSetup, StartPose};
-use crate::sim::{RobotBuild, SimConfig, Simulation};
+use crate::robot::{self, Overlap, RobotBuild, RobotSetup, SimConfig, StartPose};
+use crate::simulation::Simulation;
 use crate::spec::{Drive, RobotSpec};
 use caravan_world::description::{JointKind, RobotDescription, load_description};
 use caravan_world::{RobotModel, load_world};
@@ -151,6 +151,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
     let cfg = SimConfig {
         dt_ns,
         gravity: params.gravity,
+        precision: params.precision,
     };
     let sim = Simulation::new(&world, builds, cfg).map_err(SetupError)?;
     let topics: usize = 1
@@ -165,7 +166,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
             caravan_schemas::lockstep::MAX_TOPICS
         )));
     }
-    match scene::first_overlap(sim.scene()) {
+    match sim.first_overlap() {
         None => Ok(sim),
         Some(Overlap::Obstacle { robot: i, obstacle }) => {
             let o = &world.obstacles[obstacle];
@@ -174,7 +175,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                  world file {}; move it to free floor",
                 poses[i].0,
                 poses[i].1,
-                scene::kind_name(o.kind),
+                robot::kind_name(o.kind),
                 o.center[0],
                 o.center[1],
                 world_path.display()

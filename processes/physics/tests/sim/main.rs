@@ -8,4 +8,5 @@ mod common;
 mod determinism;
 mod driving;
 mod lab;
+mod precision;
 mod step_response;

@@ -6,9 +6,9 @@
 //! within 1 µrad of a body axis is snapped onto it (a URDF's `rpy="1.5707963 0 0"` is a
 //! quarter turn to 7 digits), which keeps the colliders of the usual wheel exactly aligned.
 
+use super::rapier::prelude::*;
 use caravan_world::description::{Geometry, Inertial};
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
-use rapier3d::prelude::*;
 
 /// Axes closer than this to a body axis are snapped onto it, rad.
 const SNAP: f64 = 1e-6;

@@ -3,62 +3,18 @@
 //! counted in whole nanoseconds so that firmware ticks on exact simulated times and two runs
 //! with the same inputs agree bit for bit.
 
+use super::applied_wrench::ActiveWrench;
+use super::contacts::ContactMonitor;
+use super::joint_state::{JointIo, Loads};
+use super::rapier::prelude::*;
+use super::scene::{self, Scene};
 use crate::actuator::{Actuator, Target};
-use crate::contacts::ContactMonitor;
-use crate::joint_state::{JointIo, Loads};
-use crate::scene::{self, RobotSetup, Scene};
+use crate::robot::{ContactPoint, Outputs, RobotBuild, RobotSetup, SimConfig};
 use crate::spec::{Base, CmdVelFrame};
-use crate::wrench::{ActiveWrench, WrenchCommand};
+use crate::wrench::WrenchCommand;
 use caravan_schemas::{Collision, Pose2D, Twist, Vector3, WheelSetpoint, WheelState};
 use caravan_world::World;
 use caravan_world::description::RobotDescription;
-use rapier3d::prelude::*;
-
-/// Everything that shapes the dynamics besides the world and the robots.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SimConfig {
-    /// Physics step, ns.
-    pub dt_ns: u64,
-    /// Gravitational acceleration along −z, m/s².
-    pub gravity: f64,
-}
-
-impl SimConfig {
-    pub fn with_dt_ns(dt_ns: u64) -> Self {
-        Self {
-            dt_ns,
-            gravity: 9.81,
-        }
-    }
-}
-
-/// The topics a robot publishes besides its pose and twist.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Outputs {
-    /// `wheel_state` (and `wheel_setpoint` in): the robot is a differential drive.
-    pub wheels: bool,
-    /// `joint_states` (and `joint_command` in).
-    pub joint_states: bool,
-    pub link_states: bool,
-    pub contacts: bool,
-    /// Takes `cmd_vel`: a kinematic base.
-    pub cmd_vel: bool,
-}
-
-impl Outputs {
-    /// Topics published per step: pose, twist and each output switched on.
-    pub fn topic_count(&self) -> usize {
-        2 + [
-            self.wheels,
-            self.joint_states,
-            self.link_states,
-            self.contacts,
-        ]
-        .iter()
-        .filter(|on| **on)
-        .count()
-    }
-}
 
 /// One robot's runtime state besides its rapier bodies.
 struct RobotState {
@@ -85,14 +41,6 @@ pub struct Simulation {
     contacts: ContactMonitor,
     events: Vec<Collision>,
     time_ns: u64,
-}
-
-/// A robot to build: its setup and its actuators (one per description joint).
-pub struct RobotBuild<'a> {
-    pub setup: RobotSetup<'a>,
-    pub actuators: Vec<Option<Actuator>>,
-    /// Description joint indices of the left and right wheel of a differential drive.
-    pub drive: Option<[usize; 2]>,
 }
 
 impl Simulation {
@@ -345,7 +293,7 @@ impl Simulation {
             .iter()
             .map(|(b, in_body)| {
                 let body = &bodies[rb.bodies[*b]];
-                let pose = *body.position() * crate::shapes::pose(in_body);
+                let pose = *body.position() * super::shapes::pose(in_body);
                 let origin = pose.translation;
                 let q = pose.rotation;
                 let p3 = caravan_schemas::Pose3D {
@@ -398,13 +346,18 @@ impl Simulation {
     }
 
     /// Pairs (robot, other robot or −1) touching now.
+    /// The first robot that, at its start pose, overlaps an obstacle or another robot.
+    pub fn first_overlap(&self) -> Option<crate::robot::Overlap> {
+        scene::first_overlap(&self.scene)
+    }
+
     pub fn touching(&self) -> Vec<(u32, i32)> {
         self.contacts.touching().collect()
     }
 
     /// Contact points of robot `i`'s links after the last step.
-    pub fn contact_points(&self, i: usize) -> Vec<crate::contacts::ContactPoint> {
-        crate::contacts::points(&self.scene, i, self.cfg.dt_ns as f64 * 1e-9)
+    pub fn contact_points(&self, i: usize) -> Vec<ContactPoint> {
+        super::contacts::points(&self.scene, i, self.cfg.dt_ns as f64 * 1e-9)
     }
 }
 

@@ -19,14 +19,14 @@
 //! simulation applies it to the child body and, reversed, to the parent, so a motor pushes
 //! against the body it is bolted to.
 
+use super::rapier::parry::query::intersection_test;
+use super::rapier::prelude::*;
+use super::shapes;
 use crate::plan::RobotPlan;
-use crate::shapes;
-use crate::spec::{Base, JointModel, RobotSpec};
-use caravan_world::description::{Geometry, JointKind, RobotDescription};
-use caravan_world::{Obstacle, ObstacleKind, Shape, World};
-use nalgebra::Isometry3;
-use rapier3d::parry::query::intersection_test;
-use rapier3d::prelude::*;
+use crate::robot::{Overlap, RobotSetup, StartPose};
+use crate::spec::{Base, JointModel};
+use caravan_world::description::{Geometry, RobotDescription};
+use caravan_world::{Obstacle, Shape, World};
 
 /// What a collider belongs to, stored in its `user_data` so contacts can be classified.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,7 +72,7 @@ impl Part {
 
 /// Collision groups: who may touch whom.
 mod groups {
-    use rapier3d::prelude::{Group, InteractionGroups, InteractionTestMode};
+    use super::super::rapier::prelude::{Group, InteractionGroups, InteractionTestMode};
 
     const FLOOR: Group = Group::GROUP_1;
     const WORLD: Group = Group::GROUP_2;
@@ -115,25 +115,6 @@ pub const DEFAULT_FRICTION: f64 = 0.5;
 
 /// Friction of obstacles. Robot parts combine with `Min`, so their own coefficients decide.
 const OBSTACLE_FRICTION: Real = 0.5;
-
-/// A robot to place: its description, its kind's spec and its start pose.
-pub struct RobotSetup<'a> {
-    pub description: &'a RobotDescription,
-    pub spec: &'a RobotSpec,
-    pub pose: StartPose,
-    /// Inertia added to each joint's child link about the joint axis (an actuator's rotor
-    /// seen through its gear), kg·m²; one per joint.
-    pub reflected_inertia: Vec<f64>,
-}
-
-/// Where a robot starts.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum StartPose {
-    /// On the floor (a floating base stands on it; a fixed base sits at z = 0).
-    Planar { x: f64, y: f64, yaw: f64 },
-    /// The base link's full pose.
-    Full(Isometry3<f64>),
-}
 
 /// How a robot's joint is solved in rapier.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -414,26 +395,6 @@ fn add_robot(
     })
 }
 
-impl RobotSetup<'_> {
-    /// The joint axis (in the link frame) and the inertia an actuator adds about it, for
-    /// the link a joint moves.
-    fn reflected_inertia_of(&self, link: usize) -> Option<(nalgebra::Vector3<f64>, f64)> {
-        let j = self.description.parent_joint(link)?;
-        let joint = &self.description.joints[j];
-        let extra = self.reflected_inertia.get(j).copied().unwrap_or(0.0);
-        (joint.kind != JointKind::Fixed && extra > 0.0).then_some((joint.axis, extra))
-    }
-}
-
-/// Why a start pose cannot be used.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Overlap {
-    /// Robot `robot` overlaps world obstacle `obstacle`.
-    Obstacle { robot: usize, obstacle: usize },
-    /// Robots `robot` and `other` overlap.
-    Robot { robot: usize, other: usize },
-}
-
 /// The first robot that, at its start pose, overlaps an obstacle or another robot (floor
 /// contacts excepted).
 pub fn first_overlap(scene: &Scene) -> Option<Overlap> {
@@ -457,13 +418,4 @@ pub fn first_overlap(scene: &Scene) -> Option<Overlap> {
         }
     }
     None
-}
-
-/// "wall", "box" or "cylinder", for messages.
-pub fn kind_name(kind: ObstacleKind) -> &'static str {
-    match kind {
-        ObstacleKind::Wall => "wall",
-        ObstacleKind::Box => "box",
-        ObstacleKind::Cylinder => "cylinder",
-    }
 }

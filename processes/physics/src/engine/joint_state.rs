@@ -2,11 +2,11 @@
 //! force to them. The same code serves impulse joints and multibody joints: positions come
 //! from body poses through the joint frame, not from either solver's internal coordinates.
 
+use super::rapier::prelude::*;
+use super::shapes;
 use crate::actuator::JointReading;
-use crate::shapes;
 use caravan_world::description::{Joint, JointKind};
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
-use rapier3d::prelude::*;
 
 /// One movable joint as the simulation sees it.
 #[derive(Debug, Clone)]

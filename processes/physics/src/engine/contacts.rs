@@ -12,9 +12,10 @@
 //! colliders: the monitor reports a robot-level contact once, however many of its colliders
 //! touch, and sorted sets make the event order independent of rapier's internal order.
 
-use crate::scene::{Part, Scene};
+use super::rapier::prelude::*;
+use super::scene::{Part, Scene};
+use crate::robot::ContactPoint;
 use caravan_schemas::Collision;
-use rapier3d::prelude::*;
 use std::collections::BTreeSet;
 
 /// Two colliders closer than this count as touching, m. rapier keeps speculative contact
@@ -94,21 +95,6 @@ fn touching_pairs(scene: &Scene) -> BTreeSet<(u32, i32)> {
         }
     }
     pairs
-}
-
-/// One contact point of a robot's link.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactPoint {
-    pub link: usize,
-    /// Other robot and its link, or −1, −1 for the world.
-    pub other_robot: i32,
-    pub other_link: i32,
-    /// World frame, m.
-    pub point: [f64; 3],
-    /// Unit normal pointing from the other body into this link.
-    pub normal: [f64; 3],
-    /// Normal force over the last step, N.
-    pub normal_force: f64,
 }
 
 /// Robot `i`'s contact points after the last step (`dt` s long), wheels' tyres included.

@@ -1,0 +1,132 @@
+//! What a simulation is built from and reports, the same for either precision of the engine:
+//! robots to place, the step configuration, a robot's outputs and contact points.
+
+use crate::actuator::Actuator;
+use crate::params::Precision;
+use crate::spec::RobotSpec;
+use caravan_world::ObstacleKind;
+use caravan_world::description::{JointKind, RobotDescription};
+use nalgebra::Isometry3;
+
+/// Everything that shapes the dynamics besides the world and the robots.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimConfig {
+    /// Physics step, ns.
+    pub dt_ns: u64,
+    /// Gravitational acceleration along −z, m/s².
+    pub gravity: f64,
+    /// Floating-point precision of the engine.
+    pub precision: Precision,
+}
+
+impl SimConfig {
+    pub fn with_dt_ns(dt_ns: u64) -> Self {
+        Self {
+            dt_ns,
+            gravity: 9.81,
+            precision: Precision::F32,
+        }
+    }
+}
+
+/// The topics a robot publishes besides its pose and twist.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Outputs {
+    /// `wheel_state` (and `wheel_setpoint` in): the robot is a differential drive.
+    pub wheels: bool,
+    /// `joint_states` (and `joint_command` in).
+    pub joint_states: bool,
+    pub link_states: bool,
+    pub contacts: bool,
+    /// Takes `cmd_vel`: a kinematic base.
+    pub cmd_vel: bool,
+}
+
+impl Outputs {
+    /// Topics published per step: pose, twist and each output switched on.
+    pub fn topic_count(&self) -> usize {
+        2 + [
+            self.wheels,
+            self.joint_states,
+            self.link_states,
+            self.contacts,
+        ]
+        .iter()
+        .filter(|on| **on)
+        .count()
+    }
+}
+
+/// A robot to build: its setup and its actuators (one per description joint).
+pub struct RobotBuild<'a> {
+    pub setup: RobotSetup<'a>,
+    pub actuators: Vec<Option<Actuator>>,
+    /// Description joint indices of the left and right wheel of a differential drive.
+    pub drive: Option<[usize; 2]>,
+}
+
+/// A robot to place: its description, its kind's spec and its start pose.
+pub struct RobotSetup<'a> {
+    pub description: &'a RobotDescription,
+    pub spec: &'a RobotSpec,
+    pub pose: StartPose,
+    /// Inertia added to each joint's child link about the joint axis (an actuator's rotor
+    /// seen through its gear), kg·m²; one per joint.
+    pub reflected_inertia: Vec<f64>,
+}
+
+/// Where a robot starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StartPose {
+    /// On the floor (a floating base stands on it; a fixed base sits at z = 0).
+    Planar { x: f64, y: f64, yaw: f64 },
+    /// The base link's full pose.
+    Full(Isometry3<f64>),
+}
+
+impl RobotSetup<'_> {
+    /// The joint axis (in the link frame) and the inertia an actuator adds about it, for
+    /// the link a joint moves.
+    pub(crate) fn reflected_inertia_of(
+        &self,
+        link: usize,
+    ) -> Option<(nalgebra::Vector3<f64>, f64)> {
+        let j = self.description.parent_joint(link)?;
+        let joint = &self.description.joints[j];
+        let extra = self.reflected_inertia.get(j).copied().unwrap_or(0.0);
+        (joint.kind != JointKind::Fixed && extra > 0.0).then_some((joint.axis, extra))
+    }
+}
+
+/// Why a start pose cannot be used.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Overlap {
+    /// Robot `robot` overlaps world obstacle `obstacle`.
+    Obstacle { robot: usize, obstacle: usize },
+    /// Robots `robot` and `other` overlap.
+    Robot { robot: usize, other: usize },
+}
+
+/// One contact point of a robot's link.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactPoint {
+    pub link: usize,
+    /// Other robot and its link, or −1, −1 for the world.
+    pub other_robot: i32,
+    pub other_link: i32,
+    /// World frame, m.
+    pub point: [f64; 3],
+    /// Unit normal pointing from the other body into this link.
+    pub normal: [f64; 3],
+    /// Normal force over the last step, N.
+    pub normal_force: f64,
+}
+
+/// "wall", "box" or "cylinder", for messages.
+pub fn kind_name(kind: ObstacleKind) -> &'static str {
+    match kind {
+        ObstacleKind::Wall => "wall",
+        ObstacleKind::Box => "box",
+        ObstacleKind::Cylinder => "cylinder",
+    }
+}
