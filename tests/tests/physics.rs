@@ -6,10 +6,11 @@
 use caravan_tests::{Scenario, workspace_root};
 use serde_json::Value;
 
-/// The group: physics at 100 Hz (5 substeps) and the commander at 10 Hz, in lockstep. The
+/// The group: physics at 100 Hz (5 substeps), the commander at 10 Hz and an IMU on the arm's
+/// link `imu_link`, in lockstep. The
 /// position loops' gains suit each joint's inertia: an explicit damping term kd·dt/I above 2
 /// would make a light hand oscillate.
-fn launch() -> String {
+fn launch(imu_link: &str) -> String {
     let robots = workspace_root().join("processes/physics/tests/robots");
     let r = |f: &str| robots.join(f).display().to_string();
     format!(
@@ -38,6 +39,13 @@ robots = [
 name = "commander"
 exec = "caravan-testnode arm-commands"
 rate = "10Hz"
+
+[[process]]
+name = "hand-imu"
+exec = "caravan-sensor"
+rate = "100Hz"
+params = {{ robot = 0, count = 1, world = "{world}", urdf = "{arm}", link = "{imu_link}",
+           imu_offset = [0.3, 0.0, 0.0] }}
 "#,
         world = r("empty.toml"),
         arm = r("arm3.urdf"),
@@ -72,7 +80,7 @@ fn f(v: &Value) -> f64 {
 
 #[test]
 fn joints_links_contacts_wrenches_and_kinematic_bases_on_topics() {
-    let s = Scenario::new("physics-topics", &launch());
+    let s = Scenario::new("physics-topics", &launch("hand"));
     let out = s.run(&[]);
     assert!(
         out.status.success(),
@@ -166,4 +174,56 @@ fn joints_links_contacts_wrenches_and_kinematic_bases_on_topics() {
     let pose = messages(&s, "robot/2/pose_true");
     let moved = f(&at(&pose, 4.95)["x"]) - f(&at(&pose, 1.0)["x"]);
     assert!((moved - 0.5 * 3.95).abs() < 0.02, "moved {moved} m");
+}
+
+#[test]
+fn an_imu_on_a_link_reads_gravity_in_the_link_frame() {
+    let s = Scenario::new("physics-imu", &launch("hand"));
+    let out = s.run(&["--duration", "3s"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The arm holds still from about 2 s with the hand level (joint angles summing to 0):
+    // the IMU, 0.3 m out on the hand, reads +g along the hand's z axis and no rotation.
+    let imu = messages(&s, "robot/0/imu");
+    assert!(imu.len() >= 290, "{} readings", imu.len());
+    let r = at(&imu, 2.95);
+    let a = &r["linear_acceleration"];
+    let (ax, ay, az) = (f(&a["x"]), f(&a["y"]), f(&a["z"]));
+    let norm = (ax * ax + ay * ay + az * az).sqrt();
+    assert!((norm - 9.81).abs() < 0.01, "|f| = {norm}: {r}");
+    assert!(az > 9.8 && ax.abs() < 0.01 && ay.abs() < 0.01, "{r}");
+    let w = &r["angular_velocity"];
+    assert!(
+        f(&w["x"]).abs() + f(&w["y"]).abs() + f(&w["z"]).abs() < 0.01,
+        "{r}"
+    );
+}
+
+/// A sensor on a link its robot does not have exits 2 naming the key, the file and the links
+/// there are, before it joins any group.
+#[test]
+fn a_sensor_on_a_missing_link_exits_2_naming_it() {
+    let robots = workspace_root().join("processes/physics/tests/robots");
+    let params = serde_json::json!({
+        "robot": 0, "count": 1,
+        "world": robots.join("empty.toml"), "urdf": robots.join("arm3.urdf"), "link": "claw",
+    });
+    let group = caravan_tests::TestGroup::new("sensor-claw");
+    let out = std::process::Command::new(caravan_tests::workspace_bin("caravan-sensor"))
+        .env("CARAVAN_GROUP", &group.name)
+        .env("CARAVAN_NODE", "hand-imu")
+        .env("CARAVAN_PARAMS", params.to_string())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("key 'link' = \"claw\"")
+            && err.contains("arm3.urdf has no link named 'claw'")
+            && err.contains("links: post, upper, fore, hand"),
+        "{err}"
+    );
 }

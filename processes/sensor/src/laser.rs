@@ -159,16 +159,39 @@ impl Laser {
     /// A scanner in `world` on a robot described by `robot` (the other robots' chassis boxes
     /// and base_link's height come from it); `seed` seeds the noise.
     pub fn new(config: LaserConfig, world: &World, robot: &RobotModel, seed: u64) -> Self {
+        let chassis = (robot.chassis_half_extents, robot.chassis_center);
+        Self::build(config, world, chassis, robot.base_height(), seed)
+    }
+
+    /// A scanner that sees the world but no robots, its plane `z_offset` above the mount
+    /// height given by [`Laser::set_mount_height`] (a scanner on an arm's link).
+    pub fn world_only(config: LaserConfig, world: &World, seed: u64) -> Self {
+        Self::build(config, world, ([0.0; 3], [0.0; 3]), 0.0, seed)
+    }
+
+    fn build(
+        config: LaserConfig,
+        world: &World,
+        (chassis_half, chassis_center): ([f64; 3], [f64; 3]),
+        base_height: f64,
+        seed: u64,
+    ) -> Self {
         let statics: Vec<Placed> = world.obstacles.iter().map(Placed::from_obstacle).collect();
         Self {
             scene: Vec::with_capacity(statics.len() + 8),
             statics,
-            chassis_half: robot.chassis_half_extents,
-            chassis_center: robot.chassis_center,
-            height: robot.base_height() + config.z_offset,
+            chassis_half,
+            chassis_center,
+            height: base_height + config.z_offset,
             noise: Gaussian::new(seed, crate::noise::LASER_STREAM),
             config,
         }
+    }
+
+    /// Puts the scan plane `z_offset` above a mount at height `z` (a link's origin) instead of
+    /// above base_link standing on the floor.
+    pub fn set_mount_height(&mut self, z: f64) {
+        self.height = z + self.config.z_offset;
     }
 
     pub fn config(&self) -> &LaserConfig {

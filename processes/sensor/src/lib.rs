@@ -5,6 +5,7 @@
 //!
 //! The algorithms live here with their tests; `main.rs` only wires them to topics.
 
+pub mod attach;
 pub mod encoders;
 pub mod imu;
 pub mod laser;

@@ -4,11 +4,13 @@
 //! (50 Hz), the laser every 10th (10 Hz), each by whole steps so periods stay exact in lockstep.
 //!
 //! In:  `robot/i/pose_true`, `robot/i/twist_true`, `robot/i/wheel_state` from physics, and
-//!      `robot/j/pose_true` of the other robots (for the laser to see their chassis).
+//!      `robot/j/pose_true` of the other robots (for the laser to see their chassis); with
+//!      `link`, `robot/i/link_states` instead of pose and twist (see `attach.rs`).
 //! Out: `robot/i/encoder_ticks`, `robot/i/scan` (if `laser`), `robot/i/imu` (if `imu`).
 
 use caravan::{Node, NodeIdentity, Subscriber, Trigger, parse_rate};
 use caravan_schemas::{Pose2D, Twist, WheelState, topics};
+use caravan_sensor::attach::{check_link, link_state};
 use caravan_sensor::encoders::encoder_ticks;
 use caravan_sensor::imu::{BodyState, Mount, VirtualImu};
 use caravan_sensor::laser::Laser;
@@ -28,7 +30,9 @@ fn main() -> ExitCode {
 struct Ready {
     p: Params,
     world: caravan_world::World,
-    robot: caravan_world::RobotModel,
+    /// The wheeled-robot view of the description: required on the base, optional on a link
+    /// (the laser then sees no other robots).
+    robot: Option<caravan_world::RobotModel>,
     seed: u64,
     period: Duration,
     encoder_every: u64,
@@ -39,8 +43,19 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     p.validate().map_err(|e| e.to_string())?;
     let world = caravan_world::load_world(&identity.resolve_path(&p.world))
         .map_err(|e| format!("key 'world': world file {e}"))?;
-    let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
-        .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+    let urdf = identity.resolve_path(&p.urdf);
+    let robot = match &p.link {
+        None => Some(
+            caravan_world::load_robot(&urdf)
+                .map_err(|e| format!("key 'urdf': robot description {e}"))?,
+        ),
+        Some(link) => {
+            let d = caravan_world::description::load_description(&urdf)
+                .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+            check_link(&d, link)?;
+            caravan_world::RobotModel::from_description(&d).ok()
+        }
+    };
     // The launch file's `rate` overrides the default, as `Node::trigger` does.
     let period = match (&identity.rate_override, &identity.on_override) {
         (Some(rate), _) => parse_rate(rate).map_err(|e| format!("its `rate`: {e}"))?,
@@ -83,11 +98,12 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     let wheels = node.subscriber(&topics::wheel_state(i))?;
     let ticks_out = node.publisher(&topics::encoder_ticks(i))?;
 
-    // The laser sees the other robots at their latest true poses.
-    let mut laser = p
-        .laser
-        .then(|| Laser::new(p.laser_config(), &world, &robot, seed));
-    let others: Vec<Subscriber<Pose2D>> = if p.laser {
+    // The laser sees the other robots at their latest true poses, if it knows their shape.
+    let mut laser = p.laser.then(|| match &robot {
+        Some(robot) => Laser::new(p.laser_config(), &world, robot, seed),
+        None => Laser::world_only(p.laser_config(), &world, seed),
+    });
+    let others: Vec<Subscriber<Pose2D>> = if p.laser && robot.is_some() {
         (0..p.count)
             .filter(|&j| j != i)
             .map(sub_pose)
@@ -106,10 +122,17 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         offset: p.imu_offset.into(),
     };
     let mut imu = p.imu.then(|| VirtualImu::new(mount, p.imu_noise(), seed));
+    let links_in = match &p.link {
+        Some(_) => Some(node.subscriber(&topics::link_states(i))?),
+        None => None,
+    };
     let (twist_in, imu_out) = if p.imu {
-        let twist_in = node.subscriber(&topics::twist_true(i))?;
+        let twist_in = match links_in {
+            None => Some(node.subscriber(&topics::twist_true(i))?),
+            Some(_) => None,
+        };
         let imu_out = node.publisher(&topics::imu(i))?;
-        (Some(twist_in), Some(imu_out))
+        (twist_in, Some(imu_out))
     } else {
         (None, None)
     };
@@ -143,7 +166,24 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
 
     node.run(Trigger::Every(period), |step| {
         // Drain every input each step, so none overflows its queue between uses.
+        if let (Some(links_in), Some(link)) = (&links_in, &p.link) {
+            while let Some(m) = links_in.receive()? {
+                let Some((body, planar, z)) = link_state(m.header().stamp_ns, &m, link) else {
+                    continue;
+                };
+                own = Some(planar);
+                if let Some(laser) = laser.as_mut() {
+                    laser.set_mount_height(z);
+                }
+                if let Some(r) = imu.as_mut().and_then(|imu| imu.update(&body)) {
+                    fresh_imu = Some(r);
+                }
+            }
+        }
         while let Some(m) = own_pose.receive()? {
+            if links_in.is_some() {
+                continue;
+            }
             own = Some(*m);
             if imu.is_some() {
                 pairer.push_a(m.header().stamp_ns, *m);

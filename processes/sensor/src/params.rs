@@ -24,6 +24,13 @@ pub struct Params {
     /// Robot description, for the chassis boxes of the other robots and base_link's height.
     #[serde(default = "default_urdf")]
     pub urdf: String,
+    /// The link the laser and the IMU ride on, read from `robot/i/link_states` (give
+    /// physics `link_states = true` for this robot). Default: the base, from
+    /// `robot/i/pose_true` and `robot/i/twist_true`. The IMU reads once per `link_states`
+    /// message, so at the physics node's rate: for a reading every physics step, run
+    /// physics with `substeps = 1` at the rate wanted.
+    #[serde(default)]
+    pub link: Option<String>,
 
     /// Whether this robot carries the laser scanner (the leader does).
     #[serde(default)]
@@ -43,10 +50,11 @@ pub struct Params {
     pub laser_range_min: f64,
     #[serde(default = "default_laser_range_max")]
     pub laser_range_max: f64,
-    /// Scanner position ahead of base_link's origin, m (along the robot's x axis).
+    /// Scanner position ahead of its link's origin (base_link by default), m, along the
+    /// link's x axis.
     #[serde(default)]
     pub laser_x_offset: f64,
-    /// Scanner height above base_link's origin, m. Obstacles lower than the scan plane are
+    /// Scanner height above its link's origin, m. Obstacles lower than the scan plane are
     /// not seen, as with a real planar scanner.
     #[serde(default)]
     pub laser_z_offset: f64,
@@ -64,7 +72,7 @@ pub struct Params {
     /// Whether this robot publishes an IMU.
     #[serde(default = "yes")]
     pub imu: bool,
-    /// IMU position in base_link, m.
+    /// IMU position in the link it rides on (base_link by default), m.
     #[serde(default)]
     pub imu_offset: [f64; 3],
     /// White noise on the IMU readings (off: ideal readings, as in the reference study).
