@@ -202,6 +202,27 @@ fn an_imu_on_a_link_reads_gravity_in_the_link_frame() {
     );
 }
 
+/// A sensor on a link whose states physics does not publish says so instead of staying
+/// silent.
+#[test]
+fn a_sensor_without_link_states_says_so() {
+    let body = launch("hand").replacen("link_states = true", "link_states = false", 1);
+    let s = Scenario::new("physics-silent", &body);
+    let out = s.run(&["--duration", "2s"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(messages(&s, "robot/0/imu").is_empty());
+    let log = std::fs::read_to_string(s.run_dirs()[0].join("logs/hand-imu.log")).unwrap();
+    assert!(
+        log.contains("no state of link 'hand' on robot/0/link_states after 1 s")
+            && log.contains("link_states = true"),
+        "{log}"
+    );
+}
+
 /// A sensor on a link its robot does not have exits 2 naming the key, the file and the links
 /// there are, before it joins any group.
 #[test]

@@ -94,7 +94,11 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     } = ready;
     let i = p.robot;
     let sub_pose = |j: usize| node.subscriber(&topics::pose_true(j));
-    let own_pose = sub_pose(i)?;
+    // On a link, the sensors' pose comes from link_states instead.
+    let own_pose = match p.link {
+        None => Some(sub_pose(i)?),
+        Some(_) => None,
+    };
     let wheels = node.subscriber(&topics::wheel_state(i))?;
     let ticks_out = node.publisher(&topics::encoder_ticks(i))?;
 
@@ -163,10 +167,20 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     let mut visible: Vec<Pose2D> = Vec::with_capacity(others.len());
     let mut wheel: Option<WheelState> = None;
     let mut fresh_imu = None;
+    let mut warned_silent = false;
 
     node.run(Trigger::Every(period), |step| {
         // Drain every input each step, so none overflows its queue between uses.
         if let (Some(links_in), Some(link)) = (&links_in, &p.link) {
+            // Nothing after a second: physics does not publish this robot's link states, or
+            // not this link. Say so once rather than stay silent.
+            if own.is_none() && !warned_silent && step.now() >= Duration::from_secs(1) {
+                warned_silent = true;
+                eprintln!(
+                    "caravan-sensor: no state of link '{link}' on robot/{i}/link_states after \
+                     1 s; give physics `link_states = true` for robot {i}"
+                );
+            }
             while let Some(m) = links_in.receive()? {
                 let Some((body, planar, z)) = link_state(m.header().stamp_ns, &m, link) else {
                     continue;
@@ -180,10 +194,12 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
                 }
             }
         }
-        while let Some(m) = own_pose.receive()? {
-            if links_in.is_some() {
-                continue;
-            }
+        while let Some(m) = own_pose
+            .as_ref()
+            .map(|s| s.receive())
+            .transpose()?
+            .flatten()
+        {
             own = Some(*m);
             if imu.is_some() {
                 pairer.push_a(m.header().stamp_ns, *m);
