@@ -1,0 +1,14 @@
+//! The virtual IMU experiment of `shared/reference/imu.md` as a Caravan scenario.
+//!
+//! A run is a process group: `caravan-physics` (f64, one physics step per node step),
+//! `caravan-sensor` with its IMU on the scenario's link, and `caravan-imu-driver`, which
+//! moves the body as the scenario says. `caravan-imu-report` then checks every IMU reading
+//! against the analytic value of its phase.
+//!
+//! - [`scenario`]: the scenarios, their commands over time and their analytic readings;
+//! - [`phase_errors`]: max and RMS error per axis of the readings of each phase;
+//! - [`report`]: the report plugin's section.
+
+pub mod phase_errors;
+pub mod report;
+pub mod scenario;

@@ -1,0 +1,123 @@
+//! The `imu` report section: every IMU reading of `robot/0/imu` scored against its phase's
+//! ideal value (see [`crate::scenario`]), per phase and axis, against the reference's targets
+//! of 1e-6 m/s² and 1e-6 rad/s.
+//!
+//! JSON: `{scenario, readings, phases: [PhaseErrors], accel_max_err_m_s2,
+//! gyro_max_err_rad_s, accel_target_m_s2, gyro_target_rad_s, within_target}`.
+
+use crate::phase_errors::{PhaseErrors, Reading, score};
+use crate::scenario::Scenario;
+use caravan_report::{Inputs, ReportPlugin, Run, Section};
+use std::fmt::Write;
+
+/// The reference's accuracy targets.
+pub const ACCEL_TARGET_M_S2: f64 = 1e-6;
+pub const GYRO_TARGET_RAD_S: f64 = 1e-6;
+
+/// The IMU topic of the scenarios' one robot.
+pub const IMU_TOPIC: &str = "robot/0/imu";
+
+pub struct ImuReport {
+    scenario: Scenario,
+    /// The lifted cube's mass, kg (0 for other scenarios).
+    mass_kg: f64,
+}
+
+impl ReportPlugin for ImuReport {
+    type Params = Scenario;
+
+    fn new(scenario: Scenario, inputs: &Inputs) -> Result<Self, String> {
+        scenario.validate()?;
+        let mass_kg = match &scenario {
+            Scenario::Lift { urdf, .. } => {
+                let d = caravan_world::description::load_description(&inputs.path(urdf))
+                    .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+                d.mass()
+            }
+            _ => 0.0,
+        };
+        Ok(Self { scenario, mass_kg })
+    }
+
+    fn sections(&self, run: &Run) -> anyhow::Result<Vec<Section>> {
+        let v3 = |v: &serde_json::Value| ["x", "y", "z"].map(|k| v[k].as_f64().unwrap_or(f64::NAN));
+        let readings: Vec<Reading> = run
+            .messages()?
+            .iter()
+            .filter(|m| m.topic == IMU_TOPIC)
+            .map(|m| Reading {
+                t_s: m.stamp_ns() as f64 * 1e-9,
+                accel: v3(&m.json["linear_acceleration"]),
+                gyro: v3(&m.json["angular_velocity"]),
+            })
+            .collect();
+        if readings.is_empty() {
+            anyhow::bail!("no IMU readings on {IMU_TOPIC} in the recording");
+        }
+        let phases: Vec<PhaseErrors> = self
+            .scenario
+            .phases(self.mass_kg)
+            .iter()
+            .map(|p| score(p, &readings))
+            .collect();
+        let accel = phases
+            .iter()
+            .map(PhaseErrors::accel_max)
+            .fold(0.0, f64::max);
+        let gyro = phases.iter().map(PhaseErrors::gyro_max).fold(0.0, f64::max);
+        let scored = phases.iter().all(|p| p.readings > 0);
+        let within = scored && accel <= ACCEL_TARGET_M_S2 && gyro <= GYRO_TARGET_RAD_S;
+        let json = serde_json::json!({
+            "scenario": self.scenario.name(),
+            "readings": readings.len(),
+            "phases": phases,
+            "accel_max_err_m_s2": accel,
+            "gyro_max_err_rad_s": gyro,
+            "accel_target_m_s2": ACCEL_TARGET_M_S2,
+            "gyro_target_rad_s": GYRO_TARGET_RAD_S,
+            "within_target": within,
+        });
+        Ok(vec![Section {
+            name: "imu".into(),
+            json,
+            markdown: markdown(self.scenario.name(), &phases, within),
+        }])
+    }
+}
+
+fn markdown(scenario: &str, phases: &[PhaseErrors], within: bool) -> String {
+    let mut md = format!(
+        "## IMU: {scenario}\n\nEvery reading against its phase's ideal value; targets \
+         {ACCEL_TARGET_M_S2:.0e} m/s² and {GYRO_TARGET_RAD_S:.0e} rad/s: **{}**.\n\n\
+         | phase | window (s) | readings | ideal f (m/s²) | max / RMS error f (m/s²) | ideal ω (rad/s) | max / RMS error ω (rad/s) |\n\
+         |---|---|---:|---|---|---|---|\n",
+        if within { "met" } else { "missed" }
+    );
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    for p in phases {
+        let accel_max = p.accel_max();
+        let accel_rms = p.accel_err_m_s2.iter().map(|s| s.rms).fold(0.0, f64::max);
+        let gyro_rms = p.gyro_err_rad_s.iter().map(|s| s.rms).fold(0.0, f64::max);
+        let ideal_f = if p.expected_accel_m_s2.len() == 1 {
+            format!("\\|f\\| = {}", list(&p.expected_accel_m_s2))
+        } else {
+            format!("({})", list(&p.expected_accel_m_s2))
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {:.2} – {:.2} | {} | {ideal_f} | {accel_max:.1e} / {accel_rms:.1e} | ({}) | {:.1e} / {gyro_rms:.1e} |",
+            p.phase,
+            p.from_s,
+            p.to_s,
+            p.readings,
+            list(&p.expected_gyro_rad_s),
+            p.gyro_max(),
+        );
+    }
+    md
+}

@@ -1,0 +1,423 @@
+//! The reference scenarios: what the driver commands at each instant, and what an ideal IMU
+//! reads in each phase. Every constant is a parameter with the reference's value as default.
+//!
+//! Frames: the world is z up; the IMU's axes are its link's. Specific force is the standard
+//! one (+g up at rest); the paper plots it with the sign flipped.
+//!
+//! - **Tilt**: a platform (kinematic base) turns about the world x axis at `rate_deg_s` from
+//!   `start_s` until it is `angle_deg` from level, then holds for `hold_s`. The IMU sits on
+//!   the axis. f = g·(0, sin φ, cos φ), ω = (rate, 0, 0) during the ramp.
+//! - **Lift**: a cube (floating base, the URDF's mass m) rests on the floor, is pushed up by
+//!   `force_n` through its centre of mass from `push_from_s` to `push_to_s`, then falls
+//!   freely. f = (0, 0, g), (0, 0, F/m), then 0; ω = 0.
+//! - **Rotation**: a platform (kinematic base) turns about the vertical axis through its
+//!   origin at `rate_rad_s`; the IMU sits `radius_m` out along the platform's x axis.
+//!   f = (−ω²r, 0, g) (the centripetal acceleration points to the axis), ω = (0, 0, rate).
+//!
+//! The kinematic platforms follow the commanded velocities exactly, so the readings measure
+//! the IMU, not a controller's tracking.
+
+use serde::Deserialize;
+
+/// Gravity, m/s², the reference's value (physics uses the same by default).
+pub const G: f64 = 9.81;
+
+/// Readings within this long after a phase change are not scored, s: the reading whose
+/// interval spans the change mixes two phases, and the contact of a resting body lets go
+/// over a few steps.
+pub const SETTLE_S: f64 = 0.05;
+
+/// The lifted cube's rest is scored from this time, s. It starts touching the floor, and
+/// rapier's soft contact lets it sink to its equilibrium and ring down over the first few
+/// tenths of a second (errors up to 3.6e-2 m/s² before 0.3 s, below 1e-8 from 0.5 s).
+pub const REST_FROM_S: f64 = 0.5;
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "scenario", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Scenario {
+    Tilt {
+        /// Tilt rate, °/s, > 0.
+        #[serde(default = "tilt_rate")]
+        rate_deg_s: f64,
+        /// Final tilt, degrees, in (0, 90].
+        #[serde(default = "tilt_angle")]
+        angle_deg: f64,
+        /// Start of the ramp, s, ≥ 0.
+        #[serde(default = "tilt_start")]
+        start_s: f64,
+        /// Hold after the ramp, s, > 0.
+        #[serde(default = "tilt_hold")]
+        hold_s: f64,
+    },
+    Lift {
+        /// The cube's description, for its mass (relative to the launch file).
+        #[serde(default = "lift_urdf")]
+        urdf: String,
+        /// Upward force, N, > 0.
+        #[serde(default = "lift_force")]
+        force_n: f64,
+        /// Push interval, s: 0 < from < to.
+        #[serde(default = "lift_from")]
+        push_from_s: f64,
+        #[serde(default = "lift_to")]
+        push_to_s: f64,
+        /// Free fall scored until this time, s (before the cube lands), > `push_to_s`.
+        #[serde(default = "lift_fall_end")]
+        fall_end_s: f64,
+    },
+    Rotation {
+        /// Turn rate, rad/s, ≠ 0.
+        #[serde(default = "rotation_rate")]
+        rate_rad_s: f64,
+        /// IMU distance from the axis, m, ≥ 0 (the sensor's `imu_offset` x).
+        #[serde(default = "rotation_radius")]
+        radius_m: f64,
+        /// Scored from this time to `end_s`, s.
+        #[serde(default = "rotation_from")]
+        from_s: f64,
+        #[serde(default = "rotation_end")]
+        end_s: f64,
+    },
+}
+
+fn tilt_rate() -> f64 {
+    3.0
+}
+fn tilt_angle() -> f64 {
+    45.0
+}
+fn tilt_start() -> f64 {
+    2.0
+}
+fn tilt_hold() -> f64 {
+    3.0
+}
+fn lift_urdf() -> String {
+    "robots/cube.urdf".into()
+}
+fn lift_force() -> f64 {
+    54.05
+}
+fn lift_from() -> f64 {
+    2.5
+}
+fn lift_to() -> f64 {
+    5.0
+}
+fn lift_fall_end() -> f64 {
+    6.0
+}
+fn rotation_rate() -> f64 {
+    std::f64::consts::FRAC_PI_4
+}
+fn rotation_radius() -> f64 {
+    0.75
+}
+fn rotation_from() -> f64 {
+    0.5
+}
+fn rotation_end() -> f64 {
+    5.0
+}
+
+/// What a scenario's driver does at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Command {
+    /// Angular velocity of the kinematic platform, world frame, rad/s.
+    Turn([f64; 3]),
+    /// Start an upward push of `force_n` for `duration_s` (sent once).
+    Push { force_n: f64, duration_s: f64 },
+    /// Nothing to send.
+    Idle,
+}
+
+/// The ideal accelerometer reading of a phase.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Expect {
+    /// Specific force, sensor frame, m/s².
+    Vector([f64; 3]),
+    /// Only the magnitude, m/s²: during the tilt ramp the reading turns with the platform,
+    /// and the instant the ramp began is known to a physics step only.
+    Norm(f64),
+}
+
+/// One phase: its time window and the ideal reading in it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Phase {
+    pub name: &'static str,
+    pub from_s: f64,
+    pub to_s: f64,
+    pub accel: Expect,
+    /// Angular rate, sensor frame, rad/s.
+    pub gyro: [f64; 3],
+}
+
+impl Scenario {
+    /// Checks the values serde cannot; the error names the key.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = |v: f64, key: &str| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("key '{key}': must be a positive number, got {v}"))
+            }
+        };
+        match *self {
+            Scenario::Tilt {
+                rate_deg_s,
+                angle_deg,
+                start_s,
+                hold_s,
+            } => {
+                positive(rate_deg_s, "rate_deg_s")?;
+                positive(hold_s, "hold_s")?;
+                if !(angle_deg > 0.0 && angle_deg <= 90.0) {
+                    return Err(format!(
+                        "key 'angle_deg': must be in (0, 90], got {angle_deg}"
+                    ));
+                }
+                if !(start_s.is_finite() && start_s >= 0.0) {
+                    return Err(format!("key 'start_s': must be ≥ 0, got {start_s}"));
+                }
+            }
+            Scenario::Lift {
+                force_n,
+                push_from_s,
+                push_to_s,
+                fall_end_s,
+                ..
+            } => {
+                positive(force_n, "force_n")?;
+                positive(push_from_s, "push_from_s")?;
+                if !(push_to_s > push_from_s && fall_end_s > push_to_s) {
+                    return Err(format!(
+                        "keys 'push_from_s' < 'push_to_s' < 'fall_end_s' must hold, got \
+                         {push_from_s}, {push_to_s}, {fall_end_s}"
+                    ));
+                }
+            }
+            Scenario::Rotation {
+                rate_rad_s,
+                radius_m,
+                from_s,
+                end_s,
+            } => {
+                if !(rate_rad_s.is_finite() && rate_rad_s != 0.0) {
+                    return Err(format!(
+                        "key 'rate_rad_s': must be non-zero, got {rate_rad_s}"
+                    ));
+                }
+                if !(radius_m.is_finite() && radius_m >= 0.0) {
+                    return Err(format!("key 'radius_m': must be ≥ 0, got {radius_m}"));
+                }
+                if !(from_s >= 0.0 && end_s > from_s) {
+                    return Err(format!(
+                        "keys 'from_s' < 'end_s' must hold, got {from_s}, {end_s}"
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The scenario's name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Scenario::Tilt { .. } => "tilt",
+            Scenario::Lift { .. } => "lift",
+            Scenario::Rotation { .. } => "rotation",
+        }
+    }
+
+    /// End of the ramp of a tilt, s.
+    fn ramp_end(&self) -> f64 {
+        match *self {
+            Scenario::Tilt {
+                rate_deg_s,
+                angle_deg,
+                start_s,
+                ..
+            } => start_s + angle_deg / rate_deg_s,
+            _ => 0.0,
+        }
+    }
+
+    /// How long a run must last to cover every phase, s.
+    pub fn duration_s(&self) -> f64 {
+        match *self {
+            Scenario::Tilt { hold_s, .. } => self.ramp_end() + hold_s,
+            Scenario::Lift { fall_end_s, .. } => fall_end_s,
+            Scenario::Rotation { end_s, .. } => end_s,
+        }
+    }
+
+    /// What the driver sends at time `t_s`; `pushed` says whether the push was sent.
+    pub fn command(&self, t_s: f64, pushed: bool) -> Command {
+        match *self {
+            Scenario::Tilt {
+                rate_deg_s,
+                start_s,
+                ..
+            } => {
+                let on = t_s >= start_s && t_s < self.ramp_end();
+                Command::Turn([if on { rate_deg_s.to_radians() } else { 0.0 }, 0.0, 0.0])
+            }
+            Scenario::Lift {
+                force_n,
+                push_from_s,
+                push_to_s,
+                ..
+            } if t_s >= push_from_s && !pushed => Command::Push {
+                force_n,
+                duration_s: push_to_s - push_from_s,
+            },
+            Scenario::Lift { .. } => Command::Idle,
+            Scenario::Rotation { rate_rad_s, .. } => Command::Turn([0.0, 0.0, rate_rad_s]),
+        }
+    }
+
+    /// The scored phases, in time order. `mass_kg` is the lifted cube's (unused otherwise).
+    pub fn phases(&self, mass_kg: f64) -> Vec<Phase> {
+        let level = Expect::Vector([0.0, 0.0, G]);
+        let phase = |name, from_s, to_s, accel, gyro| Phase {
+            name,
+            from_s,
+            to_s,
+            accel,
+            gyro,
+        };
+        match *self {
+            Scenario::Tilt {
+                rate_deg_s,
+                angle_deg,
+                start_s,
+                ..
+            } => {
+                let end = self.ramp_end();
+                let phi = angle_deg.to_radians();
+                vec![
+                    phase("level", SETTLE_S, start_s, level, [0.0; 3]),
+                    phase(
+                        "ramp",
+                        start_s + SETTLE_S,
+                        end,
+                        Expect::Norm(G),
+                        [rate_deg_s.to_radians(), 0.0, 0.0],
+                    ),
+                    phase(
+                        "held",
+                        end + SETTLE_S,
+                        self.duration_s(),
+                        Expect::Vector([0.0, G * phi.sin(), G * phi.cos()]),
+                        [0.0; 3],
+                    ),
+                ]
+            }
+            Scenario::Lift {
+                force_n,
+                push_from_s,
+                push_to_s,
+                fall_end_s,
+                ..
+            } => vec![
+                phase("rest", REST_FROM_S, push_from_s, level, [0.0; 3]),
+                phase(
+                    "pushed",
+                    push_from_s + SETTLE_S,
+                    push_to_s,
+                    Expect::Vector([0.0, 0.0, force_n / mass_kg]),
+                    [0.0; 3],
+                ),
+                phase(
+                    "free fall",
+                    push_to_s + SETTLE_S,
+                    fall_end_s,
+                    Expect::Vector([0.0; 3]),
+                    [0.0; 3],
+                ),
+            ],
+            Scenario::Rotation {
+                rate_rad_s,
+                radius_m,
+                from_s,
+                end_s,
+            } => vec![phase(
+                "turning",
+                from_s,
+                end_s,
+                Expect::Vector([-rate_rad_s * rate_rad_s * radius_m, 0.0, G]),
+                [0.0, 0.0, rate_rad_s],
+            )],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tilt() -> Scenario {
+        serde_json::from_value(serde_json::json!({ "scenario": "tilt" })).unwrap()
+    }
+
+    #[test]
+    fn the_tilt_turns_for_angle_over_rate_then_holds_at_the_reference_values() {
+        let s = tilt();
+        assert_eq!(s.duration_s(), 2.0 + 15.0 + 3.0);
+        assert_eq!(s.command(1.99, false), Command::Turn([0.0; 3]));
+        assert_eq!(
+            s.command(2.0, false),
+            Command::Turn([3f64.to_radians(), 0.0, 0.0])
+        );
+        assert_eq!(s.command(17.0, false), Command::Turn([0.0; 3]));
+        let held = &s.phases(0.0)[2];
+        let Expect::Vector(f) = held.accel else {
+            panic!()
+        };
+        // The reference: two axes read 9.81·cos 45° = 6.937 m/s².
+        assert!((f[1] - 6.937).abs() < 5e-4 && (f[2] - 6.937).abs() < 5e-4);
+        assert!((s.phases(0.0)[1].gyro[0] - 0.05236).abs() < 1e-5);
+    }
+
+    #[test]
+    fn the_lift_pushes_once_and_reads_force_over_mass() {
+        let s: Scenario =
+            serde_json::from_value(serde_json::json!({ "scenario": "lift" })).unwrap();
+        assert_eq!(s.command(2.4, false), Command::Idle);
+        assert_eq!(
+            s.command(2.5, false),
+            Command::Push {
+                force_n: 54.05,
+                duration_s: 2.5
+            }
+        );
+        assert_eq!(s.command(2.6, true), Command::Idle);
+        let pushed = &s.phases(5.0)[1];
+        // The reference: 10.81 m/s² (1.10 g) while pushed.
+        assert_eq!(pushed.accel, Expect::Vector([0.0, 0.0, 54.05 / 5.0]));
+    }
+
+    #[test]
+    fn the_rotation_reads_the_centripetal_acceleration_inwards() {
+        let s: Scenario =
+            serde_json::from_value(serde_json::json!({ "scenario": "rotation" })).unwrap();
+        let Expect::Vector(f) = s.phases(0.0)[0].accel else {
+            panic!()
+        };
+        // The reference: radial 0.4626 m/s² (ω²r), gyro Z 0.7854 rad/s.
+        assert!((f[0] + 0.4626).abs() < 1e-4 && f[2] == G);
+        assert!((s.phases(0.0)[0].gyro[2] - 0.7854).abs() < 1e-4);
+    }
+
+    #[test]
+    fn bad_values_name_their_key() {
+        let bad: Scenario =
+            serde_json::from_value(serde_json::json!({ "scenario": "tilt", "angle_deg": 120.0 }))
+                .unwrap();
+        assert!(bad.validate().unwrap_err().contains("'angle_deg'"));
+        let unknown = serde_json::from_value::<Scenario>(
+            serde_json::json!({ "scenario": "tilt", "angel_deg": 10.0 }),
+        );
+        assert!(unknown.unwrap_err().to_string().contains("angel_deg"));
+    }
+}

@@ -1,0 +1,87 @@
+//! The virtual IMU experiment's scenarios, each run briefly in lockstep from its shipped
+//! launch file under a unique group name; the `imu` report section must meet the reference's
+//! targets (1e-6 m/s², 1e-6 rad/s) in every phase.
+
+use caravan_tests::{TestGroup, workspace_bin, workspace_root};
+use serde_json::Value;
+
+/// Runs `launch/imu/<file>` with `extra` arguments; returns the `imu` report section.
+fn run(file: &str, extra: &[&str]) -> Value {
+    let group = TestGroup::new("imu");
+    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
+    let out = std::process::Command::new(workspace_bin("caravan"))
+        .arg("launch")
+        .arg(workspace_root().join("launch/imu").join(file))
+        .args(["--runs-dir".as_ref(), runs.as_os_str()])
+        .args(["--quiet", "--set"])
+        .arg(format!("group.name={}", group.name))
+        .args(extra)
+        .output()
+        .unwrap();
+    let dir = std::fs::read_dir(&runs)
+        .ok()
+        .and_then(|mut d| d.next())
+        .map(|e| e.unwrap().path());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.expect("a run directory").join("report.json")).unwrap(),
+    )
+    .unwrap();
+    let _ = std::fs::remove_dir_all(&runs);
+    report["imu"].clone()
+}
+
+fn assert_met(imu: &Value, phases: &[&str]) {
+    let names: Vec<&str> = imu["phases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["phase"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, phases, "{imu}");
+    for p in imu["phases"].as_array().unwrap() {
+        assert!(p["readings"].as_u64().unwrap() > 100, "{p}");
+    }
+    assert!(imu["accel_max_err_m_s2"].as_f64().unwrap() <= 1e-6, "{imu}");
+    assert!(imu["gyro_max_err_rad_s"].as_f64().unwrap() <= 1e-6, "{imu}");
+    assert_eq!(imu["within_target"], true, "{imu}");
+}
+
+#[test]
+fn static_tilt_meets_the_targets() {
+    // A 3° tilt instead of 45° keeps the run short: 2 s level, 1 s ramp, 0.5 s held.
+    let imu = run(
+        "tilt.toml",
+        &[
+            "--set",
+            "args.angle_deg=3.0",
+            "--set",
+            "args.hold_s=0.5",
+            "--duration",
+            "3.5s",
+        ],
+    );
+    assert_met(&imu, &["level", "ramp", "held"]);
+    assert_eq!(imu["scenario"], "tilt");
+}
+
+#[test]
+fn lift_and_free_fall_meet_the_targets() {
+    let imu = run("lift.toml", &[]);
+    assert_met(&imu, &["rest", "pushed", "free fall"]);
+    // 54.05 N on 5 kg: 10.81 m/s² while pushed.
+    let pushed = imu["phases"][1]["expected_accel_m_s2"][2].as_f64().unwrap();
+    assert!((pushed - 10.81).abs() < 1e-12, "{pushed}");
+}
+
+#[test]
+fn constant_rotation_meets_the_targets() {
+    let imu = run("rotation.toml", &["--duration", "1.5s"]);
+    assert_met(&imu, &["turning"]);
+    let radial = imu["phases"][0]["expected_accel_m_s2"][0].as_f64().unwrap();
+    assert!((radial + 0.4626).abs() < 1e-4, "{radial}");
+}
