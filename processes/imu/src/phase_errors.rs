@@ -94,8 +94,8 @@ pub fn score(phase: &Phase, readings: &[Reading]) -> PhaseErrors {
         n += 1;
         match phase.accel {
             Expect::Vector(v) => {
-                for k in 0..3 {
-                    accel[k].add(r.accel[k] - v[k]);
+                for ((acc, a), e) in accel.iter_mut().zip(r.accel).zip(v) {
+                    acc.add(a - e);
                 }
             }
             Expect::Norm(norm) => {
@@ -103,8 +103,8 @@ pub fn score(phase: &Phase, readings: &[Reading]) -> PhaseErrors {
                 accel[0].add(m - norm);
             }
         }
-        for k in 0..3 {
-            gyro[k].add(r.gyro[k] - phase.gyro[k]);
+        for ((acc, w), e) in gyro.iter_mut().zip(r.gyro).zip(phase.gyro) {
+            acc.add(w - e);
         }
     }
     PhaseErrors {

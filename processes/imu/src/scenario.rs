@@ -404,9 +404,9 @@ mod tests {
         let Expect::Vector(f) = s.phases(0.0)[0].accel else {
             panic!()
         };
-        // The reference: radial 0.4626 m/s² (ω²r), gyro Z 0.7854 rad/s.
+        // The reference: radial 0.4626 m/s² (ω²r), gyro Z π/4 = 0.7854 rad/s.
         assert!((f[0] + 0.4626).abs() < 1e-4 && f[2] == G);
-        assert!((s.phases(0.0)[0].gyro[2] - 0.7854).abs() < 1e-4);
+        assert_eq!(s.phases(0.0)[0].gyro[2], std::f64::consts::FRAC_PI_4);
     }
 
     #[test]
