@@ -26,9 +26,10 @@ fn run(mut node: Node, scenario: Scenario) -> Result<(), caravan::Error> {
     node.run(trigger, |step| {
         match scenario.command(step.now().as_secs_f64(), pushed) {
             Command::Turn([x, y, z]) => {
-                let mut twist = Twist::default();
-                twist.angular = Vector3 { x, y, z };
-                cmd_vel.publish(&twist)?;
+                cmd_vel.publish(&Twist {
+                    angular: Vector3 { x, y, z },
+                    ..Twist::default()
+                })?;
             }
             Command::Push {
                 force_n,
