@@ -85,3 +85,22 @@ fn constant_rotation_meets_the_targets() {
     let radial = imu["phases"][0]["expected_accel_m_s2"][0].as_f64().unwrap();
     assert!((radial + 0.4626).abs() < 1e-4, "{radial}");
 }
+
+#[test]
+fn spin_up_times_are_within_one_step_of_i_omega_over_m() {
+    // The longest row (10 kg, 5 N·m, 45°/s: 0.416 s) and the heaviest (20 kg, 15 N·m, 30°/s).
+    for (row, analytic) in [
+        (1, 0.265 * 10.0 * 45f64.to_radians() / 5.0),
+        (6, 0.265 * 20.0 * 30f64.to_radians() / 15.0),
+    ] {
+        let imu = run("spinup.toml", &["--set", &format!("args.row={row}")]);
+        assert_eq!(imu["scenario"], "spinup");
+        let f = |k: &str| imu[k].as_f64().unwrap();
+        assert!((f("analytic_s") - analytic).abs() < 1e-9, "{imu}");
+        assert!(f("fit_err_s").abs() <= f("step_s"), "{imu}");
+        assert_eq!(imu["within_one_step"], true, "{imu}");
+        // The threshold crossing comes after the fitted end: the speed loop's last approach.
+        assert!(f("threshold_s") >= f("fit_s") - f("step_s"), "{imu}");
+        assert!(f("paper_s") > 0.0, "a reference row: {imu}");
+    }
+}

@@ -7,8 +7,10 @@
 //!
 //! - [`scenario`]: the scenarios, their commands over time and their analytic readings;
 //! - [`phase_errors`]: max and RMS error per axis of the readings of each phase;
+//! - [`spin_up`]: the spin-up times, analytic and measured, and the reference's table;
 //! - [`report`]: the report plugin's section.
 
 pub mod phase_errors;
 pub mod report;
 pub mod scenario;
+pub mod spin_up;

@@ -7,6 +7,7 @@
 
 use crate::phase_errors::{PhaseErrors, Reading, score};
 use crate::scenario::Scenario;
+use crate::spin_up::{self, Bar};
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
 use std::fmt::Write;
 
@@ -21,6 +22,8 @@ pub struct ImuReport {
     scenario: Scenario,
     /// The lifted cube's mass, kg (0 for other scenarios).
     mass_kg: f64,
+    /// The spin-up's bar and motor.
+    bar: Option<Bar>,
 }
 
 impl ReportPlugin for ImuReport {
@@ -28,15 +31,22 @@ impl ReportPlugin for ImuReport {
 
     fn new(scenario: Scenario, inputs: &Inputs) -> Result<Self, String> {
         scenario.validate()?;
-        let mass_kg = match &scenario {
-            Scenario::Lift { urdf, .. } => {
-                let d = caravan_world::description::load_description(&inputs.path(urdf))
-                    .map_err(|e| format!("key 'urdf': robot description {e}"))?;
-                d.mass()
-            }
-            _ => 0.0,
+        let load = |urdf: &str| {
+            caravan_world::description::load_description(&inputs.path(urdf))
+                .map_err(|e| format!("key 'urdf': robot description {e}"))
         };
-        Ok(Self { scenario, mass_kg })
+        let (mass_kg, bar) = match &scenario {
+            Scenario::Lift { urdf, .. } => (load(urdf)?.mass(), None),
+            Scenario::SpinUp { urdf, joint, .. } => {
+                (0.0, Some(Bar::from_description(&load(urdf)?, joint)?))
+            }
+            _ => (0.0, None),
+        };
+        Ok(Self {
+            scenario,
+            mass_kg,
+            bar,
+        })
     }
 
     fn sections(&self, run: &Run) -> anyhow::Result<Vec<Section>> {
@@ -53,6 +63,9 @@ impl ReportPlugin for ImuReport {
             .collect();
         if readings.is_empty() {
             anyhow::bail!("no IMU readings on {IMU_TOPIC} in the recording");
+        }
+        if let Some(bar) = &self.bar {
+            return Ok(vec![spin_up_section(bar, &readings)?]);
         }
         let phases: Vec<PhaseErrors> = self
             .scenario
@@ -120,4 +133,69 @@ fn markdown(scenario: &str, phases: &[PhaseErrors], within: bool) -> String {
         );
     }
     md
+}
+
+/// The spin-up section: the bar's analytic time against the measured ones and, for a row of
+/// the reference's table, the paper's. JSON: `{scenario, torque_nm, rate_deg_s, mass_kg,
+/// inertia_kg_m2, step_s, analytic_s, fit_s, fit_err_s, threshold_s, threshold_err_s,
+/// within_one_step, paper_s, paper_err_s}`.
+fn spin_up_section(bar: &Bar, readings: &[Reading]) -> anyhow::Result<Section> {
+    let step_s = readings
+        .windows(2)
+        .map(|w| w[1].t_s - w[0].t_s)
+        .fold(f64::INFINITY, f64::min);
+    let gyro: Vec<(f64, f64)> = readings.iter().map(|r| (r.t_s, r.gyro[2])).collect();
+    let m = spin_up::measure(&gyro, bar.rate_rad_s, step_s).ok_or_else(|| {
+        anyhow::anyhow!("the gyro never ramped from 10 % to 90 % of the target rate")
+    })?;
+    let analytic = bar.analytic_s();
+    let fit_err = m.fit_s - analytic;
+    let threshold_err = m.threshold_s.map(|t| t - analytic);
+    let rate_deg_s = bar.rate_rad_s.to_degrees();
+    let paper = spin_up::reference_row(bar.torque_nm, rate_deg_s, bar.mass_kg);
+    let within = fit_err.abs() <= step_s;
+    let json = serde_json::json!({
+        "scenario": "spinup",
+        "torque_nm": bar.torque_nm,
+        "rate_deg_s": rate_deg_s,
+        "mass_kg": bar.mass_kg,
+        "inertia_kg_m2": bar.inertia_kg_m2,
+        "step_s": step_s,
+        "analytic_s": analytic,
+        "start_s": m.start_s,
+        "fit_s": m.fit_s,
+        "fit_err_s": fit_err,
+        "threshold_s": m.threshold_s,
+        "threshold_err_s": threshold_err,
+        "ramp_readings": m.ramp_readings,
+        "within_one_step": within,
+        "paper_s": paper.map(|p| p.paper_s),
+        "paper_err_s": paper.map(|p| p.paper_err_s),
+    });
+    let opt =
+        |v: Option<f64>, digits: usize| v.map_or("–".to_string(), |v| format!("{v:.digits$}"));
+    let markdown = format!(
+        "## IMU: spin-up\n\nM = {} N·m, ω = {rate_deg_s:.1} °/s, m = {} kg, I = {:.4} kg·m², \
+         step {:.1} ms. Fit: a line through the gyro readings between 10 % and 90 % of ω; \
+         threshold: the first reading within {:.0e} of ω. Error within one step: **{}**.\n\n\
+         | analytic I·ω/M (s) | fit (s) | fit error (s) | threshold (s) | threshold error (s) | paper (s) | paper's error (s) |\n\
+         |---:|---:|---:|---:|---:|---:|---:|\n\
+         | {analytic:.4} | {:.4} | {fit_err:.1e} | {} | {} | {} | {} |\n",
+        bar.torque_nm,
+        bar.mass_kg,
+        bar.inertia_kg_m2,
+        step_s * 1e3,
+        spin_up::THRESHOLD,
+        if within { "yes" } else { "no" },
+        m.fit_s,
+        opt(m.threshold_s, 4),
+        threshold_err.map_or("–".into(), |e| format!("{e:.1e}")),
+        opt(paper.map(|p| p.paper_s), 3),
+        opt(paper.map(|p| p.paper_err_s), 3),
+    );
+    Ok(Section {
+        name: "imu".into(),
+        json,
+        markdown,
+    })
 }

@@ -78,6 +78,35 @@ pub enum Scenario {
         #[serde(default = "rotation_end")]
         end_s: f64,
     },
+    SpinUp {
+        /// The bar and its motor, one row of the reference's table: the joint's
+        /// `<limit effort>` is the motor's maximum torque M, its `<limit velocity>` the rate
+        /// ω, the bar's inertia about the joint axis I.
+        #[serde(default = "spin_up_urdf")]
+        urdf: String,
+        /// The bar's joint.
+        #[serde(default = "spin_up_joint")]
+        joint: String,
+        /// When the motor is switched on, s, ≥ 0.
+        #[serde(default = "spin_up_start")]
+        start_s: f64,
+        /// End of the run, s, > `start_s`.
+        #[serde(default = "spin_up_end")]
+        end_s: f64,
+    },
+}
+
+fn spin_up_urdf() -> String {
+    "robots/spinup_row1.urdf".into()
+}
+fn spin_up_joint() -> String {
+    "bar_joint".into()
+}
+fn spin_up_start() -> f64 {
+    0.5
+}
+fn spin_up_end() -> f64 {
+    1.5
 }
 
 fn tilt_rate() -> f64 {
@@ -125,6 +154,9 @@ fn rotation_end() -> f64 {
 pub enum Command {
     /// Angular velocity of the kinematic platform, world frame, rad/s.
     Turn([f64; 3]),
+    /// Command the bar's joint to its velocity limit ω (the motor then gives its maximum
+    /// torque until ω is reached).
+    Spin,
     /// Start an upward push of `force_n` for `duration_s` (sent once).
     Push { force_n: f64, duration_s: f64 },
     /// Nothing to send.
@@ -216,6 +248,13 @@ impl Scenario {
                     ));
                 }
             }
+            Scenario::SpinUp { start_s, end_s, .. } => {
+                if !(start_s >= 0.0 && end_s > start_s) {
+                    return Err(format!(
+                        "keys 'start_s' < 'end_s' must hold, got {start_s}, {end_s}"
+                    ));
+                }
+            }
         }
         Ok(())
     }
@@ -226,6 +265,7 @@ impl Scenario {
             Scenario::Tilt { .. } => "tilt",
             Scenario::Lift { .. } => "lift",
             Scenario::Rotation { .. } => "rotation",
+            Scenario::SpinUp { .. } => "spinup",
         }
     }
 
@@ -247,7 +287,7 @@ impl Scenario {
         match *self {
             Scenario::Tilt { hold_s, .. } => self.ramp_end() + hold_s,
             Scenario::Lift { fall_end_s, .. } => fall_end_s,
-            Scenario::Rotation { end_s, .. } => end_s,
+            Scenario::Rotation { end_s, .. } | Scenario::SpinUp { end_s, .. } => end_s,
         }
     }
 
@@ -273,10 +313,13 @@ impl Scenario {
             },
             Scenario::Lift { .. } => Command::Idle,
             Scenario::Rotation { rate_rad_s, .. } => Command::Turn([0.0, 0.0, rate_rad_s]),
+            Scenario::SpinUp { start_s, .. } if t_s >= start_s => Command::Spin,
+            Scenario::SpinUp { .. } => Command::Idle,
         }
     }
 
-    /// The scored phases, in time order. `mass_kg` is the lifted cube's (unused otherwise).
+    /// The scored phases, in time order; none for the spin-up, which is timed instead (see
+    /// [`crate::spin_up`]). `mass_kg` is the lifted cube's (unused otherwise).
     pub fn phases(&self, mass_kg: f64) -> Vec<Phase> {
         let level = Expect::Vector([0.0, 0.0, G]);
         let phase = |name, from_s, to_s, accel, gyro| Phase {
@@ -348,6 +391,7 @@ impl Scenario {
                 Expect::Vector([-rate_rad_s * rate_rad_s * radius_m, 0.0, G]),
                 [0.0, 0.0, rate_rad_s],
             )],
+            Scenario::SpinUp { .. } => Vec::new(),
         }
     }
 }

@@ -1,25 +1,45 @@
 //! `caravan-imu-driver`: moves robot 0 as its scenario says (see `caravan_imu::scenario`):
-//! the platform's angular velocity on `robot/0/cmd_vel` (world frame) every step, or one
-//! upward push on `robot/0/wrench` at the cube's centre of mass. Params: the scenario table,
+//! the platform's angular velocity on `robot/0/cmd_vel` (world frame) every step, one
+//! upward push on `robot/0/wrench` at the cube's centre of mass, or the bar's joint to its
+//! velocity limit on `robot/0/joint_command`. Params: the scenario table,
 //! e.g. `{ scenario = "tilt", rate_deg_s = 3.0 }`. Give it a `rate` whose period divides the
 //! scenario's switching times, so that every switch falls on a step.
 
 use caravan::{Node, NodeIdentity, Trigger};
 use caravan_imu::scenario::{Command, Scenario};
-use caravan_schemas::{Name, Twist, Vector3, Wrench, topics};
+use caravan_imu::spin_up::Bar;
+use caravan_schemas::{JointCommand, JointValue, Name, Twist, Vector3, Wrench, topics};
+use caravan_world::description::load_description;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     caravan::node_main("caravan-imu-driver", setup, run)
 }
 
-fn setup(scenario: Scenario, _: &NodeIdentity) -> Result<Scenario, String> {
-    scenario.validate()?;
-    Ok(scenario)
+/// The scenario, and for a spin-up the joint and its target rate (rad/s).
+struct Ready {
+    scenario: Scenario,
+    spin: Option<(String, f64)>,
 }
 
-fn run(mut node: Node, scenario: Scenario) -> Result<(), caravan::Error> {
+fn setup(scenario: Scenario, identity: &NodeIdentity) -> Result<Ready, String> {
+    scenario.validate()?;
+    let spin = match &scenario {
+        Scenario::SpinUp { urdf, joint, .. } => {
+            let d = load_description(&identity.resolve_path(urdf))
+                .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+            let bar = Bar::from_description(&d, joint)?;
+            Some((joint.clone(), bar.rate_rad_s))
+        }
+        _ => None,
+    };
+    Ok(Ready { scenario, spin })
+}
+
+fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
+    let Ready { scenario, spin } = ready;
     let cmd_vel = node.publisher(&topics::cmd_vel(0))?;
+    let joints = node.publisher(&topics::joint_command(0))?;
     let wrench = node.publisher(&topics::wrench(0))?;
     let mut pushed = false;
     let trigger = node.trigger(Trigger::every_hz(100.0))?;
@@ -47,6 +67,17 @@ fn run(mut node: Node, scenario: Scenario) -> Result<(), caravan::Error> {
                     duration_s,
                     ..Wrench::default()
                 })?;
+            }
+            Command::Spin => {
+                let (joint, rate) = spin.as_ref().expect("a spin-up has its joint");
+                let mut cmd = caravan_schemas::placement_new::<JointCommand>();
+                let _ = cmd.joints.push(JointValue {
+                    name: Name::new(joint),
+                    position: f64::NAN,
+                    velocity: *rate,
+                    effort: f64::NAN,
+                });
+                joints.publish(&cmd)?;
             }
             Command::Idle => {}
         }

@@ -58,3 +58,40 @@ fn a_free_body_accelerates_at_f_over_m_plus_g_to_1e_6_in_f64() {
     // f32 gets close, but not that close: the precision switch changes the engine.
     assert!(f32_error < 1e-3, "f32: {f32_error:e}");
 }
+
+/// A motor of constant torque spins a bar (I = 2.65 kg·m² about its axis, centre of mass
+/// 0.278 m off it) at M/I, with either joint solver: rapier's default multibody damping is
+/// switched off.
+#[test]
+fn a_constant_torque_spins_a_bar_at_m_over_i_with_either_solver() {
+    use caravan_physics::actuator::Target;
+    for joints in ["multibody", "impulse"] {
+        let params: Params = caravan::parse_params(
+            "physics",
+            &serde_json::json!({
+                "world": "empty.toml", "precision": "f64",
+                "robots": [{ "urdf": "bar.urdf", "base": "fixed", "joints": joints,
+                    "poses": [[2.0, 2.0, 1.0, 0.0, 0.0, 0.0]],
+                    "actuators": [{ "type": "effort", "joints": ["bar_joint"] }] }],
+            }),
+        )
+        .unwrap();
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
+        let mut sim = load(&params, &dir, 1_000_000).unwrap();
+        let motor = Target {
+            effort: 5.0,
+            ..Target::default()
+        };
+        sim.set_targets(0, &[motor]);
+        let speed = |s: &caravan_physics::Simulation| s.joints(0).next().unwrap().2;
+        sim.advance_to(100_000_000, u64::MAX);
+        let w1 = speed(&sim);
+        sim.advance_to(300_000_000, u64::MAX);
+        let accel = (speed(&sim) - w1) / 0.2;
+        let expected = 5.0 / 2.65;
+        assert!(
+            (accel - expected).abs() < 1e-5 * expected,
+            "{joints}: {accel} rad/s², expected {expected}"
+        );
+    }
+}
