@@ -27,10 +27,16 @@ fn run(file: &str, extra: &[&str]) -> Value {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let report: Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.expect("a run directory").join("report.json")).unwrap(),
-    )
-    .unwrap();
+    let dir = dir.expect("a run directory");
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    // The readings' plot, named in the section.
+    let plot = report["imu"]["plot"].as_str().expect("a plot");
+    let svg = std::fs::read_to_string(dir.join(plot)).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("<polyline"),
+        "{plot}"
+    );
     let _ = std::fs::remove_dir_all(&runs);
     report["imu"].clone()
 }

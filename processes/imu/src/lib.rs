@@ -8,9 +8,11 @@
 //! - [`scenario`]: the scenarios, their commands over time and their analytic readings;
 //! - [`phase_errors`]: max and RMS error per axis of the readings of each phase;
 //! - [`spin_up`]: the spin-up times, analytic and measured, and the reference's table;
+//! - [`plot`]: the readings against time, as the reference's figures;
 //! - [`report`]: the report plugin's section.
 
 pub mod phase_errors;
+pub mod plot;
 pub mod report;
 pub mod scenario;
 pub mod spin_up;

@@ -15,6 +15,9 @@ use std::fmt::Write;
 pub const ACCEL_TARGET_M_S2: f64 = 1e-6;
 pub const GYRO_TARGET_RAD_S: f64 = 1e-6;
 
+/// The plot of the readings, in the run directory.
+pub const PLOT_FILE: &str = "imu.svg";
+
 /// The IMU topic of the scenarios' one robot.
 pub const IMU_TOPIC: &str = "robot/0/imu";
 
@@ -64,6 +67,8 @@ impl ReportPlugin for ImuReport {
         if readings.is_empty() {
             anyhow::bail!("no IMU readings on {IMU_TOPIC} in the recording");
         }
+        let title = format!("IMU readings: {}", self.scenario.name());
+        crate::plot::readings_svg(&run.dir.join(PLOT_FILE), &title, &readings)?;
         if let Some(bar) = &self.bar {
             return Ok(vec![spin_up_section(bar, &readings)?]);
         }
@@ -89,6 +94,7 @@ impl ReportPlugin for ImuReport {
             "accel_target_m_s2": ACCEL_TARGET_M_S2,
             "gyro_target_rad_s": GYRO_TARGET_RAD_S,
             "within_target": within,
+            "plot": PLOT_FILE,
         });
         Ok(vec![Section {
             name: "imu".into(),
@@ -132,6 +138,7 @@ fn markdown(scenario: &str, phases: &[PhaseErrors], within: bool) -> String {
             p.gyro_max(),
         );
     }
+    let _ = write!(md, "\n![IMU readings against time]({PLOT_FILE})\n");
     md
 }
 
@@ -171,6 +178,7 @@ fn spin_up_section(bar: &Bar, readings: &[Reading]) -> anyhow::Result<Section> {
         "within_one_step": within,
         "paper_s": paper.map(|p| p.paper_s),
         "paper_err_s": paper.map(|p| p.paper_err_s),
+        "plot": PLOT_FILE,
     });
     let opt =
         |v: Option<f64>, digits: usize| v.map_or("–".to_string(), |v| format!("{v:.digits$}"));
@@ -180,7 +188,8 @@ fn spin_up_section(bar: &Bar, readings: &[Reading]) -> anyhow::Result<Section> {
          threshold: the first reading within {:.0e} of ω. Error within one step: **{}**.\n\n\
          | analytic I·ω/M (s) | fit (s) | fit error (s) | threshold (s) | threshold error (s) | paper (s) | paper's error (s) |\n\
          |---:|---:|---:|---:|---:|---:|---:|\n\
-         | {analytic:.4} | {:.4} | {fit_err:.1e} | {} | {} | {} | {} |\n",
+         | {analytic:.4} | {:.4} | {fit_err:.1e} | {} | {} | {} | {} |\n\n\
+         ![IMU readings against time]({PLOT_FILE})\n",
         bar.torque_nm,
         bar.mass_kg,
         bar.inertia_kg_m2,
