@@ -14,6 +14,9 @@ const AXES: [(&str, RGBColor); 3] = [
     ("z", RGBColor(31, 119, 180)),
 ];
 
+/// Picks the plotted vector out of a reading.
+type Field = fn(&Reading) -> [f64; 3];
+
 /// Writes the readings' plot to `path`, titled `title`.
 pub fn readings_svg(path: &Path, title: &str, readings: &[Reading]) -> anyhow::Result<()> {
     let every = readings.len().div_ceil(MAX_POINTS).max(1);
@@ -22,7 +25,7 @@ pub fn readings_svg(path: &Path, title: &str, readings: &[Reading]) -> anyhow::R
     let root = SVGBackend::new(path, (900, 640)).into_drawing_area();
     root.fill(&WHITE)?;
     let (top, bottom) = root.split_vertically(320);
-    let panels: [(_, &str, fn(&Reading) -> [f64; 3]); 2] = [
+    let panels: [(_, &str, Field); 2] = [
         (top, "specific force (m/s²)", |r| r.accel),
         (bottom, "angular rate (rad/s)", |r| r.gyro),
     ];
