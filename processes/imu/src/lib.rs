@@ -5,12 +5,14 @@
 //! moves the body as the scenario says. `caravan-imu-report` then checks every IMU reading
 //! against the analytic value of its phase.
 //!
+//! - [`allan_run`]: the Allan-deviation check of the IMU's error model;
 //! - [`scenario`]: the scenarios, their commands over time and their analytic readings;
 //! - [`phase_errors`]: max and RMS error per axis of the readings of each phase;
 //! - [`spin_up`]: the spin-up times, analytic and measured, and the reference's table;
 //! - [`plot`]: the readings against time, as the reference's figures;
 //! - [`report`]: the report plugin's section.
 
+pub mod allan_run;
 pub mod phase_errors;
 pub mod plot;
 pub mod report;

@@ -67,3 +67,69 @@ pub fn readings_svg(path: &Path, title: &str, readings: &[Reading]) -> anyhow::R
     root.present()?;
     Ok(())
 }
+
+/// Writes the Allan deviation of each triad (log–log) with its configured model
+/// √(N²/τ + (0.664·B)²) to `path`.
+pub fn allan_svg(path: &Path, triads: &[crate::allan_run::TriadResult]) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (900, 380 * triads.len() as u32)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let areas = root.split_evenly((triads.len(), 1));
+    for (area, t) in areas.iter().zip(triads) {
+        let (tau_lo, tau_hi) = (t.adev[0].0, t.adev[t.adev.len() - 1].0);
+        let model = |tau: f64| {
+            (t.noise_density.powi(2) / tau
+                + (caravan_sensor::imu_errors::FLICKER_FLOOR * t.bias_instability).powi(2))
+            .sqrt()
+        };
+        let (lo, hi) = t
+            .adev
+            .iter()
+            .map(|(tau, s)| (s.min(model(*tau)), s.max(model(*tau))))
+            .fold((f64::INFINITY, 0.0f64), |(a, b), (l, h)| {
+                (a.min(l), b.max(h))
+            });
+        let unit = if t.triad == "gyro" { "rad/s" } else { "m/s²" };
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!(
+                    "{}: N = {:.3e} (fit {:.3e}), B = {:.3e} (fit {:.3e}) {unit}",
+                    t.triad,
+                    t.noise_density,
+                    t.noise_density_estimated,
+                    t.bias_instability,
+                    t.bias_instability_estimated
+                ),
+                ("sans-serif", 16),
+            )
+            .margin(10)
+            .x_label_area_size(30)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                (tau_lo..tau_hi).log_scale(),
+                (lo * 0.8..hi * 1.25).log_scale(),
+            )?;
+        chart
+            .configure_mesh()
+            .x_desc("τ (s)")
+            .y_desc(format!("Allan deviation ({unit})"))
+            .draw()?;
+        chart
+            .draw_series(LineSeries::new(t.adev.iter().copied(), &AXES[2].1))?
+            .label("measured")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], AXES[2].1));
+        chart
+            .draw_series(LineSeries::new(
+                t.adev.iter().map(|(tau, _)| (*tau, model(*tau))),
+                &AXES[0].1,
+            ))?
+            .label("configured N, B")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], AXES[0].1));
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}

@@ -25,6 +25,7 @@
 //! all-zero covariance as "unknown", so the model's values are reported even when the noise is
 //! off: the readings are then better than declared, never worse.
 
+use crate::imu_errors::{ImuErrors, TriadModel};
 use crate::noise::Gaussian;
 use caravan_schemas::{Imu, Pose2D, Quaternion as MsgQuaternion, Twist, Vector3 as MsgVector3};
 use nalgebra::{UnitQuaternion, Vector3};
@@ -150,6 +151,8 @@ pub struct VirtualImu {
     noise: ImuNoise,
     rng: Gaussian,
     last: Option<SensorState>,
+    /// Accelerometer and gyroscope error models (see [`crate::imu_errors`]).
+    errors: Option<(TriadModel, TriadModel)>,
 }
 
 impl VirtualImu {
@@ -160,7 +163,19 @@ impl VirtualImu {
             noise,
             rng: Gaussian::new(seed, crate::noise::IMU_STREAM),
             last: None,
+            errors: None,
         }
+    }
+
+    /// Adds a datasheet error model (noise density, bias instability, random walk, scale
+    /// factor, quantisation) on top of the white noise.
+    pub fn with_errors(mut self, errors: &ImuErrors) -> Self {
+        let c = errors.bias_correlation_s;
+        self.errors = Some((
+            TriadModel::new(errors.accel, c),
+            TriadModel::new(errors.gyro, c),
+        ));
+        self
     }
 
     /// Takes the body's next state; returns the reading since the previous one (none for the
@@ -171,7 +186,8 @@ impl VirtualImu {
             Some(s0) if s1.stamp_ns <= s0.stamp_ns => None,
             Some(s0) => {
                 self.last = Some(s1);
-                measure(&s0, &s1, &self.gravity).map(|r| self.perturb(r))
+                let dt = (s1.stamp_ns - s0.stamp_ns) as f64 * 1e-9;
+                measure(&s0, &s1, &self.gravity).map(|r| self.perturb(r, dt))
             }
             None => {
                 self.last = Some(s1);
@@ -180,7 +196,11 @@ impl VirtualImu {
         }
     }
 
-    fn perturb(&mut self, mut r: Reading) -> Reading {
+    fn perturb(&mut self, mut r: Reading, dt: f64) -> Reading {
+        if let Some((accel, gyro)) = &mut self.errors {
+            r.linear_acceleration = accel.apply(r.linear_acceleration, dt, &mut self.rng);
+            r.angular_velocity = gyro.apply(r.angular_velocity, dt, &mut self.rng);
+        }
         if !self.noise.enabled {
             return r;
         }

@@ -5,9 +5,11 @@
 //!
 //! The algorithms live here with their tests; `main.rs` only wires them to topics.
 
+pub mod allan;
 pub mod attach;
 pub mod encoders;
 pub mod imu;
+pub mod imu_errors;
 pub mod laser;
 pub mod noise;
 pub mod params;

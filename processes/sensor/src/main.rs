@@ -125,7 +125,13 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     let mount = Mount {
         offset: p.imu_offset.into(),
     };
-    let mut imu = p.imu.then(|| VirtualImu::new(mount, p.imu_noise(), seed));
+    let mut imu = p.imu.then(|| {
+        let imu = VirtualImu::new(mount, p.imu_noise(), seed);
+        match &p.imu_errors {
+            Some(e) => imu.with_errors(e),
+            None => imu,
+        }
+    });
     let links_in = match &p.link {
         Some(_) => Some(node.subscriber(&topics::link_states(i))?),
         None => None,

@@ -86,6 +86,12 @@ pub struct Params {
     pub imu_gyro_stddev: f64,
     #[serde(default = "default_orientation_stddev")]
     pub imu_orientation_stddev: f64,
+    /// A datasheet error model on top of the white noise: per triad (`accel`, `gyro`) noise
+    /// density, bias instability, rate random walk, scale factor and quantisation, and the
+    /// flicker bias's `bias_correlation_s` (see `imu_errors.rs`). Applies whatever
+    /// `imu_noise` says.
+    #[serde(default)]
+    pub imu_errors: Option<crate::imu_errors::ImuErrors>,
 }
 
 fn default_urdf() -> String {
@@ -227,6 +233,12 @@ impl Params {
         non_negative(self.imu_accel_stddev, "imu_accel_stddev")?;
         non_negative(self.imu_gyro_stddev, "imu_gyro_stddev")?;
         non_negative(self.imu_orientation_stddev, "imu_orientation_stddev")?;
+        if let Some(e) = &self.imu_errors {
+            e.validate().map_err(|message| ParamError {
+                key: "imu_errors",
+                message,
+            })?;
+        }
         Ok(())
     }
 
@@ -308,6 +320,13 @@ mod tests {
         assert!(with("laser_range_min", json!(-1.0)).contains("'laser_range_min'"));
         assert!(with("ticks_per_rev", json!(0)).contains("'ticks_per_rev'"));
         assert!(with("imu_gyro_stddev", json!(-1.0)).contains("'imu_gyro_stddev'"));
+        let e = with("imu_errors", json!({"gyro": {"noise_density": -1.0}}));
+        assert!(
+            e.contains("key 'imu_errors'") && e.contains("'gyro.noise_density'"),
+            "{e}"
+        );
+        let e = with("imu_errors", json!({"gyro": {"bias_instabilty": 1e-5}}));
+        assert!(e.contains("bias_instabilty"), "{e}");
     }
 
     #[test]
