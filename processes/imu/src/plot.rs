@@ -14,6 +14,18 @@ const AXES: [(&str, RGBColor); 3] = [
     ("z", RGBColor(31, 119, 180)),
 ];
 
+/// Draws the series' labels in a box.
+fn legend<'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, CT>,
+) -> anyhow::Result<()> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    Ok(())
+}
+
 /// Picks the plotted vector out of a reading.
 type Field = fn(&Reading) -> [f64; 3];
 
@@ -58,11 +70,7 @@ pub fn readings_svg(path: &Path, title: &str, readings: &[Reading]) -> anyhow::R
                 .label(*name)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], *colour));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        legend(&mut chart)?;
     }
     root.present()?;
     Ok(())
@@ -124,11 +132,7 @@ pub fn allan_svg(path: &Path, triads: &[crate::allan_run::TriadResult]) -> anyho
             ))?
             .label("configured N, B")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], AXES[0].1));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        legend(&mut chart)?;
     }
     root.present()?;
     Ok(())
