@@ -22,6 +22,7 @@ NAME_BYTES = 60
 MAX_JOINTS = 64
 MAX_LINKS = 64
 MAX_CONTACTS = 64
+MAX_FORCE_TORQUE = 16
 WRENCH_WORLD = 0
 WRENCH_LINK = 1
 
@@ -624,6 +625,42 @@ class Wrench(ctypes.Structure):
         return "caravan::Wrench"
 
 
+class ForceTorque(ctypes.Structure):
+    """``caravan::ForceTorque``: 112 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("joint_len", ctypes.c_uint32),
+        ("joint", ctypes.c_uint8 * 60),
+        ("force", Vector3),
+        ("torque", Vector3),
+    ]
+    SIZE = 112
+    ALIGN = 8
+    OFFSETS = {"joint_len": 0, "joint": 4, "force": 64, "torque": 88}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::ForceTorque"
+
+
+class ForceTorques(ctypes.Structure):
+    """``caravan::ForceTorques``: 1800 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("sensors_len", ctypes.c_uint32),
+        ("sensors", ForceTorque * 16),
+    ]
+    SIZE = 1800
+    ALIGN = 8
+    OFFSETS = {"sensors_len": 0, "sensors": 8}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::ForceTorques"
+
+
 class Hello(ctypes.Structure):
     """``caravan::lockstep::Hello``: 4184 bytes, aligned to 8."""
 
@@ -706,6 +743,7 @@ MESSAGE_TYPES = (
     LinkStates,
     Contacts,
     Wrench,
+    ForceTorques,
 )
 BY_TYPE_NAME = {t.type_name(): t for t in MESSAGE_TYPES}
 # Every generated structure, the header and lockstep messages included.
@@ -735,6 +773,8 @@ ALL_TYPES = (
     Contact,
     Contacts,
     Wrench,
+    ForceTorque,
+    ForceTorques,
     Hello,
     Grant,
     Done,
@@ -812,6 +852,10 @@ class topics:
     @staticmethod
     def wrench(i: int) -> str:
         return f"robot/{i}/wrench"
+
+    @staticmethod
+    def force_torque(i: int) -> str:
+        return f"robot/{i}/force_torque"
 
 
 class lockstep:

@@ -14,6 +14,8 @@ pub const MAX_JOINTS: usize = 64;
 pub const MAX_LINKS: usize = 64;
 /// Most contact points in a [`Contacts`]; the deepest are kept when there are more.
 pub const MAX_CONTACTS: usize = 64;
+/// Most force–torque sensors in a [`ForceTorques`].
+pub const MAX_FORCE_TORQUE: usize = 16;
 
 /// A joint or link name.
 pub type Name = FixedString<NAME_BYTES>;
@@ -156,6 +158,28 @@ pub struct Wrench {
 impl Wrench {
     pub const WORLD: u32 = 0;
     pub const LINK: u32 = 1;
+}
+
+/// A force–torque sensor's reading: what the parent exerts on the child through a fixed
+/// joint, in the child link's frame, as Gazebo's ForceTorque sensor (child, child-to-parent).
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[type_name("caravan::ForceTorque")]
+pub struct ForceTorque {
+    /// The fixed joint that carries the sensor.
+    pub joint: Name,
+    /// N.
+    pub force: Vector3,
+    /// About the child link's origin, N·m.
+    pub torque: Vector3,
+}
+
+/// A robot's force–torque sensors after the last step (`robot/i/force_torque`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[type_name("caravan::ForceTorques")]
+pub struct ForceTorques {
+    pub sensors: FixedVec<ForceTorque, MAX_FORCE_TORQUE>,
 }
 
 impl JointState {

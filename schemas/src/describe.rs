@@ -14,10 +14,10 @@
 
 use crate::lockstep::{Done, Grant, Hello};
 use crate::{
-    Collision, Contact, Contacts, EncoderTicks, FixedString, FixedVec, Goal, Header, Imu,
-    JointCommand, JointState, JointValue, LaserScan, LinkState, LinkStates, NodeStatus,
-    OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Quaternion, Twist, Vector3, WheelSetpoint,
-    WheelState, Wrench,
+    Collision, Contact, Contacts, EncoderTicks, FixedString, FixedVec, ForceTorque, ForceTorques,
+    Goal, Header, Imu, JointCommand, JointState, JointValue, LaserScan, LinkState, LinkStates,
+    NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Quaternion, Twist, Vector3,
+    WheelSetpoint, WheelState, Wrench,
 };
 use core::mem::{align_of, offset_of, size_of};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
@@ -282,6 +282,8 @@ describe! {
     Contact { link, other_robot, other_link, _reserved, point, normal, normal_force }
     Contacts { contacts }
     Wrench { link, frame, _reserved, point, force, torque, duration_s }
+    ForceTorque { joint, force, torque }
+    ForceTorques { sensors }
     Hello { node, period_ns, triggers }
     Grant { now_ns, tick_ns, stop, _reserved }
     Done { node_hash, now_ns, wake_ns, published }
@@ -330,6 +332,7 @@ pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
     link_states,
     contacts,
     wrench,
+    force_torque,
 ];
 
 /// Alignment of a field's element: a scalar's size, or a described struct's alignment.

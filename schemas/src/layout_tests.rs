@@ -24,6 +24,7 @@ const _: () = {
     assert!(size_of::<LinkState>() == 64 + 56 + 48);
     assert!(size_of::<Contact>() == 64 + 4 + 64 + 4 + 24 + 24 + 8);
     assert!(size_of::<Wrench>() == 64 + 8 + 3 * 24 + 8);
+    assert!(size_of::<ForceTorque>() == 64 + 2 * 24);
     assert!(offset_of!(LaserScan, ranges) == 32);
     assert!(offset_of!(OccupancyGrid, data) == 40);
 };

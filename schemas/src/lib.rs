@@ -22,8 +22,8 @@ mod topic;
 pub mod topics;
 
 pub use articulated::{
-    Contact, Contacts, JointCommand, JointState, JointValue, LinkState, LinkStates, MAX_CONTACTS,
-    MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Wrench,
+    Contact, Contacts, ForceTorque, ForceTorques, JointCommand, JointState, JointValue, LinkState,
+    LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Wrench,
 };
 pub use fixed::{FixedString, FixedVec};
 pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3};
@@ -109,6 +109,8 @@ pub fn wire_size<T: Message>(message: &T) -> usize {
         header + held(&m.links)
     } else if let Some(m) = any.downcast_ref::<Contacts>() {
         header + held(&m.contacts)
+    } else if let Some(m) = any.downcast_ref::<ForceTorques>() {
+        header + held(&m.sensors)
     } else {
         header + core::mem::size_of::<T>()
     }

@@ -7,9 +7,9 @@
 //! Where only the name is needed (matching recorded messages), use [`Topic::name`].
 
 use crate::{
-    Collision, Contacts, EncoderTicks, Goal, Imu, JointCommand, JointState, LaserScan, LinkStates,
-    NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Topic, Twist, WheelSetpoint, WheelState,
-    Wrench,
+    Collision, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand, JointState,
+    LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Topic, Twist,
+    WheelSetpoint, WheelState, Wrench,
 };
 
 /// Per-node execution statistics, published by every node (`status`).
@@ -93,6 +93,10 @@ pub fn link_states(i: usize) -> Topic<LinkStates> {
 pub fn contacts(i: usize) -> Topic<Contacts> {
     robot(i, "contacts")
 }
+/// Robot `i`'s force–torque sensors (`robot/i/force_torque`).
+pub fn force_torque(i: usize) -> Topic<ForceTorques> {
+    robot(i, "force_torque")
+}
 /// Forces applied to robot `i`'s links (`robot/i/wrench`).
 pub fn wrench(i: usize) -> Topic<Wrench> {
     robot(i, "wrench")
@@ -127,6 +131,7 @@ mod tests {
         check::<LinkStates>(link_states(3), "robot/3/link_states");
         check::<Contacts>(contacts(3), "robot/3/contacts");
         check::<Wrench>(wrench(3), "robot/3/wrench");
+        check::<ForceTorques>(force_torque(3), "robot/3/force_torque");
         assert_eq!(scan(0).name(), "robot/0/scan");
     }
 

@@ -33,6 +33,8 @@ robots = [
      ] }},
   {{ urdf = "{box_}", poses = [[3.0, 3.0, 0.0]], contacts = true }},
   {{ urdf = "{box_}", base = "kinematic", poses = [[3.0, 1.0, 1.5, 0.0, 0.0, 0.0]] }},
+  {{ urdf = "{mass}", base = "fixed", poses = [[1.0, 3.0, 1.0, 0.0, 0.0, 0.0]],
+     force_torque = ["sensor_joint"] }},
 ]
 
 [[process]]
@@ -50,6 +52,7 @@ params = {{ robot = 0, count = 1, world = "{world}", urdf = "{arm}", link = "{im
         world = r("empty.toml"),
         arm = r("arm3.urdf"),
         box_ = r("box.urdf"),
+        mass = r("test_mass.urdf"),
     )
 }
 
@@ -174,6 +177,17 @@ fn joints_links_contacts_wrenches_and_kinematic_bases_on_topics() {
     let pose = messages(&s, "robot/2/pose_true");
     let moved = f(&at(&pose, 4.95)["x"]) - f(&at(&pose, 1.0)["x"]);
     assert!((moved - 0.5 * 3.95).abs() < 0.02, "moved {moved} m");
+
+    // The force–torque sensor carries the hanging 1 kg test mass: its weight in the sensor's
+    // frame, turned 0.5 rad about x.
+    let ft = messages(&s, "robot/3/force_torque");
+    let reading = &at(&ft, 4.95)["sensors"][0];
+    assert_eq!(reading["joint"], "sensor_joint");
+    let (fy, fz) = (f(&reading["force"]["y"]), f(&reading["force"]["z"]));
+    assert!(
+        (fy - 9.81 * 0.5f64.sin()).abs() < 1e-3 && (fz - 9.81 * 0.5f64.cos()).abs() < 1e-3,
+        "{reading}"
+    );
 }
 
 #[test]

@@ -3,10 +3,10 @@
 //! Per robot i it publishes `robot/i/pose_true` and `robot/i/twist_true` every step, and as
 //! the robot's params ask `robot/i/wheel_state` (a differential drive, which follows
 //! `robot/i/wheel_setpoint`), `robot/i/joint_states` (which takes `robot/i/joint_command`),
-//! `robot/i/link_states` and `robot/i/contacts`. It takes `robot/i/cmd_vel` for a kinematic
-//! base and every `robot/i/wrench`. Commands are held until changed. Contact events go to
-//! `collisions`. The node steps at
-//! 100 Hz unless the launch file gives a `rate`; each step runs `substeps` physics steps.
+//! `robot/i/link_states`, `robot/i/contacts` and `robot/i/force_torque`. It takes
+//! `robot/i/cmd_vel` for a kinematic base and every `robot/i/wrench`. Commands are held until
+//! changed. Contact events go to `collisions`. The node steps at 100 Hz unless the launch
+//! file gives a `rate`; each step runs `substeps` physics steps.
 //! Params and inputs are checked before the node joins the group, so bad input never leaves
 //! anything behind in shared memory.
 
@@ -14,8 +14,8 @@ use caravan::{Node, NodeIdentity, Publisher, Subscriber, Trigger};
 use caravan_physics::messages::{self, CommandReader};
 use caravan_physics::{Params, Simulation};
 use caravan_schemas::{
-    Contacts, JointCommand, JointState, LinkStates, Pose2D, Twist, WheelSetpoint, WheelState,
-    Wrench, topics,
+    Contacts, ForceTorques, JointCommand, JointState, LinkStates, Pose2D, Twist, WheelSetpoint,
+    WheelState, Wrench, topics,
 };
 use std::process::ExitCode;
 use std::time::Duration;
@@ -81,6 +81,7 @@ struct RobotPorts {
     joints: Option<(Subscriber<JointCommand>, Publisher<JointState>)>,
     links: Option<Publisher<LinkStates>>,
     contacts: Option<Publisher<Contacts>>,
+    force_torque: Option<Publisher<ForceTorques>>,
     cmd_vel: Option<Subscriber<Twist>>,
     wrench: Subscriber<Wrench>,
 }
@@ -105,6 +106,9 @@ impl RobotPorts {
             .then(|| node.publisher(&topics::link_states(i)));
         let contacts = out.contacts.then(|| node.publisher(&topics::contacts(i)));
         let cmd_vel = out.cmd_vel.then(|| node.subscriber(&topics::cmd_vel(i)));
+        let force_torque = out
+            .force_torque
+            .then(|| node.publisher(&topics::force_torque(i)));
         Ok(Self {
             pose: node.publisher(&topics::pose_true(i))?,
             twist: node.publisher(&topics::twist_true(i))?,
@@ -112,6 +116,7 @@ impl RobotPorts {
             joints: joints.transpose()?,
             links: links.transpose()?,
             contacts: contacts.transpose()?,
+            force_torque: force_torque.transpose()?,
             cmd_vel: cmd_vel.transpose()?,
             wrench: node.subscriber(&topics::wrench(i))?,
         })
@@ -169,6 +174,11 @@ impl RobotPorts {
         if let Some(p) = &self.contacts {
             let mut m = p.loan()?;
             messages::contacts(sim, i, &mut m);
+            m.send()?;
+        }
+        if let Some(p) = &self.force_torque {
+            let mut m = p.loan()?;
+            messages::force_torque(sim, i, &mut m);
             m.send()?;
         }
         Ok(())

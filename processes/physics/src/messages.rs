@@ -6,8 +6,9 @@ use crate::actuator::Target;
 use crate::simulation::Simulation;
 use crate::wrench::WrenchCommand;
 use caravan_schemas::{
-    Contact, Contacts, JointCommand, JointState, JointValue, LinkState, LinkStates, MAX_CONTACTS,
-    MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Vector3, Wrench,
+    Contact, Contacts, ForceTorque, ForceTorques, JointCommand, JointState, JointValue, LinkState,
+    LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Vector3,
+    Wrench,
 };
 use caravan_world::description::RobotDescription;
 use std::collections::HashSet;
@@ -123,6 +124,24 @@ pub fn contacts(sim: &Simulation, i: usize, out: &mut Contacts) {
             p.normal_force,
         );
         let _ = out.contacts.push(contact);
+    }
+}
+
+/// Fills `out` with robot `i`'s force–torque sensor readings.
+pub fn force_torque(sim: &Simulation, i: usize, out: &mut ForceTorques) {
+    let v = |a: [f64; 3]| Vector3 {
+        x: a[0],
+        y: a[1],
+        z: a[2],
+    };
+    out.sensors.clear();
+    for (joint, force, torque) in sim.force_torque(i).into_iter().take(MAX_FORCE_TORQUE) {
+        let reading = ForceTorque {
+            joint: Name::new(joint),
+            force: v(force),
+            torque: v(torque),
+        };
+        let _ = out.sensors.push(reading);
     }
 }
 

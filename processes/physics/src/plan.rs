@@ -6,7 +6,7 @@
 use caravan_world::description::{Geometry, JointKind, RobotDescription};
 use nalgebra::Isometry3;
 
-/// A movable joint between two bodies.
+/// A movable (or sensed fixed) joint between two bodies.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointPlan {
     /// Index into [`RobotDescription::joints`].
@@ -38,8 +38,15 @@ pub struct RobotPlan {
 
 impl RobotPlan {
     pub fn new(d: &RobotDescription) -> Self {
+        Self::with_sensed(d, &[])
+    }
+
+    /// As [`RobotPlan::new`], except that the fixed joints in `sensed` (description joint
+    /// indices) are not welded: their child starts a body of its own, held by a fixed
+    /// joint whose constraint force can be read (a force–torque sensor).
+    pub fn with_sensed(d: &RobotDescription, sensed: &[usize]) -> Self {
         let mut bodies = Vec::new();
-        add_body(d, d.root, None, &mut bodies);
+        add_body(d, d.root, None, sensed, &mut bodies);
         let mut link_body = vec![(0, Isometry3::identity()); d.links.len()];
         for (b, body) in bodies.iter().enumerate() {
             for (link, pose) in &body.links {
@@ -66,16 +73,18 @@ fn add_body(
     d: &RobotDescription,
     link: usize,
     joint: Option<JointPlan>,
+    sensed: &[usize],
     bodies: &mut Vec<BodyPlan>,
 ) {
+    let welded = |j: usize| d.joints[j].kind == JointKind::Fixed && !sensed.contains(&j);
     let index = bodies.len();
     let mut links = vec![(link, Isometry3::identity())];
     let mut i = 0;
     while i < links.len() {
         let (l, pose) = links[i];
         for j in d.child_joints(l) {
-            let joint = &d.joints[j];
-            if joint.kind == JointKind::Fixed {
+            if welded(j) {
+                let joint = &d.joints[j];
                 links.push((joint.child, pose * joint.origin));
             }
         }
@@ -87,14 +96,13 @@ fn add_body(
     });
     for (l, pose) in links {
         for j in d.child_joints(l) {
-            let joint = &d.joints[j];
-            if joint.kind.is_movable() {
+            if !welded(j) {
                 let plan = JointPlan {
                     joint: j,
                     parent_body: index,
-                    frame: pose * joint.origin,
+                    frame: pose * d.joints[j].origin,
                 };
-                add_body(d, joint.child, Some(plan), bodies);
+                add_body(d, d.joints[j].child, Some(plan), sensed, bodies);
             }
         }
     }

@@ -40,6 +40,8 @@ pub struct Outputs {
     pub contacts: bool,
     /// Takes `cmd_vel`: a kinematic base.
     pub cmd_vel: bool,
+    /// `force_torque`: the robot has force–torque sensors.
+    pub force_torque: bool,
 }
 
 impl Outputs {
@@ -50,6 +52,7 @@ impl Outputs {
             self.joint_states,
             self.link_states,
             self.contacts,
+            self.force_torque,
         ]
         .iter()
         .filter(|on| **on)

@@ -56,6 +56,8 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                 spec.urdf
             ))
         })?;
+        spec.sensed_joints(&d)
+            .map_err(|e| SetupError(format!("key '{}{}", key(params, k, ""), &e[1..])))?;
         check_masses(&d, spec).map_err(|e| {
             SetupError(format!(
                 "robot description (key '{}' = \"{}\"): {e}",
@@ -202,7 +204,7 @@ fn start_pose(p: &[f64]) -> StartPose {
 
 /// Every link that moves needs mass: a body of massless links cannot be simulated.
 fn check_masses(d: &RobotDescription, spec: &RobotSpec) -> Result<(), String> {
-    let plan = crate::plan::RobotPlan::new(d);
+    let plan = crate::plan::RobotPlan::with_sensed(d, &spec.sensed_joints(d)?);
     for (b, body) in plan.bodies.iter().enumerate() {
         let moves = b > 0 || spec.base == crate::spec::Base::Floating && !spec.lifted;
         let massive = body

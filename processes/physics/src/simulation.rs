@@ -102,5 +102,8 @@ impl Simulation {
         fn contact_points(&self, i: usize) -> Vec<ContactPoint>;
         /// The first robot that, at its start pose, overlaps an obstacle or another robot.
         fn first_overlap(&self) -> Option<Overlap>;
+        /// Robot `i`'s force–torque sensors: joint, force (N) and torque (N·m) on the child,
+        /// in the child link's frame.
+        fn force_torque(&self, i: usize) -> Vec<(&str, [f64; 3], [f64; 3])>;
     }
 }

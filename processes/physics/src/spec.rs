@@ -179,6 +179,11 @@ pub struct RobotSpec {
     /// robot has a movable joint.
     #[serde(default)]
     pub joint_states: Option<bool>,
+    /// Fixed joints that carry a force–torque sensor: their child is not welded to the
+    /// parent but held by a fixed joint whose force and torque are published on
+    /// `robot/i/force_torque`.
+    #[serde(default)]
+    pub force_torque: Vec<String>,
     /// Publish `robot/i/link_states` (every link's pose and velocity).
     #[serde(default)]
     pub link_states: bool,
@@ -295,6 +300,35 @@ impl RobotSpec {
     }
 }
 
+impl RobotSpec {
+    /// The description joint indices of the `force_torque` joints, after checking that each
+    /// exists and is fixed; errors start with the quoted key.
+    pub fn sensed_joints(&self, d: &RobotDescription) -> Result<Vec<usize>, String> {
+        self.force_torque
+            .iter()
+            .enumerate()
+            .map(|(k, name)| {
+                let j = d.joint(name).ok_or_else(|| {
+                    format!(
+                        "'force_torque[{k}]': no joint named '{name}' in {} (joints: {})",
+                        d.file,
+                        names(d)
+                    )
+                })?;
+                if d.joints[j].kind != JointKind::Fixed {
+                    return Err(format!(
+                        "'force_torque[{k}]': joint '{name}' of {} moves; a force–torque \
+                         sensor sits on a fixed joint (a moving joint reports its effort in \
+                         joint_states)",
+                        d.file
+                    ));
+                }
+                Ok(j)
+            })
+            .collect()
+    }
+}
+
 fn names(d: &RobotDescription) -> String {
     d.joints
         .iter()
@@ -331,6 +365,7 @@ impl RobotSpec {
             wheel_friction,
             cmd_vel_frame: CmdVelFrame::Body,
             joint_states: Some(false),
+            force_torque: Vec::new(),
             link_states: false,
             contacts: false,
         }

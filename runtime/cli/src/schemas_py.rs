@@ -207,6 +207,7 @@ pub fn python_module() -> Result<String> {
         ("MAX_JOINTS", caravan_schemas::MAX_JOINTS),
         ("MAX_LINKS", caravan_schemas::MAX_LINKS),
         ("MAX_CONTACTS", caravan_schemas::MAX_CONTACTS),
+        ("MAX_FORCE_TORQUE", caravan_schemas::MAX_FORCE_TORQUE),
         ("WRENCH_WORLD", caravan_schemas::Wrench::WORLD as usize),
         ("WRENCH_LINK", caravan_schemas::Wrench::LINK as usize),
     ] {

@@ -129,7 +129,7 @@ pub struct RobotBodies {
     pub plan: RobotPlan,
     /// One per [`RobotPlan::bodies`]; the first is the base.
     pub bodies: Vec<RigidBodyHandle>,
-    /// Per description joint: its rapier joint, for movable joints.
+    /// Per description joint: its rapier joint, for movable and sensed fixed joints.
     pub joints: Vec<Option<JointHandle>>,
     /// Colliders that can hit obstacles and other robots (everything but tyres).
     pub colliders: Vec<ColliderHandle>,
@@ -264,7 +264,8 @@ fn add_robot(
     r: &RobotSetup,
 ) -> Result<RobotBodies, String> {
     let d = r.description;
-    let plan = RobotPlan::new(d);
+    let sensed = r.spec.sensed_joints(d)?;
+    let plan = RobotPlan::with_sensed(d, &sensed);
     let multibody = r.spec.joint_model() == JointModel::Multibody;
     let base = base_pose(r, &plan);
     let friction_of = |l: usize| d.links[l].friction.unwrap_or(DEFAULT_FRICTION);
@@ -366,7 +367,9 @@ fn add_robot(
             let joint = &d.joints[j.joint];
             let parent = bodies[j.parent_body];
             let generic = shapes::joint(joint, &j.frame);
-            joints[j.joint] = Some(if multibody {
+            // A sensed fixed joint is an impulse joint even in a multibody: a multibody
+            // holds its joints without forces to read.
+            joints[j.joint] = Some(if multibody && joint.kind.is_movable() {
                 JointHandle::Multibody(
                     physics
                         .multibody_joints

@@ -19,6 +19,8 @@ use caravan_world::description::RobotDescription;
 /// One robot's runtime state besides its rapier bodies.
 struct RobotState {
     outputs: Outputs,
+    /// Force–torque sensors: description joint index and its fixed impulse joint.
+    sensors: Vec<(usize, ImpulseJointHandle)>,
     description: RobotDescription,
     /// Movable joints in description order (the robot's joint order on its topics).
     joints: Vec<JointIo>,
@@ -88,7 +90,16 @@ impl Simulation {
                 actuators.push(build_actuators[j].take());
             }
             let spec = build.setup.spec;
+            let sensors = spec
+                .sensed_joints(d)?
+                .into_iter()
+                .filter_map(|j| match bodies.joints[j] {
+                    Some(scene::JointHandle::Impulse(h)) => Some((j, h)),
+                    _ => None,
+                })
+                .collect();
             let outputs = Outputs {
+                force_torque: !spec.force_torque.is_empty(),
                 wheels: build.drive.is_some(),
                 joint_states: spec.joint_states.unwrap_or(!joints.is_empty()),
                 link_states: spec.link_states,
@@ -97,6 +108,7 @@ impl Simulation {
             };
             robots.push(RobotState {
                 outputs,
+                sensors,
                 description: d.clone(),
                 joints,
                 actuators,
@@ -346,6 +358,34 @@ impl Simulation {
     }
 
     /// Pairs (robot, other robot or −1) touching now.
+    /// Robot `i`'s force–torque sensors after the last step: the joint's name and the force
+    /// (N) and torque (N·m) the parent exerts on the child through it, in the child link's
+    /// frame, about the child link's origin.
+    pub fn force_torque(&self, i: usize) -> Vec<(&str, [f64; 3], [f64; 3])> {
+        let r = &self.robots[i];
+        let physics = &self.scene.physics;
+        // rapier writes back the impulses of the last of its solver substeps, as applied to
+        // the parent; and the angular ones about the child's centre of mass.
+        let per_second = -(physics.integration_parameters.num_solver_iterations as f64)
+            / (self.cfg.dt_ns as f64 * 1e-9);
+        r.sensors
+            .iter()
+            .filter_map(|&(j, h)| {
+                let joint = physics.impulse_joints.get(h)?;
+                let child = &physics.bodies[joint.body2()];
+                let imp = joint.impulses;
+                let force = Vector::new(imp[0], imp[1], imp[2]) * per_second as Real;
+                let about_com = Vector::new(imp[3], imp[4], imp[5]) * per_second as Real;
+                let com = child
+                    .position()
+                    .inverse_transform_point(child.center_of_mass());
+                let torque = about_com + com.cross(force);
+                let a = |v: Vector| [v.x as f64, v.y as f64, v.z as f64];
+                Some((r.description.joints[j].name.as_str(), a(force), a(torque)))
+            })
+            .collect()
+    }
+
     /// The first robot that, at its start pose, overlaps an obstacle or another robot.
     pub fn first_overlap(&self) -> Option<crate::robot::Overlap> {
         scene::first_overlap(&self.scene)

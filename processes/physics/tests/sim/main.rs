@@ -7,6 +7,7 @@ mod collisions;
 mod common;
 mod determinism;
 mod driving;
+mod force_torque;
 mod lab;
 mod precision;
 mod step_response;
