@@ -110,3 +110,26 @@ fn spin_up_times_are_within_one_step_of_i_omega_over_m() {
         assert!(f("paper_s") > 0.0, "a reference row: {imu}");
     }
 }
+
+#[test]
+fn the_rejected_force_sensor_accelerometer_is_scored_beside_the_finite_difference() {
+    let imu = run("lift-force-sensor.toml", &[]);
+    let fs = &imu["force_sensor"];
+    assert_eq!(fs["test_mass_kg"], 1.0, "{imu}");
+    let phases = fs["phases"].as_array().unwrap();
+    let names: Vec<&str> = phases
+        .iter()
+        .map(|p| p["phase"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["rest", "pushed", "free fall"]);
+    for p in phases {
+        assert!(p["readings"].as_u64().unwrap() > 100, "{p}");
+    }
+    // In rapier (f64) the design reads the steady phases well; where it parts from the
+    // finite difference is a change of phase (the release at 5 s), for one reading.
+    let diff_at = fs["max_diff_at_s"].as_f64().unwrap();
+    assert!(
+        (diff_at - 5.0).abs() < 0.01 || (diff_at - 2.5).abs() < 0.01,
+        "{fs}"
+    );
+}

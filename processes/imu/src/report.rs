@@ -18,6 +18,12 @@ pub const GYRO_TARGET_RAD_S: f64 = 1e-6;
 /// The plot of the readings, in the run directory.
 pub const PLOT_FILE: &str = "imu.svg";
 
+/// The test mass of the rejected force-sensor accelerometer, kg (the scenarios' URDFs).
+pub const TEST_MASS_KG: f64 = 1.0;
+
+/// The force–torque topic of the scenarios' one robot.
+pub const FORCE_TOPIC: &str = "robot/0/force_torque";
+
 /// The IMU topic of the scenarios' one robot.
 pub const IMU_TOPIC: &str = "robot/0/imu";
 
@@ -78,6 +84,45 @@ impl ReportPlugin for ImuReport {
             .iter()
             .map(|p| score(p, &readings))
             .collect();
+        // The design the reference study rejected, where the run records it: a test mass on
+        // a force sensor, a = F/m, with the gyro of the same instant.
+        let gyro_at = |t: f64| {
+            readings
+                .iter()
+                .find(|r| (r.t_s - t).abs() < 1e-9)
+                .map_or([0.0; 3], |r| r.gyro)
+        };
+        let forced: Vec<Reading> = run
+            .messages()?
+            .iter()
+            .filter(|m| m.topic == FORCE_TOPIC)
+            .map(|m| {
+                let t_s = m.stamp_ns() as f64 * 1e-9;
+                let f = v3(&m.json["sensors"][0]["force"]);
+                Reading {
+                    t_s,
+                    accel: f.map(|c| c / TEST_MASS_KG),
+                    gyro: gyro_at(t_s),
+                }
+            })
+            .collect();
+        // Where the two designs part: the largest difference at one instant, and when.
+        let (diff, diff_t) = forced
+            .iter()
+            .filter_map(|f| {
+                let r = readings.iter().find(|r| (r.t_s - f.t_s).abs() < 1e-9)?;
+                let d = (0..3)
+                    .map(|k| (f.accel[k] - r.accel[k]).abs())
+                    .fold(0.0, f64::max);
+                Some((d, f.t_s))
+            })
+            .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
+        let force_phases: Vec<PhaseErrors> = if forced.is_empty() {
+            Vec::new()
+        } else {
+            let all = self.scenario.phases(self.mass_kg);
+            all.iter().map(|p| score(p, &forced)).collect()
+        };
         let accel = phases
             .iter()
             .map(PhaseErrors::accel_max)
@@ -95,16 +140,39 @@ impl ReportPlugin for ImuReport {
             "gyro_target_rad_s": GYRO_TARGET_RAD_S,
             "within_target": within,
             "plot": PLOT_FILE,
+            "force_sensor": if forced.is_empty() { serde_json::Value::Null } else { serde_json::json!({
+                "readings": forced.len(),
+                "max_diff_from_finite_difference_m_s2": diff,
+                "max_diff_at_s": diff_t,
+                "test_mass_kg": TEST_MASS_KG,
+                "phases": force_phases,
+                "accel_max_err_m_s2": force_phases
+                    .iter()
+                    .map(PhaseErrors::accel_max)
+                    .fold(0.0, f64::max),
+            }) },
         });
         Ok(vec![Section {
             name: "imu".into(),
             json,
-            markdown: markdown(self.scenario.name(), &phases, within),
+            markdown: markdown(
+                self.scenario.name(),
+                &phases,
+                within,
+                &force_phases,
+                (diff, diff_t),
+            ),
         }])
     }
 }
 
-fn markdown(scenario: &str, phases: &[PhaseErrors], within: bool) -> String {
+fn markdown(
+    scenario: &str,
+    phases: &[PhaseErrors],
+    within: bool,
+    force_phases: &[PhaseErrors],
+    (diff, diff_t): (f64, f64),
+) -> String {
     let mut md = format!(
         "## IMU: {scenario}\n\nEvery reading against its phase's ideal value; targets \
          {ACCEL_TARGET_M_S2:.0e} m/s² and {GYRO_TARGET_RAD_S:.0e} rad/s: **{}**.\n\n\
@@ -136,6 +204,28 @@ fn markdown(scenario: &str, phases: &[PhaseErrors], within: bool) -> String {
             p.readings,
             list(&p.expected_gyro_rad_s),
             p.gyro_max(),
+        );
+    }
+    if force_phases.iter().any(|p| p.readings > 0) {
+        let _ = write!(
+            md,
+            "\nThe accelerometer the reference study rejected, a {TEST_MASS_KG} kg test mass on a \
+             force sensor (a = F/m):\n\n| phase | readings | max / RMS error f (m/s²) |\n|---|---:|---|\n"
+        );
+        for p in force_phases {
+            let rms = p.accel_err_m_s2.iter().map(|s| s.rms).fold(0.0, f64::max);
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.1e} / {rms:.1e} |",
+                p.phase,
+                p.readings,
+                p.accel_max()
+            );
+        }
+        let _ = writeln!(
+            md,
+            "\nLargest difference from the finite-difference reading at one instant: \
+             {diff:.2e} m/s² at {diff_t:.3} s."
         );
     }
     let _ = write!(md, "\n![IMU readings against time]({PLOT_FILE})\n");
