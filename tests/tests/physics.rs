@@ -34,7 +34,7 @@ robots = [
   {{ urdf = "{box_}", poses = [[3.0, 3.0, 0.0]], contacts = true }},
   {{ urdf = "{box_}", base = "kinematic", poses = [[3.0, 1.0, 1.5, 0.0, 0.0, 0.0]] }},
   {{ urdf = "{mass}", base = "fixed", poses = [[1.0, 3.0, 1.0, 0.0, 0.0, 0.0]],
-     force_torque = ["sensor_joint"] }},
+     force_torque = ["sensor_joint"], link_states = true }},
 ]
 
 [[process]]
@@ -48,6 +48,16 @@ exec = "caravan-sensor"
 rate = "100Hz"
 params = {{ robot = 0, count = 1, world = "{world}", urdf = "{arm}", link = "{imu_link}",
            imu_offset = [0.3, 0.0, 0.0] }}
+
+# The force-sensor accelerometer on robot 3's hanging 1 kg mass, told the mass is 2 kg: it
+# reads half the specific force, which the finite difference would not.
+[[process]]
+name = "mass-imu"
+exec = "caravan-sensor"
+rate = "100Hz"
+params = {{ robot = 3, count = 4, world = "{world}", urdf = "{mass}", link = "mass",
+           imu_accelerometer = "force_sensor", imu_force_joint = "sensor_joint",
+           imu_test_mass_kg = 2.0 }}
 "#,
         world = r("empty.toml"),
         arm = r("arm3.urdf"),
@@ -187,6 +197,13 @@ fn joints_links_contacts_wrenches_and_kinematic_bases_on_topics() {
     assert!(
         (fy - 9.81 * 0.5f64.sin()).abs() < 1e-3 && (fz - 9.81 * 0.5f64.cos()).abs() < 1e-3,
         "{reading}"
+    );
+    // The force-sensor accelerometer on that mass reads F / 2 kg.
+    let imu = messages(&s, "robot/3/imu");
+    let a = &at(&imu, 4.95)["linear_acceleration"];
+    assert!(
+        (f(&a["y"]) - fy / 2.0).abs() < 1e-6 && (f(&a["z"]) - fz / 2.0).abs() < 1e-6,
+        "{a}"
     );
 }
 

@@ -21,6 +21,24 @@ pub fn check_link(d: &RobotDescription, link: &str) -> Result<(), String> {
     ))
 }
 
+/// Checks that the force-sensor accelerometer's joint exists in `d` and is fixed (key
+/// `imu_force_joint`).
+pub fn check_force_joint(d: &RobotDescription, joint: &str) -> Result<(), String> {
+    match d.joint(joint).map(|j| &d.joints[j]) {
+        Some(j) if j.kind == caravan_world::description::JointKind::Fixed => Ok(()),
+        Some(_) => Err(format!(
+            "key 'imu_force_joint' = \"{joint}\": joint '{joint}' of {} moves; the test mass \
+             hangs on a fixed joint with a force–torque sensor",
+            d.file
+        )),
+        None => Err(format!(
+            "key 'imu_force_joint' = \"{joint}\": robot description {} has no joint named \
+             '{joint}'",
+            d.file
+        )),
+    }
+}
+
 /// The state of link `name` in a `link_states` message stamped `stamp_ns`, with the link's
 /// planar pose (x, y, yaw) for the laser and its height above the floor.
 pub fn link_state(
@@ -50,6 +68,22 @@ pub fn link_state(
 mod tests {
     use super::*;
     use caravan_schemas::{LinkState, Pose3D, Quaternion as MsgQuaternion, Twist};
+
+    #[test]
+    fn the_force_joint_must_exist_and_be_fixed() {
+        let urdf = r#"<robot name="r"><link name="a"/>
+  <link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="c"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="fixed" type="fixed"><parent link="a"/><child link="b"/></joint>
+  <joint name="hinge" type="continuous"><parent link="a"/><child link="c"/><axis xyz="0 0 1"/></joint>
+</robot>"#;
+        let d = caravan_world::description::parse(urdf, "r.urdf", std::path::Path::new("."))
+            .unwrap();
+        assert!(check_force_joint(&d, "fixed").is_ok());
+        assert!(check_force_joint(&d, "hinge").unwrap_err().contains("moves"));
+        let e = check_force_joint(&d, "wrist").unwrap_err();
+        assert!(e.contains("'imu_force_joint'") && e.contains("no joint named"), "{e}");
+    }
 
     #[test]
     fn a_link_state_becomes_a_body_state_and_a_planar_pose() {

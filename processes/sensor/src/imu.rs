@@ -181,13 +181,28 @@ impl VirtualImu {
     /// Takes the body's next state; returns the reading since the previous one (none for the
     /// first state, or a state not newer than the previous).
     pub fn update(&mut self, body: &BodyState) -> Option<Reading> {
+        self.update_with(body, None)
+    }
+
+    /// As [`VirtualImu::update`], but the accelerometer reads `specific_force` (sensor
+    /// frame, m/s²) instead of the finite difference, when given: the force-sensor design
+    /// (see [`crate::force_accel`]). Errors and noise apply to it all the same.
+    pub fn update_with(
+        &mut self,
+        body: &BodyState,
+        specific_force: Option<Vector3<f64>>,
+    ) -> Option<Reading> {
         let s1 = self.mount.sensor(body);
         match self.last {
             Some(s0) if s1.stamp_ns <= s0.stamp_ns => None,
             Some(s0) => {
                 self.last = Some(s1);
                 let dt = (s1.stamp_ns - s0.stamp_ns) as f64 * 1e-9;
-                measure(&s0, &s1, &self.gravity).map(|r| self.perturb(r, dt))
+                let mut r = measure(&s0, &s1, &self.gravity)?;
+                if let Some(f) = specific_force {
+                    r.linear_acceleration = f;
+                }
+                Some(self.perturb(r, dt))
             }
             None => {
                 self.last = Some(s1);

@@ -8,6 +8,7 @@
 pub mod allan;
 pub mod attach;
 pub mod encoders;
+pub mod force_accel;
 pub mod imu;
 pub mod imu_errors;
 pub mod laser;

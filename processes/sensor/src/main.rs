@@ -10,10 +10,12 @@
 
 use caravan::{Node, NodeIdentity, Subscriber, Trigger, parse_rate};
 use caravan_schemas::{Pose2D, Twist, WheelState, topics};
-use caravan_sensor::attach::{check_link, link_state};
+use caravan_sensor::attach::{check_force_joint, check_link, link_state};
 use caravan_sensor::encoders::encoder_ticks;
+use caravan_sensor::force_accel::ForceAccelerometer;
 use caravan_sensor::imu::{BodyState, Mount, VirtualImu};
 use caravan_sensor::laser::Laser;
+use caravan_sensor::params::Accelerometer;
 use caravan_sensor::params::Params;
 use caravan_sensor::schedule::{due, every_nth};
 use caravan_sensor::sync::Pairer;
@@ -53,6 +55,9 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
             let d = caravan_world::description::load_description(&urdf)
                 .map_err(|e| format!("key 'urdf': robot description {e}"))?;
             check_link(&d, link)?;
+            if p.imu_accelerometer == Accelerometer::ForceSensor {
+                check_force_joint(&d, &p.imu_force_joint)?;
+            }
             caravan_world::RobotModel::from_description(&d).ok()
         }
     };
@@ -132,6 +137,13 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
             None => imu,
         }
     });
+    // The force-sensor accelerometer pairs force readings with link states by stamp.
+    let mut force_accel = (p.imu && p.imu_accelerometer == Accelerometer::ForceSensor)
+        .then(|| ForceAccelerometer::new(&p.imu_force_joint, p.imu_test_mass_kg));
+    let forces_in = match force_accel {
+        Some(_) => Some(node.subscriber(&topics::force_torque(i))?),
+        None => None,
+    };
     let links_in = match &p.link {
         Some(_) => Some(node.subscriber(&topics::link_states(i))?),
         None => None,
@@ -187,15 +199,24 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
                      1 s; give physics `link_states = true` for robot {i}"
                 );
             }
+            if let (Some(fa), Some(forces_in)) = (force_accel.as_mut(), &forces_in) {
+                while let Some(m) = forces_in.receive()? {
+                    fa.push(m.header().stamp_ns, &m);
+                }
+            }
             while let Some(m) = links_in.receive()? {
-                let Some((body, planar, z)) = link_state(m.header().stamp_ns, &m, link) else {
+                let stamp_ns = m.header().stamp_ns;
+                let Some((body, planar, z)) = link_state(stamp_ns, &m, link) else {
                     continue;
                 };
                 own = Some(planar);
                 if let Some(laser) = laser.as_mut() {
                     laser.set_mount_height(z);
                 }
-                if let Some(r) = imu.as_mut().and_then(|imu| imu.update(&body)) {
+                let force = force_accel
+                    .as_ref()
+                    .and_then(|f| f.specific_force(stamp_ns));
+                if let Some(r) = imu.as_mut().and_then(|imu| imu.update_with(&body, force)) {
                     fresh_imu = Some(r);
                 }
             }

@@ -92,6 +92,33 @@ pub struct Params {
     /// `imu_noise` says.
     #[serde(default)]
     pub imu_errors: Option<crate::imu_errors::ImuErrors>,
+    /// The accelerometer's design: `finite_difference` of the sensor's velocity (the
+    /// reference's, default) or `force_sensor`, a test mass of `imu_test_mass_kg` held by the
+    /// force–torque sensor on fixed joint `imu_force_joint` (give physics
+    /// `force_torque = [that joint]`, and `link` the test mass's link), a = F/m.
+    #[serde(default)]
+    pub imu_accelerometer: Accelerometer,
+    #[serde(default = "default_force_joint")]
+    pub imu_force_joint: String,
+    /// kg, > 0.
+    #[serde(default = "default_test_mass")]
+    pub imu_test_mass_kg: f64,
+}
+
+/// The accelerometer's design.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Accelerometer {
+    #[default]
+    FiniteDifference,
+    ForceSensor,
+}
+
+fn default_force_joint() -> String {
+    "accel_joint".into()
+}
+fn default_test_mass() -> f64 {
+    1.0
 }
 
 fn default_urdf() -> String {
@@ -233,6 +260,14 @@ impl Params {
         non_negative(self.imu_accel_stddev, "imu_accel_stddev")?;
         non_negative(self.imu_gyro_stddev, "imu_gyro_stddev")?;
         non_negative(self.imu_orientation_stddev, "imu_orientation_stddev")?;
+        if self.imu_accelerometer == Accelerometer::ForceSensor {
+            positive(self.imu_test_mass_kg, "imu_test_mass_kg")?;
+            check(self.link.is_some(), "imu_accelerometer", || {
+                "the force-sensor design reads its states from link_states: give `link`, the \
+                 test mass's link"
+                    .into()
+            })?;
+        }
         if let Some(e) = &self.imu_errors {
             e.validate().map_err(|message| ParamError {
                 key: "imu_errors",
@@ -327,6 +362,9 @@ mod tests {
         );
         let e = with("imu_errors", json!({"gyro": {"bias_instabilty": 1e-5}}));
         assert!(e.contains("bias_instabilty"), "{e}");
+        let e = with("imu_accelerometer", json!("force_sensor"));
+        assert!(e.contains("key 'imu_accelerometer'") && e.contains("`link`"), "{e}");
+        assert!(with("imu_accelerometer", json!("spring")).contains("imu_accelerometer"));
     }
 
     #[test]
