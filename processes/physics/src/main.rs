@@ -161,28 +161,27 @@ impl RobotPorts {
         if let Some((_, state)) = &self.wheels {
             state.publish(&sim.wheel_state(i))?;
         }
-        if let Some((_, state)) = &self.joints {
-            let mut m = state.loan()?;
-            messages::joint_state(sim, i, &mut m);
-            m.send()?;
-        }
-        if let Some(p) = &self.links {
-            let mut m = p.loan()?;
-            messages::link_states(sim, i, &mut m);
-            m.send()?;
-        }
-        if let Some(p) = &self.contacts {
-            let mut m = p.loan()?;
-            messages::contacts(sim, i, &mut m);
-            m.send()?;
-        }
-        if let Some(p) = &self.force_torque {
-            let mut m = p.loan()?;
-            messages::force_torque(sim, i, &mut m);
-            m.send()?;
-        }
+        let joints = self.joints.as_ref().map(|(_, p)| p);
+        send_filled(joints, sim, i, messages::joint_state)?;
+        send_filled(self.links.as_ref(), sim, i, messages::link_states)?;
+        send_filled(self.contacts.as_ref(), sim, i, messages::contacts)?;
+        send_filled(self.force_torque.as_ref(), sim, i, messages::force_torque)?;
         Ok(())
     }
+}
+
+/// Loans a message on `out` (if the robot publishes it), has `fill` write robot `i`'s state
+/// into it in shared memory and sends it: the large per-robot messages are never copied.
+fn send_filled<T: caravan_schemas::Message>(
+    out: Option<&Publisher<T>>,
+    sim: &Simulation,
+    i: usize,
+    fill: fn(&Simulation, usize, &mut T),
+) -> Result<(), caravan::Error> {
+    let Some(out) = out else { return Ok(()) };
+    let mut m = out.loan()?;
+    fill(sim, i, &mut m);
+    m.send()
 }
 
 fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {

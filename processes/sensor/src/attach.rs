@@ -77,12 +77,19 @@ mod tests {
   <joint name="fixed" type="fixed"><parent link="a"/><child link="b"/></joint>
   <joint name="hinge" type="continuous"><parent link="a"/><child link="c"/><axis xyz="0 0 1"/></joint>
 </robot>"#;
-        let d = caravan_world::description::parse(urdf, "r.urdf", std::path::Path::new("."))
-            .unwrap();
+        let d =
+            caravan_world::description::parse(urdf, "r.urdf", std::path::Path::new(".")).unwrap();
         assert!(check_force_joint(&d, "fixed").is_ok());
-        assert!(check_force_joint(&d, "hinge").unwrap_err().contains("moves"));
+        assert!(
+            check_force_joint(&d, "hinge")
+                .unwrap_err()
+                .contains("moves")
+        );
         let e = check_force_joint(&d, "wrist").unwrap_err();
-        assert!(e.contains("'imu_force_joint'") && e.contains("no joint named"), "{e}");
+        assert!(
+            e.contains("'imu_force_joint'") && e.contains("no joint named"),
+            "{e}"
+        );
     }
 
     #[test]

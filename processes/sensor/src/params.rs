@@ -363,7 +363,10 @@ mod tests {
         let e = with("imu_errors", json!({"gyro": {"bias_instabilty": 1e-5}}));
         assert!(e.contains("bias_instabilty"), "{e}");
         let e = with("imu_accelerometer", json!("force_sensor"));
-        assert!(e.contains("key 'imu_accelerometer'") && e.contains("`link`"), "{e}");
+        assert!(
+            e.contains("key 'imu_accelerometer'") && e.contains("`link`"),
+            "{e}"
+        );
         assert!(with("imu_accelerometer", json!("spring")).contains("imu_accelerometer"));
     }
 
