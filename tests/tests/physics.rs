@@ -66,6 +66,13 @@ params = {{ robot = 3, count = 4, world = "{world}", urdf = "{mass}", link = "ma
     )
 }
 
+/// Runs the group with `extra` arguments; it must complete.
+fn run_ok(s: &Scenario, extra: &[&str]) {
+    let out = s.run(extra);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+}
+
 /// Recorded messages of `topic`: (log time ns, JSON).
 fn messages(s: &Scenario, topic: &str) -> Vec<(u64, Value)> {
     let bytes = std::fs::read(s.run_dirs()[0].join("record.mcap")).unwrap();
@@ -94,12 +101,7 @@ fn f(v: &Value) -> f64 {
 #[test]
 fn joints_links_contacts_wrenches_and_kinematic_bases_on_topics() {
     let s = Scenario::new("physics-topics", &launch("hand"));
-    let out = s.run(&[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_ok(&s, &[]);
 
     // Joint states: by name, in URDF order, at the commanded positions.
     let states = messages(&s, "robot/0/joint_states");
@@ -210,12 +212,7 @@ fn joints_links_contacts_wrenches_and_kinematic_bases_on_topics() {
 #[test]
 fn an_imu_on_a_link_reads_gravity_in_the_link_frame() {
     let s = Scenario::new("physics-imu", &launch("hand"));
-    let out = s.run(&["--duration", "3s"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_ok(&s, &["--duration", "3s"]);
     // The arm holds still from about 2 s with the hand level (joint angles summing to 0):
     // the IMU, 0.3 m out on the hand, reads +g along the hand's z axis and no rotation.
     let imu = messages(&s, "robot/0/imu");

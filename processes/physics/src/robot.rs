@@ -76,6 +76,9 @@ pub struct RobotSetup<'a> {
     /// Inertia added to each joint's child link about the joint axis (an actuator's rotor
     /// seen through its gear), kg·m²; one per joint.
     pub reflected_inertia: Vec<f64>,
+    /// Fixed joints that carry a force–torque sensor (description indices), from
+    /// [`RobotSpec::sensed_joints`]: not welded.
+    pub sensed: Vec<usize>,
 }
 
 /// Where a robot starts.

@@ -56,9 +56,10 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                 spec.urdf
             ))
         })?;
-        spec.sensed_joints(&d)
+        let sensed = spec
+            .sensed_joints(&d)
             .map_err(|e| SetupError(format!("key '{}{}", key(params, k, ""), &e[1..])))?;
-        check_masses(&d, spec).map_err(|e| {
+        check_masses(&d, spec, &sensed).map_err(|e| {
             SetupError(format!(
                 "robot description (key '{}' = \"{}\"): {e}",
                 key(params, k, "urdf"),
@@ -74,7 +75,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                 ))
             })?;
         }
-        descriptions.push(d);
+        descriptions.push((d, sensed));
     }
 
     // Start poses: each kind's own, else the world's [[start]] poses in robot order.
@@ -118,7 +119,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
 
     let mut builds = Vec::with_capacity(total);
     let mut pose_iter = poses.iter();
-    for (k, (spec, d)) in specs.iter().zip(&descriptions).enumerate() {
+    for (k, (spec, (d, sensed))) in specs.iter().zip(&descriptions).enumerate() {
         // Spec errors start with the quoted key below the robot kind: 'actuators[0]…'.
         let actuators = actuators(spec, d)
             .map_err(|e| SetupError(format!("key '{}{}", key(params, k, ""), &e[1..])))?;
@@ -144,6 +145,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                     spec,
                     pose: start_pose(p),
                     reflected_inertia,
+                    sensed: sensed.clone(),
                 },
                 actuators: actuators.clone(),
                 drive,
@@ -203,8 +205,8 @@ fn start_pose(p: &[f64]) -> StartPose {
 }
 
 /// Every link that moves needs mass: a body of massless links cannot be simulated.
-fn check_masses(d: &RobotDescription, spec: &RobotSpec) -> Result<(), String> {
-    let plan = crate::plan::RobotPlan::with_sensed(d, &spec.sensed_joints(d)?);
+fn check_masses(d: &RobotDescription, spec: &RobotSpec, sensed: &[usize]) -> Result<(), String> {
+    let plan = crate::plan::RobotPlan::with_sensed(d, sensed);
     for (b, body) in plan.bodies.iter().enumerate() {
         let moves = b > 0 || spec.base == crate::spec::Base::Floating && !spec.lifted;
         let massive = body

@@ -177,7 +177,7 @@ fn obstacle_collider(index: usize, o: &Obstacle) -> ColliderBuilder {
 }
 
 /// Builds the scene: the world, then each robot in order.
-pub fn build(world: &World, robots: &[RobotSetup], gravity: f64) -> Result<Scene, String> {
+pub fn build(world: &World, robots: &[&RobotSetup], gravity: f64) -> Result<Scene, String> {
     let mut physics = PhysicsWorld::new();
     physics.gravity = Vector::new(0.0, 0.0, -gravity as Real);
     // Recycled contact pairs keep stale distances; the contact monitor needs current ones,
@@ -264,8 +264,7 @@ fn add_robot(
     r: &RobotSetup,
 ) -> Result<RobotBodies, String> {
     let d = r.description;
-    let sensed = r.spec.sensed_joints(d)?;
-    let plan = RobotPlan::with_sensed(d, &sensed);
+    let plan = RobotPlan::with_sensed(d, &r.sensed);
     let multibody = r.spec.joint_model() == JointModel::Multibody;
     let base = base_pose(r, &plan);
     let friction_of = |l: usize| d.links[l].friction.unwrap_or(DEFAULT_FRICTION);

@@ -49,15 +49,6 @@ impl Simulation {
     /// A simulation of the given robots. Inputs are not checked here; see [`crate::setup`].
     pub fn new(world: &World, builds: Vec<RobotBuild>, cfg: SimConfig) -> Result<Self, String> {
         let setups: Vec<&RobotSetup> = builds.iter().map(|b| &b.setup).collect();
-        let setups: Vec<RobotSetup> = setups
-            .into_iter()
-            .map(|s| RobotSetup {
-                description: s.description,
-                spec: s.spec,
-                pose: s.pose,
-                reflected_inertia: s.reflected_inertia.clone(),
-            })
-            .collect();
         let mut scene = scene::build(world, &setups, cfg.gravity)?;
         scene.physics.integration_parameters.dt = cfg.dt_ns as Real * 1e-9;
         let mut robots = Vec::with_capacity(builds.len());
@@ -90,10 +81,11 @@ impl Simulation {
                 actuators.push(build_actuators[j].take());
             }
             let spec = build.setup.spec;
-            let sensors = spec
-                .sensed_joints(d)?
-                .into_iter()
-                .filter_map(|j| match bodies.joints[j] {
+            let sensors = build
+                .setup
+                .sensed
+                .iter()
+                .filter_map(|&j| match bodies.joints[j] {
                     Some(scene::JointHandle::Impulse(h)) => Some((j, h)),
                     _ => None,
                 })
