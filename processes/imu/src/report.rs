@@ -18,6 +18,9 @@ pub const GYRO_TARGET_RAD_S: f64 = 1e-6;
 /// The plot of the readings, in the run directory.
 pub const PLOT_FILE: &str = "imu.svg";
 
+/// The plot of the two accelerometer designs' vertical readings, when the run has both.
+pub const FORCE_PLOT_FILE: &str = "imu-force-sensor.svg";
+
 /// The test mass of the rejected force-sensor accelerometer, kg (the scenarios' URDFs).
 pub const TEST_MASS_KG: f64 = 1.0;
 
@@ -107,26 +110,34 @@ impl ReportPlugin for ImuReport {
                 }
             })
             .collect();
-        // Where the two designs part: the largest difference at one instant inside the scored
-        // windows, and when.
+        // Where the two designs part: per phase, the largest difference at one instant (the
+        // finite difference measures the body's own motion, so this is the force sensor's
+        // error as a measurement of it), and when.
         let windows = self.scenario.phases(self.mass_kg);
-        let scored = |t: f64| windows.iter().any(|p| t >= p.from_s && t <= p.to_s);
-        let (diff, diff_t) = forced
+        let diffs: Vec<(f64, f64)> = windows
             .iter()
-            .filter(|f| scored(f.t_s))
-            .filter_map(|f| {
-                let r = same_interval(f.t_s)?;
-                let d = (0..3)
-                    .map(|k| (f.accel[k] - r.accel[k]).abs())
-                    .fold(0.0, f64::max);
-                Some((d, f.t_s))
+            .map(|p| {
+                forced
+                    .iter()
+                    .filter(|f| f.t_s >= p.from_s && f.t_s <= p.to_s)
+                    .filter_map(|f| {
+                        let r = same_interval(f.t_s)?;
+                        let d = (0..3)
+                            .map(|k| (f.accel[k] - r.accel[k]).abs())
+                            .fold(0.0, f64::max);
+                        Some((d, f.t_s))
+                    })
+                    .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a })
             })
-            .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
+            .collect();
+        let (diff, diff_t) = diffs
+            .iter()
+            .fold((0.0, 0.0), |a, &b| if b.0 > a.0 { b } else { a });
         let force_phases: Vec<PhaseErrors> = if forced.is_empty() {
             Vec::new()
         } else {
-            let all = self.scenario.phases(self.mass_kg);
-            all.iter().map(|p| score(p, &forced)).collect()
+            force_plot(&run.dir.join(FORCE_PLOT_FILE), &readings, &forced, &windows)?;
+            windows.iter().map(|p| score(p, &forced)).collect()
         };
         let accel = phases
             .iter()
@@ -149,8 +160,10 @@ impl ReportPlugin for ImuReport {
                 "readings": forced.len(),
                 "max_diff_from_finite_difference_m_s2": diff,
                 "max_diff_at_s": diff_t,
+                "max_diff_per_phase_m_s2": diffs.iter().map(|d| d.0).collect::<Vec<_>>(),
                 "test_mass_kg": TEST_MASS_KG,
                 "phases": force_phases,
+                "plot": FORCE_PLOT_FILE,
                 "accel_max_err_m_s2": force_phases
                     .iter()
                     .map(PhaseErrors::accel_max)
@@ -160,15 +173,47 @@ impl ReportPlugin for ImuReport {
         Ok(vec![Section {
             name: "imu".into(),
             json,
-            markdown: markdown(
-                self.scenario.name(),
-                &phases,
-                within,
-                &force_phases,
-                (diff, diff_t),
-            ),
+            markdown: markdown(self.scenario.name(), &phases, within, &force_phases, &diffs),
         }])
     }
+}
+
+/// The vertical specific force of both designs and the ideal one of each phase.
+fn force_plot(
+    path: &std::path::Path,
+    readings: &[Reading],
+    forced: &[Reading],
+    phases: &[crate::scenario::Phase],
+) -> anyhow::Result<()> {
+    use crate::plot::{Series, lines_svg};
+    use crate::scenario::Expect;
+    let z = |rs: &[Reading]| vec![rs.iter().map(|r| (r.t_s, r.accel[2])).collect()];
+    let ideal = phases
+        .iter()
+        .filter_map(|p| match p.accel {
+            Expect::Vector(f) => Some(vec![(p.from_s, f[2]), (p.to_s, f[2])]),
+            Expect::Norm(_) => None,
+        })
+        .collect();
+    lines_svg(
+        path,
+        "The two accelerometer designs: vertical specific force",
+        "f z (m/s²)",
+        &[
+            Series {
+                label: "finite difference",
+                segments: z(readings),
+            },
+            Series {
+                label: "force sensor, F/m",
+                segments: z(forced),
+            },
+            Series {
+                label: "ideal (scored windows)",
+                segments: ideal,
+            },
+        ],
+    )
 }
 
 fn markdown(
@@ -176,7 +221,7 @@ fn markdown(
     phases: &[PhaseErrors],
     within: bool,
     force_phases: &[PhaseErrors],
-    (diff, diff_t): (f64, f64),
+    diffs: &[(f64, f64)],
 ) -> String {
     let mut md = format!(
         "## IMU: {scenario}\n\nEvery reading against its phase's ideal value; targets \
@@ -215,23 +260,22 @@ fn markdown(
         let _ = write!(
             md,
             "\nThe accelerometer the reference study rejected, a {TEST_MASS_KG} kg test mass on a \
-             force sensor (a = F/m):\n\n| phase | readings | max / RMS error f (m/s²) |\n|---|---:|---|\n"
+             force sensor (a = F/m), against the ideal value and against the finite-difference \
+             reading of the same step (the body's own motion):\n\n\
+             | phase | readings | max / RMS error f (m/s²) | max \\|F/m − finite difference\\| (m/s²) | at (s) |\n\
+             |---|---:|---|---|---:|\n"
         );
-        for p in force_phases {
+        for (p, (d, t)) in force_phases.iter().zip(diffs) {
             let rms = p.accel_err_m_s2.iter().map(|s| s.rms).fold(0.0, f64::max);
             let _ = writeln!(
                 md,
-                "| {} | {} | {:.1e} / {rms:.1e} |",
+                "| {} | {} | {:.1e} / {rms:.1e} | {d:.1e} | {t:.3} |",
                 p.phase,
                 p.readings,
                 p.accel_max()
             );
         }
-        let _ = writeln!(
-            md,
-            "\nLargest difference from the finite-difference reading of the same step, in the scored windows: \
-             {diff:.2e} m/s² at {diff_t:.3} s."
-        );
+        let _ = writeln!(md, "\n![The two accelerometer designs]({FORCE_PLOT_FILE})");
     }
     let _ = write!(md, "\n![IMU readings against time]({PLOT_FILE})\n");
     md

@@ -8,8 +8,9 @@
 //!   `start_s` until it is `angle_deg` from level, then holds for `hold_s`. The IMU sits on
 //!   the axis. f = g·(0, sin φ, cos φ), ω = (rate, 0, 0) during the ramp.
 //! - **Lift**: a cube (floating base, the URDF's mass m) rests on the floor, is pushed up by
-//!   `force_n` through its centre of mass from `push_from_s` to `push_to_s`, then falls
-//!   freely. f = (0, 0, g), (0, 0, F/m), then 0; ω = 0.
+//!   `force_n` through its centre of mass from `push_from_s` to `push_to_s`, optionally
+//!   braked by a smaller upward force for a while (`brake`), then falls freely.
+//!   f = (0, 0, g), (0, 0, F/m), (0, 0, F_brake/m), then 0; ω = 0.
 //! - **Rotation**: a platform (kinematic base) turns about the vertical axis through its
 //!   origin at `rate_rad_s`; the IMU sits `radius_m` out along the platform's x axis.
 //!   f = (−ω²r, 0, g) (the centripetal acceleration points to the axis), ω = (0, 0, rate).
@@ -61,6 +62,9 @@ pub enum Scenario {
         push_from_s: f64,
         #[serde(default = "lift_to")]
         push_to_s: f64,
+        /// A braking phase after the push (none by default, as in the reference's lift).
+        #[serde(default)]
+        brake: Option<Brake>,
         /// Free fall scored until this time, s (before the cube lands), > `push_to_s`.
         #[serde(default = "lift_fall_end")]
         fall_end_s: f64,
@@ -94,6 +98,16 @@ pub enum Scenario {
         #[serde(default = "spin_up_end")]
         end_s: f64,
     },
+}
+
+/// A braking phase: an upward force smaller than the weight, so the rising cube slows down.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Brake {
+    /// Upward force, N, > 0.
+    pub force_n: f64,
+    /// How long, s, > 0.
+    pub duration_s: f64,
 }
 
 fn spin_up_urdf() -> String {
@@ -157,7 +171,7 @@ pub enum Command {
     /// Command the bar's joint to its velocity limit ω (the motor then gives its maximum
     /// torque until ω is reached).
     Spin,
-    /// Start an upward push of `force_n` for `duration_s` (sent once).
+    /// Start an upward push of `force_n` for `duration_s` (sent once; it replaces the last).
     Push { force_n: f64, duration_s: f64 },
     /// Nothing to send.
     Idle,
@@ -217,14 +231,21 @@ impl Scenario {
                 push_from_s,
                 push_to_s,
                 fall_end_s,
+                brake,
                 ..
             } => {
                 positive(force_n, "force_n")?;
                 positive(push_from_s, "push_from_s")?;
-                if !(push_to_s > push_from_s && fall_end_s > push_to_s) {
+                if let Some(b) = brake {
+                    positive(b.force_n, "brake.force_n")?;
+                    positive(b.duration_s, "brake.duration_s")?;
+                }
+                let fall_from = self.fall_from_s();
+                if !(push_to_s > push_from_s && fall_end_s > fall_from) {
                     return Err(format!(
-                        "keys 'push_from_s' < 'push_to_s' < 'fall_end_s' must hold, got \
-                         {push_from_s}, {push_to_s}, {fall_end_s}"
+                        "keys 'push_from_s' < 'push_to_s' < 'fall_end_s' (after the brake) \
+                         must hold, got {push_from_s}, {push_to_s}, {fall_end_s} (fall from \
+                         {fall_from})"
                     ));
                 }
             }
@@ -282,6 +303,27 @@ impl Scenario {
         }
     }
 
+    /// The pushes of a lift, in time order: (start s, upward force N, duration s).
+    fn pushes(&self) -> Vec<(f64, f64, f64)> {
+        match *self {
+            Scenario::Lift {
+                force_n,
+                push_from_s,
+                push_to_s,
+                brake,
+                ..
+            } => std::iter::once((push_from_s, force_n, push_to_s - push_from_s))
+                .chain(brake.map(|b| (push_to_s, b.force_n, b.duration_s)))
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// When a lift's free fall begins, s.
+    fn fall_from_s(&self) -> f64 {
+        self.pushes().last().map_or(0.0, |&(from, _, d)| from + d)
+    }
+
     /// How long a run must last to cover every phase, s.
     pub fn duration_s(&self) -> f64 {
         match *self {
@@ -291,8 +333,8 @@ impl Scenario {
         }
     }
 
-    /// What the driver sends at time `t_s`; `pushed` says whether the push was sent.
-    pub fn command(&self, t_s: f64, pushed: bool) -> Command {
+    /// What the driver sends at time `t_s`; `pushed` says how many pushes it has sent.
+    pub fn command(&self, t_s: f64, pushed: usize) -> Command {
         match *self {
             Scenario::Tilt {
                 rate_deg_s,
@@ -302,16 +344,13 @@ impl Scenario {
                 let on = t_s >= start_s && t_s < self.ramp_end();
                 Command::Turn([if on { rate_deg_s.to_radians() } else { 0.0 }, 0.0, 0.0])
             }
-            Scenario::Lift {
-                force_n,
-                push_from_s,
-                push_to_s,
-                ..
-            } if t_s >= push_from_s && !pushed => Command::Push {
-                force_n,
-                duration_s: push_to_s - push_from_s,
+            Scenario::Lift { .. } => match self.pushes().get(pushed) {
+                Some(&(from_s, force_n, duration_s)) if t_s >= from_s => Command::Push {
+                    force_n,
+                    duration_s,
+                },
+                _ => Command::Idle,
             },
-            Scenario::Lift { .. } => Command::Idle,
             Scenario::Rotation { rate_rad_s, .. } => Command::Turn([0.0, 0.0, rate_rad_s]),
             Scenario::SpinUp { start_s, .. } if t_s >= start_s => Command::Spin,
             Scenario::SpinUp { .. } => Command::Idle,
@@ -357,28 +396,29 @@ impl Scenario {
                 ]
             }
             Scenario::Lift {
-                force_n,
                 push_from_s,
-                push_to_s,
                 fall_end_s,
                 ..
-            } => vec![
-                phase("rest", REST_FROM_S, push_from_s, level, [0.0; 3]),
-                phase(
-                    "pushed",
-                    push_from_s + SETTLE_S,
-                    push_to_s,
-                    Expect::Vector([0.0, 0.0, force_n / mass_kg]),
-                    [0.0; 3],
-                ),
-                phase(
+            } => {
+                let mut phases = vec![phase("rest", REST_FROM_S, push_from_s, level, [0.0; 3])];
+                for (k, (from_s, force_n, duration_s)) in self.pushes().into_iter().enumerate() {
+                    phases.push(phase(
+                        if k == 0 { "pushed" } else { "braking" },
+                        from_s + SETTLE_S,
+                        from_s + duration_s,
+                        Expect::Vector([0.0, 0.0, force_n / mass_kg]),
+                        [0.0; 3],
+                    ));
+                }
+                phases.push(phase(
                     "free fall",
-                    push_to_s + SETTLE_S,
+                    self.fall_from_s() + SETTLE_S,
                     fall_end_s,
                     Expect::Vector([0.0; 3]),
                     [0.0; 3],
-                ),
-            ],
+                ));
+                phases
+            }
             Scenario::Rotation {
                 rate_rad_s,
                 radius_m,
@@ -408,12 +448,12 @@ mod tests {
     fn the_tilt_turns_for_angle_over_rate_then_holds_at_the_reference_values() {
         let s = tilt();
         assert_eq!(s.duration_s(), 2.0 + 15.0 + 3.0);
-        assert_eq!(s.command(1.99, false), Command::Turn([0.0; 3]));
+        assert_eq!(s.command(1.99, 0), Command::Turn([0.0; 3]));
         assert_eq!(
-            s.command(2.0, false),
+            s.command(2.0, 0),
             Command::Turn([3f64.to_radians(), 0.0, 0.0])
         );
-        assert_eq!(s.command(17.0, false), Command::Turn([0.0; 3]));
+        assert_eq!(s.command(17.0, 0), Command::Turn([0.0; 3]));
         let held = &s.phases(0.0)[2];
         let Expect::Vector(f) = held.accel else {
             panic!()
@@ -427,18 +467,46 @@ mod tests {
     fn the_lift_pushes_once_and_reads_force_over_mass() {
         let s: Scenario =
             serde_json::from_value(serde_json::json!({ "scenario": "lift" })).unwrap();
-        assert_eq!(s.command(2.4, false), Command::Idle);
+        assert_eq!(s.command(2.4, 0), Command::Idle);
         assert_eq!(
-            s.command(2.5, false),
+            s.command(2.5, 0),
             Command::Push {
                 force_n: 54.05,
                 duration_s: 2.5
             }
         );
-        assert_eq!(s.command(2.6, true), Command::Idle);
+        assert_eq!(s.command(2.6, 1), Command::Idle);
+        assert_eq!(s.command(5.5, 1), Command::Idle);
         let pushed = &s.phases(5.0)[1];
         // The reference: 10.81 m/s² (1.10 g) while pushed.
         assert_eq!(pushed.accel, Expect::Vector([0.0, 0.0, 54.05 / 5.0]));
+    }
+
+    #[test]
+    fn a_brake_follows_the_push_and_delays_the_fall() {
+        let s: Scenario = serde_json::from_value(serde_json::json!({ "scenario": "lift",
+            "brake": { "force_n": 34.05, "duration_s": 0.8 }, "fall_end_s": 6.5 }))
+        .unwrap();
+        s.validate().unwrap();
+        assert_eq!(s.command(4.99, 1), Command::Idle);
+        assert_eq!(
+            s.command(5.0, 1),
+            Command::Push {
+                force_n: 34.05,
+                duration_s: 0.8
+            }
+        );
+        assert_eq!(s.command(5.5, 2), Command::Idle);
+        let names: Vec<_> = s.phases(5.0).iter().map(|p| p.name).collect();
+        assert_eq!(names, ["rest", "pushed", "braking", "free fall"]);
+        let braking = &s.phases(5.0)[2];
+        assert_eq!(braking.accel, Expect::Vector([0.0, 0.0, 34.05 / 5.0]));
+        assert_eq!(s.phases(5.0)[3].from_s, 5.8 + SETTLE_S);
+        // The fall must still be scored after the brake.
+        let late: Scenario = serde_json::from_value(serde_json::json!({ "scenario": "lift",
+            "brake": { "force_n": 34.05, "duration_s": 1.5 } }))
+        .unwrap();
+        assert!(late.validate().unwrap_err().contains("'fall_end_s'"));
     }
 
     #[test]

@@ -41,7 +41,7 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     let cmd_vel = node.publisher(&topics::cmd_vel(0))?;
     let joints = node.publisher(&topics::joint_command(0))?;
     let wrench = node.publisher(&topics::wrench(0))?;
-    let mut pushed = false;
+    let mut pushed = 0;
     let trigger = node.trigger(Trigger::every_hz(100.0))?;
     node.run(trigger, |step| {
         match scenario.command(step.now().as_secs_f64(), pushed) {
@@ -55,7 +55,7 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
                 force_n,
                 duration_s,
             } => {
-                pushed = true;
+                pushed += 1;
                 wrench.publish(&Wrench {
                     link: Name::new("cube"),
                     frame: Wrench::LINK,

@@ -365,7 +365,15 @@ fn add_robot(
         if let Some(j) = &body_plan.joint {
             let joint = &d.joints[j.joint];
             let parent = bodies[j.parent_body];
-            let generic = shapes::joint(joint, &j.frame);
+            let mut generic = shapes::joint(joint, &j.frame);
+            if let Some(m) = r.spec.force_torque_softness
+                && r.sensed.contains(&j.joint)
+            {
+                let _ = generic.set_softness(SpringCoefficients {
+                    natural_frequency: m.natural_frequency_hz as Real,
+                    damping_ratio: m.damping_ratio as Real,
+                });
+            }
             // A sensed fixed joint is an impulse joint even in a multibody: a multibody
             // holds its joints without forces to read.
             joints[j.joint] = Some(if multibody && joint.kind.is_movable() {

@@ -84,3 +84,87 @@ fn a_sensor_on_a_moving_or_missing_joint_is_refused() {
     let e = load(&params("wrist"), &dir, 1_000_000).err().unwrap().0;
     assert!(e.contains("no joint named 'wrist'"), "{e}");
 }
+
+/// The same push on a soft sensor joint (rapier's softness 10 Hz, 0.3; rapier's rigid
+/// default reads 2 N from the first step): the reading lags the load, rising without
+/// overshoot to the 2 N.
+#[test]
+fn a_soft_sensor_joint_lags_the_load() {
+    let mut s = sim(serde_json::json!({
+        "world": "empty.toml", "precision": "f64", "gravity": 0.0,
+        "robots": [{ "urdf": "pushed_mass.urdf", "force_torque": ["sensor_joint"],
+            "force_torque_softness": { "natural_frequency_hz": 10.0, "damping_ratio": 0.3 },
+            "poses": [[2.0, 2.0, 1.0, 0.0, 0.0, 0.0]] }],
+    }));
+    let push = WrenchCommand {
+        link: "cube".into(),
+        in_link_frame: true,
+        point: [0.0, 0.0, 0.15 * 0.2],
+        force: [10.0, 0.0, 0.0],
+        torque: [0.0; 3],
+        duration_s: 0.0,
+    };
+    s.apply_wrench(0, &push).unwrap();
+    let mut readings = Vec::new();
+    for k in 1..=300u64 {
+        s.advance_to(k * 1_000_000, u64::MAX);
+        readings.push(s.force_torque(0)[0].1[0]);
+    }
+    assert!(
+        readings[9] < 1.0,
+        "half the load is not reached in 10 ms: {}",
+        readings[9]
+    );
+    assert!(
+        readings.windows(2).all(|w| w[1] >= w[0] - 1e-9),
+        "rises monotonically"
+    );
+    assert!(readings.iter().all(|r| *r <= 2.0 + 1e-6), "no overshoot");
+    assert!(
+        (readings[299] - 2.0).abs() < 2e-3,
+        "settles: {}",
+        readings[299]
+    );
+}
+
+#[test]
+fn a_bad_softness_is_refused_with_its_key() {
+    let params = |mount: serde_json::Value, ft: &[&str]| {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
+        let parsed = caravan::parse_params::<Params>(
+            "physics",
+            &serde_json::json!({
+                "world": "empty.toml",
+                "robots": [{ "urdf": "pushed_mass.urdf", "force_torque": ft,
+                    "force_torque_softness": mount, "poses": [[2.0, 2.0, 0.0]] }],
+            }),
+        );
+        match parsed {
+            Err(e) => e.to_string(),
+            Ok(p) => load(&p, &dir, 1_000_000).err().unwrap().0,
+        }
+    };
+    let e = params(
+        serde_json::json!({ "natural_frequency_hz": 0.0, "damping_ratio": 0.3 }),
+        &["sensor_joint"],
+    );
+    assert!(
+        e.contains("force_torque_softness.natural_frequency_hz"),
+        "{e}"
+    );
+    let e = params(
+        serde_json::json!({ "natural_frequency_hz": 10.0, "damping_ratio": -1.0 }),
+        &["sensor_joint"],
+    );
+    assert!(e.contains("force_torque_softness.damping_ratio"), "{e}");
+    let e = params(
+        serde_json::json!({ "natural_frequency_hz": 10.0, "damping_ratio": 0.3 }),
+        &[],
+    );
+    assert!(e.contains("'force_torque' names no joint"), "{e}");
+    let e = params(
+        serde_json::json!({ "natural_frequency_hz": 10.0 }),
+        &["sensor_joint"],
+    );
+    assert!(e.contains("damping_ratio"), "{e}");
+}
