@@ -161,3 +161,19 @@ fn on_a_rigid_joint_the_force_sensor_reads_as_the_finite_difference() {
         "{free_fall}"
     );
 }
+
+/// The short Allan check as a group: 600 s of a still platform at 100 Hz with the error model
+/// on; N and B come back within 10 % from the recording (the long runs are in docs/imu.md).
+#[test]
+fn the_allan_deviation_of_a_still_group_recovers_the_error_model() {
+    let imu = run("allan.toml", &["--set", "args.duration=600s"]);
+    assert_eq!(imu["scenario"], "allan", "{imu}");
+    assert!(imu["readings"].as_u64().unwrap() >= 59_000, "{imu}");
+    for t in imu["triads"].as_array().unwrap() {
+        for key in ["noise_density_err_rel", "bias_instability_err_rel"] {
+            let e = t[key].as_f64().unwrap();
+            assert!(e.abs() <= 0.1, "{}: {key} {e}", t["triad"]);
+        }
+    }
+    assert_eq!(imu["within_10_percent"], true);
+}

@@ -69,7 +69,13 @@ pub fn run(errors: &ImuErrors, rate_hz: f64, seconds: f64, seed: u64) -> [TriadR
             gyro.push(r.angular_velocity.x);
         }
     }
-    let clusters = log_clusters(accel.len() / 4, 8);
+    analyse(errors, dt, &accel, &gyro)
+}
+
+/// The Allan deviation of one axis of each triad's static readings, `dt` s apart, and the
+/// noise density and bias instability read off it against `errors`.
+pub fn analyse(errors: &ImuErrors, dt: f64, accel: &[f64], gyro: &[f64]) -> [TriadResult; 2] {
+    let clusters = log_clusters(accel.len().min(gyro.len()) / 4, 8);
     // The flicker bias is flat up to a third of its longest correlation time.
     let tau_max = errors.bias_correlation_s[1] / 3.0;
     let triad = |name, p: &TriadErrors, samples: &[f64]| {
@@ -87,8 +93,8 @@ pub fn run(errors: &ImuErrors, rate_hz: f64, seconds: f64, seed: u64) -> [TriadR
         }
     };
     [
-        triad("accel", &errors.accel, &accel),
-        triad("gyro", &errors.gyro, &gyro),
+        triad("accel", &errors.accel, accel),
+        triad("gyro", &errors.gyro, gyro),
     ]
 }
 

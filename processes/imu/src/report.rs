@@ -21,6 +21,9 @@ pub const PLOT_FILE: &str = "imu.svg";
 /// The plot of the two accelerometer designs' vertical readings, when the run has both.
 pub const FORCE_PLOT_FILE: &str = "imu-force-sensor.svg";
 
+/// The Allan-deviation plot of the `allan` scenario.
+pub const ALLAN_PLOT_FILE: &str = "allan.svg";
+
 /// The test mass of the rejected force-sensor accelerometer, kg (the scenarios' URDFs).
 pub const TEST_MASS_KG: f64 = 1.0;
 
@@ -80,6 +83,9 @@ impl ReportPlugin for ImuReport {
         crate::plot::readings_svg(&run.dir.join(PLOT_FILE), &title, &readings)?;
         if let Some(bar) = &self.bar {
             return Ok(vec![spin_up_section(bar, &readings)?]);
+        }
+        if let Scenario::Allan { imu_errors } = &self.scenario {
+            return Ok(vec![allan_section(imu_errors, &readings, &run.dir)?]);
         }
         let phases: Vec<PhaseErrors> = self
             .scenario
@@ -345,5 +351,72 @@ fn spin_up_section(bar: &Bar, readings: &[Reading]) -> anyhow::Result<Section> {
         name: "imu".into(),
         json,
         markdown,
+    })
+}
+
+/// The Allan section: the x axis of each triad's readings, its Allan deviation, and the noise
+/// density and bias instability read off it against the configured ones. JSON: `{scenario,
+/// readings, seconds, rate_hz, triads: [TriadResult], within_10_percent, plot}`.
+fn allan_section(
+    errors: &caravan_sensor::imu_errors::ImuErrors,
+    readings: &[Reading],
+    dir: &std::path::Path,
+) -> anyhow::Result<Section> {
+    let step_s = readings
+        .windows(2)
+        .map(|w| w[1].t_s - w[0].t_s)
+        .fold(f64::INFINITY, f64::min);
+    if readings.len() < 1000 || !step_s.is_finite() || step_s <= 0.0 {
+        anyhow::bail!(
+            "the Allan check needs at least 1000 evenly spaced IMU readings, got {}",
+            readings.len()
+        );
+    }
+    let accel: Vec<f64> = readings.iter().map(|r| r.accel[0]).collect();
+    let gyro: Vec<f64> = readings.iter().map(|r| r.gyro[0]).collect();
+    let triads = crate::allan_run::analyse(errors, step_s, &accel, &gyro);
+    crate::plot::allan_svg(&dir.join(ALLAN_PLOT_FILE), &triads)?;
+    let within = triads
+        .iter()
+        .all(|t| t.noise_density_err_rel.abs() <= 0.1 && t.bias_instability_err_rel.abs() <= 0.1);
+    let seconds = readings.len() as f64 * step_s;
+    let json = serde_json::json!({
+        "scenario": "allan",
+        "readings": readings.len(),
+        "seconds": seconds,
+        "rate_hz": 1.0 / step_s,
+        "bias_correlation_s": errors.bias_correlation_s,
+        "triads": triads,
+        "within_10_percent": within,
+        "plot": ALLAN_PLOT_FILE,
+    });
+    let mut md = format!(
+        "## IMU: Allan deviation\n\n{} static readings over {seconds:.0} s at {:.0} Hz, x axis \
+         of each triad; flicker correlation {:?} s. Both parameters within 10 %: **{}**.\n\n\
+         | triad | noise density N: configured / read off | error | bias instability B: configured / read off | error |\n\
+         |---|---|---:|---|---:|\n",
+        readings.len(),
+        1.0 / step_s,
+        errors.bias_correlation_s,
+        if within { "yes" } else { "no" }
+    );
+    for t in &triads {
+        let _ = writeln!(
+            md,
+            "| {} | {:.4e} / {:.4e} | {:+.1} % | {:.4e} / {:.4e} | {:+.1} % |",
+            t.triad,
+            t.noise_density,
+            t.noise_density_estimated,
+            100.0 * t.noise_density_err_rel,
+            t.bias_instability,
+            t.bias_instability_estimated,
+            100.0 * t.bias_instability_err_rel
+        );
+    }
+    let _ = write!(md, "\n![Allan deviation]({ALLAN_PLOT_FILE})\n");
+    Ok(Section {
+        name: "imu".into(),
+        json,
+        markdown: md,
     })
 }

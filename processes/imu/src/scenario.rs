@@ -15,6 +15,9 @@
 //!   origin at `rate_rad_s`; the IMU sits `radius_m` out along the platform's x axis.
 //!   f = (−ω²r, 0, g) (the centripetal acceleration points to the axis), ω = (0, 0, rate).
 //!
+//! - **Allan**: a platform held still with the IMU's error model `imu_errors` on; the report
+//!   reads the noise density and bias instability off the readings' Allan deviation.
+//!
 //! The kinematic platforms follow the commanded velocities exactly, so the readings measure
 //! the IMU, not a controller's tracking.
 
@@ -81,6 +84,11 @@ pub enum Scenario {
         from_s: f64,
         #[serde(default = "rotation_end")]
         end_s: f64,
+    },
+    Allan {
+        /// The sensor's error model, as its `imu_errors` param (the configured values the
+        /// report recovers).
+        imu_errors: caravan_sensor::imu_errors::ImuErrors,
     },
     SpinUp {
         /// The bar and its motor, one row of the reference's table: the joint's
@@ -269,6 +277,18 @@ impl Scenario {
                     ));
                 }
             }
+            Scenario::Allan { ref imu_errors } => {
+                imu_errors
+                    .validate()
+                    .map_err(|e| format!("key 'imu_errors': {e}"))?;
+                if imu_errors.accel.noise_density <= 0.0 || imu_errors.gyro.noise_density <= 0.0 {
+                    return Err(
+                        "key 'imu_errors': the Allan check needs a noise_density > 0 \
+                                on both triads"
+                            .into(),
+                    );
+                }
+            }
             Scenario::SpinUp { start_s, end_s, .. } => {
                 if !(start_s >= 0.0 && end_s > start_s) {
                     return Err(format!(
@@ -287,6 +307,7 @@ impl Scenario {
             Scenario::Lift { .. } => "lift",
             Scenario::Rotation { .. } => "rotation",
             Scenario::SpinUp { .. } => "spinup",
+            Scenario::Allan { .. } => "allan",
         }
     }
 
@@ -330,6 +351,8 @@ impl Scenario {
             Scenario::Tilt { hold_s, .. } => self.ramp_end() + hold_s,
             Scenario::Lift { fall_end_s, .. } => fall_end_s,
             Scenario::Rotation { end_s, .. } | Scenario::SpinUp { end_s, .. } => end_s,
+            // As long as the group runs.
+            Scenario::Allan { .. } => f64::INFINITY,
         }
     }
 
@@ -353,7 +376,7 @@ impl Scenario {
             },
             Scenario::Rotation { rate_rad_s, .. } => Command::Turn([0.0, 0.0, rate_rad_s]),
             Scenario::SpinUp { start_s, .. } if t_s >= start_s => Command::Spin,
-            Scenario::SpinUp { .. } => Command::Idle,
+            Scenario::SpinUp { .. } | Scenario::Allan { .. } => Command::Idle,
         }
     }
 
@@ -431,7 +454,7 @@ impl Scenario {
                 Expect::Vector([-rate_rad_s * rate_rad_s * radius_m, 0.0, G]),
                 [0.0, 0.0, rate_rad_s],
             )],
-            Scenario::SpinUp { .. } => Vec::new(),
+            Scenario::SpinUp { .. } | Scenario::Allan { .. } => Vec::new(),
         }
     }
 }
@@ -519,6 +542,20 @@ mod tests {
         // The reference: radial 0.4626 m/s² (ω²r), gyro Z π/4 = 0.7854 rad/s.
         assert!((f[0] + 0.4626).abs() < 1e-4 && f[2] == G);
         assert_eq!(s.phases(0.0)[0].gyro[2], std::f64::consts::FRAC_PI_4);
+    }
+
+    #[test]
+    fn the_allan_check_needs_white_noise_on_both_triads() {
+        let allan = |gyro_nd: f64| {
+            serde_json::from_value::<Scenario>(serde_json::json!({ "scenario": "allan",
+                "imu_errors": { "accel": { "noise_density": 1e-3 },
+                                "gyro": { "noise_density": gyro_nd } } }))
+            .unwrap()
+            .validate()
+        };
+        assert!(allan(1e-4).is_ok());
+        assert!(allan(0.0).unwrap_err().contains("noise_density"));
+        assert!(allan(-1.0).unwrap_err().contains("'imu_errors'"));
     }
 
     #[test]
