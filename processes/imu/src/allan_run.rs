@@ -44,6 +44,26 @@ pub struct TriadResult {
     pub adev: Vec<(f64, f64)>,
 }
 
+impl TriadResult {
+    /// The configured and read-off values with their errors, as table cells:
+    /// `[triad, N configured / read off, N error, B configured / read off, B error]`.
+    pub fn cells(&self) -> [String; 5] {
+        [
+            self.triad.to_string(),
+            format!(
+                "{:.4e} / {:.4e}",
+                self.noise_density, self.noise_density_estimated
+            ),
+            format!("{:+.1} %", 100.0 * self.noise_density_err_rel),
+            format!(
+                "{:.4e} / {:.4e}",
+                self.bias_instability, self.bias_instability_estimated
+            ),
+            format!("{:+.1} %", 100.0 * self.bias_instability_err_rel),
+        ]
+    }
+}
+
 /// Reads a static IMU with `errors` at `rate_hz` for `seconds`; seeded by `seed`.
 pub fn run(errors: &ImuErrors, rate_hz: f64, seconds: f64, seed: u64) -> [TriadResult; 2] {
     let dt_ns = (1e9 / rate_hz).round() as u64;

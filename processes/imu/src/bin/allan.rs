@@ -48,17 +48,9 @@ fn main() -> ExitCode {
         eprintln!("caravan-imu-allan: {e}");
         return ExitCode::FAILURE;
     }
+    println!("triad  N configured / read off, error   B configured / read off, error");
     for t in &triads {
-        println!(
-            "{:5}  N {:.4e} → {:.4e} ({:+.1} %)   B {:.4e} → {:.4e} ({:+.1} %)",
-            t.triad,
-            t.noise_density,
-            t.noise_density_estimated,
-            100.0 * t.noise_density_err_rel,
-            t.bias_instability,
-            t.bias_instability_estimated,
-            100.0 * t.bias_instability_err_rel
-        );
+        println!("{}", t.cells().join("  "));
     }
     ExitCode::SUCCESS
 }

@@ -10,6 +10,18 @@ fn sim(params: serde_json::Value) -> Simulation {
     load(&params, &dir, 1_000_000).unwrap()
 }
 
+/// A 10 N push along the cube's x, above its centre, until replaced.
+fn push_10_n() -> WrenchCommand {
+    WrenchCommand {
+        link: "cube".into(),
+        in_link_frame: true,
+        point: [0.0, 0.0, 0.15 * 0.2],
+        force: [10.0, 0.0, 0.0],
+        torque: [0.0; 3],
+        duration_s: 0.0,
+    }
+}
+
 fn close(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {
     (0..3).all(|k| (a[k] - b[k]).abs() <= tol)
 }
@@ -45,15 +57,7 @@ fn a_pushed_body_accelerates_its_test_mass_through_the_sensor() {
         "robots": [{ "urdf": "pushed_mass.urdf", "force_torque": ["sensor_joint"],
             "poses": [[2.0, 2.0, 1.0, 0.0, 0.0, 0.0]] }],
     }));
-    let push = WrenchCommand {
-        link: "cube".into(),
-        in_link_frame: true,
-        point: [0.0, 0.0, 0.15 * 0.2],
-        force: [10.0, 0.0, 0.0],
-        torque: [0.0; 3],
-        duration_s: 0.0,
-    };
-    s.apply_wrench(0, &push).unwrap();
+    s.apply_wrench(0, &push_10_n()).unwrap();
     s.advance_to(200_000_000, u64::MAX);
     let (_, force, _) = s.force_torque(0)[0];
     assert!(close(force, [2.0, 0.0, 0.0], 1e-6), "{force:?}");
@@ -96,15 +100,7 @@ fn a_soft_sensor_joint_lags_the_load() {
             "force_torque_softness": { "natural_frequency_hz": 10.0, "damping_ratio": 0.3 },
             "poses": [[2.0, 2.0, 1.0, 0.0, 0.0, 0.0]] }],
     }));
-    let push = WrenchCommand {
-        link: "cube".into(),
-        in_link_frame: true,
-        point: [0.0, 0.0, 0.15 * 0.2],
-        force: [10.0, 0.0, 0.0],
-        torque: [0.0; 3],
-        duration_s: 0.0,
-    };
-    s.apply_wrench(0, &push).unwrap();
+    s.apply_wrench(0, &push_10_n()).unwrap();
     let mut readings = Vec::new();
     for k in 1..=300u64 {
         s.advance_to(k * 1_000_000, u64::MAX);
