@@ -857,6 +857,10 @@ class topics:
     def force_torque(i: int) -> str:
         return f"robot/{i}/force_torque"
 
+    @staticmethod
+    def ground_truth(i: int) -> str:
+        return f"robot/{i}/ground_truth"
+
 
 class lockstep:
     """The lockstep protocol's constants, as `caravan_schemas::lockstep`."""

@@ -333,6 +333,7 @@ pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
     contacts,
     wrench,
     force_torque,
+    ground_truth,
 ];
 
 /// Alignment of a field's element: a scalar's size, or a described struct's alignment.

@@ -97,6 +97,11 @@ pub fn contacts(i: usize) -> Topic<Contacts> {
 pub fn force_torque(i: usize) -> Topic<ForceTorques> {
     robot(i, "force_torque")
 }
+/// Robot `i`'s true 3-D pose and velocity (`robot/i/ground_truth`), as Gazebo's p3d plugin:
+/// base_link in the map frame, twist in the map frame.
+pub fn ground_truth(i: usize) -> Topic<Odometry> {
+    robot(i, "ground_truth")
+}
 /// Forces applied to robot `i`'s links (`robot/i/wrench`).
 pub fn wrench(i: usize) -> Topic<Wrench> {
     robot(i, "wrench")
@@ -132,6 +137,7 @@ mod tests {
         check::<Contacts>(contacts(3), "robot/3/contacts");
         check::<Wrench>(wrench(3), "robot/3/wrench");
         check::<ForceTorques>(force_torque(3), "robot/3/force_torque");
+        check::<Odometry>(ground_truth(3), "robot/3/ground_truth");
         assert_eq!(scan(0).name(), "robot/0/scan");
     }
 

@@ -14,8 +14,8 @@ use caravan::{Node, NodeIdentity, Publisher, Subscriber, Trigger};
 use caravan_physics::messages::{self, CommandReader};
 use caravan_physics::{Params, Simulation};
 use caravan_schemas::{
-    Contacts, ForceTorques, JointCommand, JointState, LinkStates, Pose2D, Twist, WheelSetpoint,
-    WheelState, Wrench, topics,
+    Contacts, ForceTorques, JointCommand, JointState, LinkStates, Odometry, Pose2D, Twist,
+    WheelSetpoint, WheelState, Wrench, topics,
 };
 use std::process::ExitCode;
 use std::time::Duration;
@@ -82,6 +82,7 @@ struct RobotPorts {
     links: Option<Publisher<LinkStates>>,
     contacts: Option<Publisher<Contacts>>,
     force_torque: Option<Publisher<ForceTorques>>,
+    ground_truth: Option<Publisher<Odometry>>,
     cmd_vel: Option<Subscriber<Twist>>,
     wrench: Subscriber<Wrench>,
 }
@@ -109,6 +110,9 @@ impl RobotPorts {
         let force_torque = out
             .force_torque
             .then(|| node.publisher(&topics::force_torque(i)));
+        let ground_truth = out
+            .ground_truth
+            .then(|| node.publisher(&topics::ground_truth(i)));
         Ok(Self {
             pose: node.publisher(&topics::pose_true(i))?,
             twist: node.publisher(&topics::twist_true(i))?,
@@ -117,6 +121,7 @@ impl RobotPorts {
             links: links.transpose()?,
             contacts: contacts.transpose()?,
             force_torque: force_torque.transpose()?,
+            ground_truth: ground_truth.transpose()?,
             cmd_vel: cmd_vel.transpose()?,
             wrench: node.subscriber(&topics::wrench(i))?,
         })
@@ -160,6 +165,14 @@ impl RobotPorts {
         self.twist.publish(&sim.twist(i))?;
         if let Some((_, state)) = &self.wheels {
             state.publish(&sim.wheel_state(i))?;
+        }
+        if let Some(p) = &self.ground_truth {
+            let (pose, twist) = sim.ground_truth(i);
+            p.publish(&Odometry {
+                pose,
+                twist,
+                ..Odometry::default()
+            })?;
         }
         let joints = self.joints.as_ref().map(|(_, p)| p);
         send_filled(joints, sim, i, messages::joint_state)?;

@@ -42,6 +42,8 @@ pub struct Outputs {
     pub cmd_vel: bool,
     /// `force_torque`: the robot has force–torque sensors.
     pub force_torque: bool,
+    /// `ground_truth`: base_link's 3-D pose and velocity.
+    pub ground_truth: bool,
 }
 
 impl Outputs {
@@ -53,6 +55,7 @@ impl Outputs {
             self.link_states,
             self.contacts,
             self.force_torque,
+            self.ground_truth,
         ]
         .iter()
         .filter(|on| **on)

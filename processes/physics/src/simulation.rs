@@ -88,6 +88,8 @@ impl Simulation {
         fn base_height(&self, i: usize) -> f64;
         /// Ground-truth velocity of robot `i`'s base, map frame.
         fn twist(&self, i: usize) -> Twist;
+        /// Pose and twist (map frame) of robot `i`'s root link.
+        fn ground_truth(&self, i: usize) -> (Pose3D, Twist);
         /// Pose (world frame) and twist of every link of robot `i`, in description order.
         fn link_states(&self, i: usize) -> Vec<(Pose3D, Twist)>;
         /// Robot `i`'s wheels; zero without a differential drive on DC motors.

@@ -189,6 +189,13 @@ pub struct RobotSpec {
     /// (ERP/CFM) solve every joint, and the force read lags each change of load.
     #[serde(default)]
     pub force_torque_softness: Option<Softness>,
+    /// Let the robot's links touch each other (those not joined by a joint). Default: no,
+    /// as Gazebo's `<self_collide>`; rows of overlapping wheels need it off.
+    #[serde(default)]
+    pub self_collide: bool,
+    /// Publish `robot/i/ground_truth` (base_link's 3-D pose and velocity, map frame).
+    #[serde(default)]
+    pub ground_truth: bool,
     /// Publish `robot/i/link_states` (every link's pose and velocity).
     #[serde(default)]
     pub link_states: bool,
@@ -402,6 +409,8 @@ impl RobotSpec {
             joint_states: Some(false),
             force_torque: Vec::new(),
             force_torque_softness: None,
+            self_collide: false,
+            ground_truth: false,
             link_states: false,
             contacts: false,
         }

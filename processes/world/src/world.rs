@@ -76,6 +76,9 @@ pub struct World {
     /// Floor extent from the origin, m.
     pub size: [f64; 2],
     pub obstacles: Vec<Obstacle>,
+    /// Friction coefficient of the walls, boxes and cylinders, ≥ 0 (default 0.5). A robot's
+    /// part grips with the smaller of this and its own.
+    pub friction: f64,
     /// Surface-to-surface distances to check maps against (the reference's map-scale test).
     pub surveys: Vec<Survey>,
     /// Start poses `[x, y, yaw]` of robot 0, 1, …
@@ -141,6 +144,15 @@ struct Header {
     size: [f64; 2],
     #[serde(default = "default_height")]
     wall_height: f64,
+    #[serde(default = "default_friction")]
+    friction: f64,
+}
+
+/// Friction of obstacles when the world file gives none.
+pub const DEFAULT_FRICTION: f64 = 0.5;
+
+fn default_friction() -> f64 {
+    DEFAULT_FRICTION
 }
 
 fn default_height() -> f64 {
@@ -203,6 +215,12 @@ pub fn parse_world(text: &str) -> Result<World, String> {
     positive("world.size[1]".into(), f.world.size[1])?;
     positive("world.wall_height".into(), f.world.wall_height)?;
     let h = f.world.wall_height;
+    if !(f.world.friction.is_finite() && f.world.friction >= 0.0) {
+        return Err(format!(
+            "world.friction must be zero or positive, got {}",
+            f.world.friction
+        ));
+    }
     let mut obstacles = Vec::new();
     for (i, w) in f.wall.iter().enumerate() {
         let (dx, dy) = (w.to[0] - w.from[0], w.to[1] - w.from[1]);
@@ -249,6 +267,7 @@ pub fn parse_world(text: &str) -> Result<World, String> {
         name: f.world.name,
         size: f.world.size,
         obstacles,
+        friction: f.world.friction,
         surveys: Vec::new(),
         starts: f.start.iter().map(|s| s.pose).collect(),
         goals: f.goal,

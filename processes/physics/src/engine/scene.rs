@@ -70,6 +70,26 @@ impl Part {
     }
 }
 
+/// The contact filter of robots whose links must not touch each other (`self_collide =
+/// false`, the default, as in Gazebo): a pair of colliders of the same robot makes no
+/// contact. Only those robots' colliders ask for it (rapier's `FILTER_CONTACT_PAIRS`), so
+/// other pairs never reach it.
+pub struct NoSelfContacts;
+
+impl PhysicsHooks for NoSelfContacts {
+    fn filter_contact_pair(&self, c: &PairFilterContext) -> Option<SolverFlags> {
+        let robot = |h: ColliderHandle| {
+            c.colliders
+                .get(h)
+                .and_then(|col| Part::decode(col.user_data).robot())
+        };
+        match (robot(c.collider1), robot(c.collider2)) {
+            (Some(a), Some(b)) if a == b => None,
+            _ => Some(SolverFlags::default()),
+        }
+    }
+}
+
 /// Collision groups: who may touch whom.
 mod groups {
     use super::super::rapier::prelude::{Group, InteractionGroups, InteractionTestMode};
@@ -113,9 +133,6 @@ pub const LIFT_HEIGHT: f64 = 0.1;
 /// Friction of a robot surface whose URDF gives no `<gazebo><mu1>`.
 pub const DEFAULT_FRICTION: f64 = 0.5;
 
-/// Friction of obstacles. Robot parts combine with `Min`, so their own coefficients decide.
-const OBSTACLE_FRICTION: Real = 0.5;
-
 /// How a robot's joint is solved in rapier.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum JointHandle {
@@ -157,7 +174,7 @@ fn v(x: f64, y: f64, z: f64) -> Vector {
     Vector::new(x as Real, y as Real, z as Real)
 }
 
-fn obstacle_collider(index: usize, o: &Obstacle) -> ColliderBuilder {
+fn obstacle_collider(index: usize, o: &Obstacle, friction: f64) -> ColliderBuilder {
     let half_h = o.height / 2.0;
     let centre = v(o.center[0], o.center[1], half_h);
     let builder = match o.shape {
@@ -171,7 +188,7 @@ fn obstacle_collider(index: usize, o: &Obstacle) -> ColliderBuilder {
     };
     builder
         .translation(centre)
-        .friction(OBSTACLE_FRICTION)
+        .friction(friction as Real)
         .collision_groups(groups::WORLD_GROUPS)
         .user_data(Part::Obstacle(index).encode())
 }
@@ -204,7 +221,7 @@ pub fn build(world: &World, robots: &[&RobotSetup], gravity: f64) -> Result<Scen
         .obstacles
         .iter()
         .enumerate()
-        .map(|(i, o)| physics.insert_collider(obstacle_collider(i, o), None))
+        .map(|(i, o)| physics.insert_collider(obstacle_collider(i, o, world.friction), None))
         .collect();
 
     let mut out = Vec::with_capacity(robots.len());
@@ -268,6 +285,11 @@ fn add_robot(
     let multibody = r.spec.joint_model() == JointModel::Multibody;
     let base = base_pose(r, &plan);
     let friction_of = |l: usize| d.links[l].friction.unwrap_or(DEFAULT_FRICTION);
+    let self_filter = if r.spec.self_collide {
+        ActiveHooks::empty()
+    } else {
+        ActiveHooks::FILTER_CONTACT_PAIRS
+    };
 
     let mut bodies: Vec<RigidBodyHandle> = Vec::with_capacity(plan.bodies.len());
     let mut world_poses: Vec<Pose> = Vec::with_capacity(plan.bodies.len());
@@ -321,6 +343,7 @@ fn add_robot(
                     } else {
                         groups::BODY_GROUPS
                     })
+                    .active_hooks(self_filter)
                     .user_data(part.encode());
                 builder = match (&inertial, k) {
                     (Some(i), 0) => builder.mass_properties(shapes::mass_properties(

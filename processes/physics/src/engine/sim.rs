@@ -92,6 +92,7 @@ impl Simulation {
                 .collect();
             let outputs = Outputs {
                 force_torque: !spec.force_torque.is_empty(),
+                ground_truth: spec.ground_truth,
                 wheels: build.drive.is_some(),
                 joint_states: spec.joint_states.unwrap_or(!joints.is_empty()),
                 link_states: spec.link_states,
@@ -222,7 +223,9 @@ impl Simulation {
             }
         }
         self.loads.apply(bodies);
-        self.scene.physics.step();
+        self.scene
+            .physics
+            .step_with_events(&scene::NoSelfContacts, &());
         self.time_ns += self.cfg.dt_ns;
         let bodies = &self.scene.physics.bodies;
         let multibodies = &self.scene.physics.multibody_joints;
@@ -312,6 +315,12 @@ impl Simulation {
                 (p3, twist_of(body.velocity_at_point(origin), body.angvel()))
             })
             .collect()
+    }
+
+    /// Pose (map frame) and twist (map frame) of robot `i`'s root link.
+    pub fn ground_truth(&self, i: usize) -> (caravan_schemas::Pose3D, Twist) {
+        let root = self.robots[i].description.root;
+        self.link_states(i).swap_remove(root)
     }
 
     /// Robot `i`'s wheels: angles, speeds relative to the chassis, voltages. Zero for a robot
