@@ -8,6 +8,8 @@
 //! - **Velocity**: τ = kp·(ω* − ω) + ki·∫(ω* − ω)dt.
 //! - **Position**: τ = kp·(q* − q) + ki·∫(q* − q)dt + kd·(ω* − ω) + τ_ff, as ros2_control's
 //!   effort-interface PID.
+//! - **Motor**: rapier's velocity motor, solved with the contacts: no explicit torque; the
+//!   effort is the motor's impulse over the step.
 //! - **Effort**: τ = τ*.
 //!
 //! Every loop runs every physics step on the state measured after the previous step, so the
@@ -110,6 +112,9 @@ pub enum Control {
         kd: f64,
         integral: f64,
     },
+    Motor {
+        damping: f64,
+    },
     Effort,
 }
 
@@ -140,6 +145,7 @@ impl Actuator {
                 kd: *kd,
                 integral: 0.0,
             },
+            ActuatorSpec::Motor { damping, .. } => Control::Motor { damping: *damping },
             ActuatorSpec::Effort { .. } => Control::Effort,
             ActuatorSpec::None { .. } => return None,
         };
@@ -195,6 +201,8 @@ impl Actuator {
                 m.output = motor::torque(&m.motor, m.pid.output(), m.speed);
                 bound(m.output.torque)
             }
+            // The engine sets the motor ([`Self::motor`]) and reads its effort back.
+            Control::Motor { .. } => return 0.0,
             Control::Effort => bound(effort_ff),
             Control::Velocity { kp, ki, integral } => {
                 let target = or(t.velocity, 0.0).clamp(-l.velocity, l.velocity);
@@ -228,6 +236,22 @@ impl Actuator {
         };
         self.effort = tau;
         tau
+    }
+
+    /// A motor's speed target (clamped to the joint's limit; none commanded: hold still),
+    /// its damping and its maximum effort; `None` for other actuators.
+    pub fn motor(&self) -> Option<(f64, f64, f64)> {
+        let Control::Motor { damping } = self.control else {
+            return None;
+        };
+        let l = self.limits;
+        let v = self.target.velocity;
+        let v = if v.is_nan() {
+            0.0
+        } else {
+            v.clamp(-l.velocity, l.velocity)
+        };
+        Some((v, damping, l.effort))
     }
 
     /// After the step: a DC motor integrates the joint speed into its angle.

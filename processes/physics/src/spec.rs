@@ -95,12 +95,26 @@ pub enum ActuatorSpec {
         #[serde(default = "default_position_kd")]
         kd: f64,
     },
+    /// rapier's velocity motor on the joint, solved with the contacts (implicitly, as
+    /// Gazebo's velocity-controlled joints under ODE): it holds the target speed with at most
+    /// the URDF's effort, stable at any step for however light the link. Takes velocity
+    /// targets.
+    Motor {
+        joints: Vec<String>,
+        /// rapier's motor damping (acceleration-based), 1/s, > 0: how hard the speed error
+        /// is corrected; large is stiff.
+        #[serde(default = "default_motor_damping")]
+        damping: f64,
+    },
     /// The commanded effort, bounded by the URDF's.
     Effort { joints: Vec<String> },
     /// A passive joint: no actuator (the default for every joint).
     None { joints: Vec<String> },
 }
 
+fn default_motor_damping() -> f64 {
+    1000.0
+}
 fn default_velocity_kp() -> f64 {
     1.0
 }
@@ -116,6 +130,7 @@ impl ActuatorSpec {
         match self {
             ActuatorSpec::DcMotor { joints, .. }
             | ActuatorSpec::Velocity { joints, .. }
+            | ActuatorSpec::Motor { joints, .. }
             | ActuatorSpec::Position { joints, .. }
             | ActuatorSpec::Effort { joints }
             | ActuatorSpec::None { joints } => joints,
@@ -129,6 +144,12 @@ impl ActuatorSpec {
                 return pid.validate();
             }
             ActuatorSpec::Velocity { kp, ki, .. } => &[("kp", *kp), ("ki", *ki)],
+            ActuatorSpec::Motor { damping, .. } => {
+                if !(damping.is_finite() && *damping > 0.0) {
+                    return Err(format!("damping must be positive, got {damping}"));
+                }
+                &[]
+            }
             ActuatorSpec::Position { kp, ki, kd, .. } => &[("kp", *kp), ("ki", *ki), ("kd", *kd)],
             ActuatorSpec::Effort { .. } | ActuatorSpec::None { .. } => &[],
         };

@@ -82,7 +82,7 @@ pub fn empty_world() -> World {
         name: "empty".into(),
         size: [10.0, 10.0],
         obstacles: Vec::new(),
-        friction: caravan_world::world::DEFAULT_FRICTION,
+        friction: None,
         surveys: Vec::new(),
         starts: Vec::new(),
         goals: Vec::new(),

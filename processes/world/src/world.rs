@@ -76,9 +76,10 @@ pub struct World {
     /// Floor extent from the origin, m.
     pub size: [f64; 2],
     pub obstacles: Vec<Obstacle>,
-    /// Friction coefficient of the walls, boxes and cylinders, ≥ 0 (default 0.5). A robot's
-    /// part grips with the smaller of this and its own.
-    pub friction: f64,
+    /// Friction coefficient of the floor, walls, boxes and cylinders, ≥ 0; a robot's part
+    /// grips with the smaller of this and its own. `None`: obstacles 0.5 and a floor that
+    /// leaves the grip to the robot's parts ([`DEFAULT_FRICTION`], [`FREE_FLOOR_FRICTION`]).
+    pub friction: Option<f64>,
     /// Surface-to-surface distances to check maps against (the reference's map-scale test).
     pub surveys: Vec<Survey>,
     /// Start poses `[x, y, yaw]` of robot 0, 1, …
@@ -144,16 +145,14 @@ struct Header {
     size: [f64; 2],
     #[serde(default = "default_height")]
     wall_height: f64,
-    #[serde(default = "default_friction")]
-    friction: f64,
+    friction: Option<f64>,
 }
 
 /// Friction of obstacles when the world file gives none.
 pub const DEFAULT_FRICTION: f64 = 0.5;
-
-fn default_friction() -> f64 {
-    DEFAULT_FRICTION
-}
+/// Friction of the floor when the world file gives none: high, so that each robot part's
+/// own coefficient decides its grip.
+pub const FREE_FLOOR_FRICTION: f64 = 10.0;
 
 fn default_height() -> f64 {
     0.3
@@ -215,11 +214,10 @@ pub fn parse_world(text: &str) -> Result<World, String> {
     positive("world.size[1]".into(), f.world.size[1])?;
     positive("world.wall_height".into(), f.world.wall_height)?;
     let h = f.world.wall_height;
-    if !(f.world.friction.is_finite() && f.world.friction >= 0.0) {
-        return Err(format!(
-            "world.friction must be zero or positive, got {}",
-            f.world.friction
-        ));
+    if let Some(mu) = f.world.friction
+        && !(mu.is_finite() && mu >= 0.0)
+    {
+        return Err(format!("world.friction must be zero or positive, got {mu}"));
     }
     let mut obstacles = Vec::new();
     for (i, w) in f.wall.iter().enumerate() {

@@ -26,6 +26,8 @@ pub struct JointIo {
     /// The multibody joint, when the robot is a multibody: its generalized velocity is the
     /// joint speed (rapier does not keep the link bodies' velocities in step with it).
     pub multibody: Option<MultibodyJointHandle>,
+    /// The impulse joint, when it is one (for a motor actuator).
+    pub impulse: Option<ImpulseJointHandle>,
     /// Position and speed after the last step.
     pub reading: JointReading,
 }
@@ -63,8 +65,60 @@ impl JointIo {
             axis: j.axis,
             axis1,
             multibody: None,
+            impulse: None,
             reading: JointReading::default(),
         }
+    }
+
+    /// The rapier axis the joint moves along.
+    fn motor_axis(&self) -> JointAxis {
+        if self.kind == JointKind::Prismatic {
+            JointAxis::LinX
+        } else {
+            JointAxis::AngX
+        }
+    }
+
+    /// The joint's rapier data, impulse or multibody.
+    fn data_mut<'a>(
+        &self,
+        impulse: &'a mut ImpulseJointSet,
+        multibody: &'a mut MultibodyJointSet,
+    ) -> Option<&'a mut GenericJoint> {
+        if let Some(h) = self.impulse {
+            return impulse.get_mut(h, true).map(|j| &mut j.data);
+        }
+        let (mb, id) = multibody.get_mut(self.multibody?)?;
+        mb.link_mut(id).map(|l| &mut l.joint.data)
+    }
+
+    /// Sets rapier's velocity motor: target speed, damping, maximum effort.
+    pub fn set_motor(
+        &self,
+        impulse: &mut ImpulseJointSet,
+        multibody: &mut MultibodyJointSet,
+        (speed, damping, max_effort): (f64, f64, f64),
+    ) {
+        let axis = self.motor_axis();
+        if let Some(data) = self.data_mut(impulse, multibody) {
+            let _ = data
+                .set_motor_model(axis, MotorModel::ForceBased)
+                .set_motor_velocity(axis, speed as Real, damping as Real)
+                .set_motor_max_force(axis, max_effort as Real);
+        }
+    }
+
+    /// The effort rapier's motor applied over the last step, N·m or N: its last substep's
+    /// impulse times the substeps, over the step.
+    pub fn motor_effort(
+        &self,
+        impulse: &mut ImpulseJointSet,
+        multibody: &mut MultibodyJointSet,
+        per_second: f64,
+    ) -> f64 {
+        let axis = self.motor_axis() as usize;
+        self.data_mut(impulse, multibody)
+            .map_or(0.0, |d| d.motors[axis].impulse as f64 * per_second)
     }
 
     /// The joint axis in the world frame.

@@ -26,6 +26,7 @@ use crate::plan::RobotPlan;
 use crate::robot::{Overlap, RobotSetup, StartPose};
 use crate::spec::{Base, JointModel};
 use caravan_world::description::{Geometry, RobotDescription};
+use caravan_world::world::{self as world_file, FREE_FLOOR_FRICTION};
 use caravan_world::{Obstacle, Shape, World};
 
 /// What a collider belongs to, stored in its `user_data` so contacts can be classified.
@@ -211,8 +212,9 @@ pub fn build(world: &World, robots: &[&RobotSetup], gravity: f64) -> Result<Scen
     physics.insert_collider(
         ColliderBuilder::cuboid((sx / 2.0 + 1.0) as Real, (sy / 2.0 + 1.0) as Real, 0.05)
             .translation(v(sx / 2.0, sy / 2.0, -0.05))
-            // Robot parts combine with `Min`, so their own coefficients decide their grip.
-            .friction(10.0)
+            // Robot parts combine with `Min`: unless the world says, their own coefficients
+            // decide their grip.
+            .friction(world.friction.unwrap_or(FREE_FLOOR_FRICTION) as Real)
             .collision_groups(groups::FLOOR_GROUPS)
             .user_data(Part::Floor.encode()),
         None,
@@ -221,7 +223,10 @@ pub fn build(world: &World, robots: &[&RobotSetup], gravity: f64) -> Result<Scen
         .obstacles
         .iter()
         .enumerate()
-        .map(|(i, o)| physics.insert_collider(obstacle_collider(i, o, world.friction), None))
+        .map(|(i, o)| {
+            let mu = world.friction.unwrap_or(world_file::DEFAULT_FRICTION);
+            physics.insert_collider(obstacle_collider(i, o, mu), None)
+        })
         .collect();
 
     let mut out = Vec::with_capacity(robots.len());
@@ -326,13 +331,31 @@ fn add_robot(
                 i.inertia += shapes::axis_inertia(&i.origin, &axis, j);
             }
             let wheel = plan.wheels[*link];
+            let fixed = r.spec.base == Base::Fixed && body_plan.joint.is_none();
+            // Several primitives on a link (a gear's rim and teeth) make one compound
+            // collider: one broad-phase entry instead of one per part.
+            if let Some(shape) = shapes::compound(&l.collisions, link_pose, fixed) {
+                let mut builder = ColliderBuilder::new(shape)
+                    .friction(friction_of(*link) as Real)
+                    .friction_combine_rule(CoefficientCombineRule::Min)
+                    .collision_groups(groups::BODY_GROUPS)
+                    .active_hooks(self_filter)
+                    .user_data(part.encode());
+                builder = match &inertial {
+                    Some(i) => builder.mass_properties(shapes::mass_properties(
+                        i,
+                        &nalgebra::Isometry3::identity(),
+                        link_pose,
+                    )),
+                    None => builder.density(0.0),
+                };
+                colliders.push(physics.insert_collider(builder, Some(handle)));
+                continue;
+            }
             for (k, c) in l.collisions.iter().enumerate() {
                 let at = link_pose * c.origin;
-                let shape = shapes::shape(
-                    &c.geometry,
-                    r.spec.base == Base::Fixed && body_plan.joint.is_none(),
-                )
-                .map_err(|e| format!("link '{}' of {}: {e}", l.name, d.file))?;
+                let shape = shapes::shape(&c.geometry, fixed)
+                    .map_err(|e| format!("link '{}' of {}: {e}", l.name, d.file))?;
                 let is_rim = wheel && matches!(c.geometry, Geometry::Cylinder { .. });
                 let mut builder = ColliderBuilder::new(shape)
                     .position(shapes::collider_pose(&c.geometry, &at))

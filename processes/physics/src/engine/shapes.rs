@@ -7,7 +7,7 @@
 //! quarter turn to 7 digits), which keeps the colliders of the usual wheel exactly aligned.
 
 use super::rapier::prelude::*;
-use caravan_world::description::{Geometry, Inertial};
+use caravan_world::description::{Collision, Geometry, Inertial};
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 
 /// Axes closer than this to a body axis are snapped onto it, rad.
@@ -56,6 +56,33 @@ pub fn collider_iso(geometry: &Geometry, at: &Isometry3<f64>) -> Isometry3<f64> 
 /// The collider pose for `geometry` placed at `at`.
 pub fn collider_pose(geometry: &Geometry, at: &Isometry3<f64>) -> Pose {
     pose(&collider_iso(geometry, at))
+}
+
+/// One compound shape of a link's collisions, in its body's frame (the link at `link_pose`),
+/// when it has several and all are primitives; `None` otherwise (one collider each).
+pub fn compound(
+    collisions: &[Collision],
+    link_pose: &Isometry3<f64>,
+    fixed: bool,
+) -> Option<SharedShape> {
+    if collisions.len() < 2
+        || collisions
+            .iter()
+            .any(|c| matches!(c.geometry, Geometry::Mesh(_)))
+    {
+        return None;
+    }
+    let parts = collisions
+        .iter()
+        .map(|c| {
+            let at = link_pose * c.origin;
+            Some((
+                collider_pose(&c.geometry, &at),
+                shape(&c.geometry, fixed).ok()?,
+            ))
+        })
+        .collect::<Option<Vec<_>>>()?;
+    Some(SharedShape::compound(parts))
 }
 
 /// The rapier shape. Meshes become their convex hull on moving bodies and a triangle mesh

@@ -72,8 +72,10 @@ impl Simulation {
                     bodies.bodies[body],
                     plan.frame,
                 );
-                if let Some(scene::JointHandle::Multibody(h)) = bodies.joints[j] {
-                    io.multibody = Some(h);
+                match bodies.joints[j] {
+                    Some(scene::JointHandle::Multibody(h)) => io.multibody = Some(h),
+                    Some(scene::JointHandle::Impulse(h)) => io.impulse = Some(h),
+                    None => {}
                 }
                 io.read(&scene.physics.bodies, &scene.physics.multibody_joints);
                 index_of[j] = joints.len();
@@ -197,7 +199,8 @@ impl Simulation {
     /// Advances by one physics step.
     pub fn step(&mut self) {
         let dt = self.cfg.dt_ns as f64 * 1e-9;
-        let bodies = &mut self.scene.physics.bodies;
+        let physics = &mut self.scene.physics;
+        let bodies = &mut physics.bodies;
         for (r, rb) in self.robots.iter_mut().zip(&self.scene.robots) {
             for a in r.actuators.iter_mut().flatten() {
                 a.firmware_tick(self.time_ns);
@@ -209,6 +212,11 @@ impl Simulation {
             }
             for (io, a) in r.joints.iter().zip(&mut r.actuators) {
                 if let Some(a) = a {
+                    if let Some(motor) = a.motor() {
+                        let joints = &mut physics.impulse_joints;
+                        io.set_motor(joints, &mut physics.multibody_joints, motor);
+                        continue;
+                    }
                     let tau = a.torque(io.reading, dt);
                     io.push(bodies, tau, &mut self.loads);
                 }
@@ -227,13 +235,18 @@ impl Simulation {
             .physics
             .step_with_events(&scene::NoSelfContacts, &());
         self.time_ns += self.cfg.dt_ns;
-        let bodies = &self.scene.physics.bodies;
-        let multibodies = &self.scene.physics.multibody_joints;
+        let physics = &mut self.scene.physics;
+        let per_second = physics.integration_parameters.num_solver_iterations as f64 / dt;
         for r in &mut self.robots {
             for (io, a) in r.joints.iter_mut().zip(&mut r.actuators) {
-                io.read(bodies, multibodies);
+                io.read(&physics.bodies, &physics.multibody_joints);
                 if let Some(a) = a {
                     a.after_step(io.reading.velocity, dt);
+                    if a.motor().is_some() {
+                        let joints = &mut physics.impulse_joints;
+                        a.effort =
+                            io.motor_effort(joints, &mut physics.multibody_joints, per_second);
+                    }
                 }
             }
         }

@@ -38,7 +38,7 @@ pub fn room(wall_x: Option<f64>) -> World {
         name: "room".into(),
         size: [4.0, 4.0],
         obstacles,
-        friction: caravan_world::world::DEFAULT_FRICTION,
+        friction: None,
         surveys: Vec::new(),
         starts: Vec::new(),
         goals: Vec::new(),

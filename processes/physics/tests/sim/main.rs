@@ -11,3 +11,4 @@ mod force_torque;
 mod lab;
 mod precision;
 mod step_response;
+mod tracks;

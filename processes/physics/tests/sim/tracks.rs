@@ -1,0 +1,102 @@
+//! What rows of overlapping wheels need: no contacts between a robot's own links, rapier's
+//! velocity motors on the wheels, a world's own friction.
+
+use caravan_physics::actuator::Target;
+use caravan_physics::{Params, Simulation, load};
+use std::path::Path;
+
+fn sim(robot: serde_json::Value, dt_ns: u64) -> Simulation {
+    let params: Params = caravan::parse_params(
+        "physics",
+        &serde_json::json!({ "world": "empty.toml", "substeps": 1, "robots": [robot] }),
+    )
+    .unwrap();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
+    load(&params, &dir, dt_ns).unwrap()
+}
+
+/// Every wheel at `speed` rad/s.
+fn spin(s: &mut Simulation, speed: f64) {
+    let targets = vec![
+        Target {
+            velocity: speed,
+            ..Target::default()
+        };
+        s.joints(0).count()
+    ];
+    s.set_targets(0, &targets);
+}
+
+#[test]
+fn overlapping_wheels_on_motors_roll_the_robot_at_their_rim_speed() {
+    let mut s = sim(
+        serde_json::json!({ "urdf": "overlap.urdf", "joints": "impulse",
+            "poses": [[1.0, 2.0, 0.0]], "actuators": [{ "type": "motor", "joints": ["*"] }] }),
+        2_000_000,
+    );
+    spin(&mut s, 4.0);
+    s.advance_to(3_000_000_000, u64::MAX);
+    let x0 = s.pose(0).x;
+    s.advance_to(5_000_000_000, u64::MAX);
+    // 4 rad/s × 5 cm: 0.2 m/s, so 0.4 m in the last 2 s.
+    let moved = s.pose(0).x - x0;
+    assert!((moved - 0.4).abs() < 0.02, "moved {moved} m");
+    assert!(s.twist(0).angular.y.abs() < 0.05, "rolls level");
+    for (name, _, speed, effort) in s.joints(0) {
+        assert!((speed - 4.0).abs() < 0.05, "{name}: {speed} rad/s");
+        assert!(
+            effort.abs() <= 5.0,
+            "{name}: {effort} N·m within the URDF's limit"
+        );
+    }
+}
+
+/// Contacts between one robot's own links: none by default, the overlapping rims' with
+/// `self_collide = true`.
+#[test]
+fn a_robots_own_links_touch_only_with_self_collide() {
+    for self_collide in [false, true] {
+        let mut s = sim(
+            serde_json::json!({ "urdf": "overlap.urdf", "joints": "impulse",
+                "self_collide": self_collide, "contacts": true, "poses": [[1.0, 2.0, 0.0]] }),
+            2_000_000,
+        );
+        s.advance_to(100_000_000, u64::MAX);
+        let own = s
+            .contact_points(0)
+            .iter()
+            .filter(|c| c.other_robot == 0)
+            .count();
+        assert_eq!(
+            own > 0,
+            self_collide,
+            "{own} contacts between its own links"
+        );
+    }
+}
+
+#[test]
+fn a_motor_holds_a_light_wheel_at_its_speed_with_a_long_step() {
+    // A 40 g wheel on a fixed stand, 10 ms steps: an explicit speed loop strong enough to
+    // drive a robot would ring; the motor is solved with the step.
+    let mut s = sim(
+        serde_json::json!({ "urdf": "overlap.urdf", "base": "fixed", "joints": "impulse",
+            "poses": [[1.0, 2.0, 0.5, 0.0, 0.0, 0.0]],
+            "actuators": [{ "type": "motor", "joints": ["*"], "damping": 1000.0 }] }),
+        10_000_000,
+    );
+    spin(&mut s, 10.0);
+    s.advance_to(1_000_000_000, u64::MAX);
+    for (name, _, speed, effort) in s.joints(0) {
+        assert!((speed - 10.0).abs() < 1e-3, "{name}: {speed}");
+        assert!(
+            effort.abs() < 0.1,
+            "{name}: nothing to push against: {effort}"
+        );
+    }
+    // Past the URDF's velocity limit the target is clamped to it.
+    spin(&mut s, 50.0);
+    s.advance_to(3_000_000_000, u64::MAX);
+    let (_, _, speed, _) = s.joints(0).next().unwrap();
+    assert!((speed - 20.0).abs() < 1e-3, "{speed}");
+}
