@@ -74,6 +74,7 @@ pub fn simulation(
         dt_ns: cfg.dt_ns,
         gravity: 9.81,
         precision: crate::params::Precision::F32,
+        solver_iterations: crate::robot::SOLVER_ITERATIONS,
     };
     Simulation::new(world, builds, sim_cfg).expect("the convoy robot builds")
 }

@@ -44,6 +44,10 @@ pub struct Params {
     pub poses: Vec<[f64; 3]>,
     /// Physics steps per node step (100 Hz node × 5 = 500 Hz physics by default).
     pub substeps: u32,
+    /// rapier's solver iterations (substeps of its TGS solver) per physics step, 1–64.
+    /// The default 8 suits the convoy's light wheels on impulse joints; a multibody robot
+    /// (exact joints) often needs 2.
+    pub solver_iterations: usize,
     /// Hold every chassis in the air so the wheels spin freely: the motor bench test.
     pub lifted: bool,
     /// Friction coefficient between wheels and floor.
@@ -65,6 +69,7 @@ impl Default for Params {
             count: 5,
             poses: Vec::new(),
             substeps: 5,
+            solver_iterations: crate::robot::SOLVER_ITERATIONS,
             lifted: false,
             wheel_friction: 1.0,
             motor: MotorParams::default(),
@@ -172,6 +177,12 @@ impl Params {
             return Err(format!(
                 "key 'substeps': must be between 1 and 100, got {}",
                 self.substeps
+            ));
+        }
+        if !(1..=64).contains(&self.solver_iterations) {
+            return Err(format!(
+                "key 'solver_iterations': must be between 1 and 64, got {}",
+                self.solver_iterations
             ));
         }
         Ok(())

@@ -156,6 +156,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
         dt_ns,
         gravity: params.gravity,
         precision: params.precision,
+        solver_iterations: params.solver_iterations,
     };
     let sim = Simulation::new(&world, builds, cfg).map_err(SetupError)?;
     let topics: usize = 1

@@ -23,7 +23,7 @@ use super::rapier::parry::query::intersection_test;
 use super::rapier::prelude::*;
 use super::shapes;
 use crate::plan::RobotPlan;
-use crate::robot::{Overlap, RobotSetup, StartPose};
+use crate::robot::{Overlap, RobotSetup, SimConfig, StartPose};
 use crate::spec::{Base, JointModel};
 use caravan_world::description::{Geometry, RobotDescription};
 use caravan_world::world::{self as world_file, FREE_FLOOR_FRICTION};
@@ -113,13 +113,6 @@ mod groups {
     pub const TYRE_GROUPS: InteractionGroups = g(TYRE, FLOOR);
 }
 
-/// Solver iterations (substeps of rapier's soft-TGS solver) per physics step. With rapier's
-/// default of 4 and a 2 ms step, the convoy robot's light wheel (40 g) chatters between its
-/// joint and the floor under the 1.4 kg chassis: its speed jitters by 0.06 rad/s rms about
-/// the rolling speed. With 8 the jitter is 0.004 rad/s, as with 4 at a 1 ms step, for a
-/// third more compute than 4 and two thirds less than halving the step.
-pub const SOLVER_ITERATIONS: usize = 8;
-
 /// Natural frequency of contacts with fixed colliders (floor, walls), Hz; rapier's default
 /// is 60. rapier sizes a contact's stiffness by the masses of the two bodies it joins, which
 /// for a tyre is the 40 g wheel alone, not the 1.5 kg robot it carries through its joint. At
@@ -195,13 +188,13 @@ fn obstacle_collider(index: usize, o: &Obstacle, friction: f64) -> ColliderBuild
 }
 
 /// Builds the scene: the world, then each robot in order.
-pub fn build(world: &World, robots: &[&RobotSetup], gravity: f64) -> Result<Scene, String> {
+pub fn build(world: &World, robots: &[&RobotSetup], cfg: &SimConfig) -> Result<Scene, String> {
     let mut physics = PhysicsWorld::new();
-    physics.gravity = Vector::new(0.0, 0.0, -gravity as Real);
+    physics.gravity = Vector::new(0.0, 0.0, -cfg.gravity as Real);
     // Recycled contact pairs keep stale distances; the contact monitor needs current ones,
     // and a small scene barely benefits from recycling.
     physics.integration_parameters.contact_recycling = false;
-    physics.integration_parameters.num_solver_iterations = SOLVER_ITERATIONS;
+    physics.integration_parameters.num_solver_iterations = cfg.solver_iterations;
     physics
         .integration_parameters
         .static_contact_softness

@@ -49,7 +49,7 @@ impl Simulation {
     /// A simulation of the given robots. Inputs are not checked here; see [`crate::setup`].
     pub fn new(world: &World, builds: Vec<RobotBuild>, cfg: SimConfig) -> Result<Self, String> {
         let setups: Vec<&RobotSetup> = builds.iter().map(|b| &b.setup).collect();
-        let mut scene = scene::build(world, &setups, cfg.gravity)?;
+        let mut scene = scene::build(world, &setups, &cfg)?;
         scene.physics.integration_parameters.dt = cfg.dt_ns as Real * 1e-9;
         let mut robots = Vec::with_capacity(builds.len());
         for (i, build) in builds.into_iter().enumerate() {
