@@ -1,0 +1,158 @@
+//! `caravan-tracked-drive`: the tracked robot's differential-drive controller (see
+//! `caravan_tracked::diff_drive`). Every step it takes the latest `robot/i/cmd_vel` (forward
+//! speed and turn rate, body frame), limits it, and sends every wheel joint of a side the
+//! same speed on `robot/i/joint_command`, with the flippers' angle; it integrates wheel
+//! odometry from `robot/i/joint_states` onto `robot/i/odometry`. Params: `robot`, `urdf`,
+//! `flipper_angle_rad`, `limits` (see the crate docs). Give it `rate = "50Hz"`.
+
+use caravan::{Node, NodeIdentity, Trigger};
+use caravan_schemas::{
+    JointCommand, JointState, JointValue, Name, Odometry, Quaternion, Twist, Vector3, topics,
+};
+use caravan_tracked::diff_drive::{DiffDrive, DriveLimits, WheelOdometry, circumscribed_radius};
+use caravan_world::description::{JointKind, load_description};
+use serde::Deserialize;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    caravan::node_main("caravan-tracked-drive", setup, run)
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Params {
+    /// The robot's index.
+    #[serde(default)]
+    robot: usize,
+    /// Its description: continuous joints named `left_…` and `right_…` are the sides' wheels;
+    /// revolute joints named `…flipper_joint` the flippers.
+    urdf: String,
+    /// The flippers' angle, rad (negative raises their tips).
+    #[serde(default)]
+    flipper_angle_rad: f64,
+    #[serde(default)]
+    limits: DriveLimits,
+}
+
+struct Ready {
+    robot: usize,
+    limits: DriveLimits,
+    left: Vec<String>,
+    right: Vec<String>,
+    flippers: Vec<String>,
+    flipper_angle_rad: f64,
+}
+
+fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
+    if !p.flipper_angle_rad.is_finite() {
+        return Err("key 'flipper_angle_rad': must be a number".into());
+    }
+    let d = load_description(&identity.resolve_path(&p.urdf))
+        .map_err(|e| format!("key 'urdf': robot description {e}"))?;
+    let named = |kind: JointKind, test: &dyn Fn(&str) -> bool| -> Vec<String> {
+        d.joints
+            .iter()
+            .filter(|j| j.kind == kind && test(&j.name))
+            .map(|j| j.name.clone())
+            .collect()
+    };
+    let left = named(JointKind::Continuous, &|n| n.starts_with("left_"));
+    let right = named(JointKind::Continuous, &|n| n.starts_with("right_"));
+    if left.is_empty() || right.is_empty() {
+        return Err(format!(
+            "key 'urdf': {} has no continuous joints named left_… and right_… (the wheels)",
+            d.file
+        ));
+    }
+    let mut limits = p.limits;
+    if limits.wheel_radius_m == 0.0 {
+        let first = d.joint(&left[0]).map(|j| d.joints[j].child);
+        limits.wheel_radius_m = first.map_or(0.0, |c| circumscribed_radius(&d.links[c]));
+    }
+    limits
+        .validate()
+        .map_err(|e| e.replace("key '", "key 'limits."))?;
+    Ok(Ready {
+        robot: p.robot,
+        limits,
+        left,
+        right,
+        flippers: named(JointKind::Revolute, &|n| n.ends_with("flipper_joint")),
+        flipper_angle_rad: p.flipper_angle_rad,
+    })
+}
+
+/// Mean position of the named joints in a joint-state message, rad.
+fn mean_angle(state: &JointState, names: &[String]) -> f64 {
+    let sum: f64 = names
+        .iter()
+        .filter_map(|n| state.get(n).map(|j| j.position))
+        .sum();
+    sum / names.len() as f64
+}
+
+fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
+    let cmd_vel = node.subscriber(&topics::cmd_vel(r.robot))?;
+    let joint_states = node.subscriber(&topics::joint_states(r.robot))?;
+    let command = node.publisher(&topics::joint_command(r.robot))?;
+    let odometry = node.publisher(&topics::odometry(r.robot))?;
+    let trigger = node.trigger(Trigger::every_hz(50.0))?;
+    let (mut drive, mut odom) = (DiffDrive::default(), WheelOdometry::default());
+    let mut last_s = None;
+    node.run(trigger, |step| {
+        let now_s = step.now().as_secs_f64();
+        let dt = last_s.map_or(0.0, |t| now_s - t);
+        last_s = Some(now_s);
+        let (v, w) = cmd_vel
+            .latest()?
+            .map_or((0.0, 0.0), |m| (m.linear.x, m.angular.z));
+        let (left, right) = drive.update(&r.limits, v, w, dt);
+        let mut cmd = caravan_schemas::placement_new::<JointCommand>();
+        let wheels = r
+            .left
+            .iter()
+            .map(|n| (n, left))
+            .chain(r.right.iter().map(|n| (n, right)));
+        for (name, speed) in wheels {
+            let _ = cmd.joints.push(JointValue {
+                name: Name::new(name),
+                position: f64::NAN,
+                velocity: speed,
+                effort: f64::NAN,
+            });
+        }
+        for name in &r.flippers {
+            let _ = cmd.joints.push(JointValue {
+                name: Name::new(name),
+                position: r.flipper_angle_rad,
+                velocity: 0.0,
+                effort: f64::NAN,
+            });
+        }
+        command.publish(&cmd)?;
+        if let Some(state) = joint_states.latest()? {
+            let (l, rr) = (mean_angle(&state, &r.left), mean_angle(&state, &r.right));
+            odom.update(&r.limits, l, rr, dt);
+            let mut out = Odometry::default();
+            out.pose.position = Vector3 {
+                x: odom.x_m,
+                y: odom.y_m,
+                z: 0.0,
+            };
+            out.pose.orientation = Quaternion::from_yaw(odom.yaw_rad);
+            out.twist = Twist {
+                linear: Vector3 {
+                    x: odom.v_m_s,
+                    ..Vector3::default()
+                },
+                angular: Vector3 {
+                    z: odom.w_rad_s,
+                    ..Vector3::default()
+                },
+            };
+            odometry.publish(&out)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}

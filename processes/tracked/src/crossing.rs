@@ -1,0 +1,112 @@
+//! One crossing's outcome from the robot's true 3-D pose over time, as the reference's
+//! passability runs count them: **passed** (its base reached the goal line without tipping
+//! over), **flipped** (it tipped past [`FLIP_TILT_DEG`] at any time) or **stuck** (neither,
+//! by the end of the run).
+
+use serde::Serialize;
+
+/// Tilt of the body's up axis from the vertical beyond which the robot counts as flipped,
+/// degrees (on its side or worse; chosen).
+pub const FLIP_TILT_DEG: f64 = 90.0;
+
+/// One ground-truth sample: time s, position m (map), orientation quaternion (x, y, z, w).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    pub t_s: f64,
+    pub position: [f64; 3],
+    pub orientation: [f64; 4],
+}
+
+impl Sample {
+    /// Angle between the body's z axis and the world's, degrees.
+    pub fn tilt_deg(&self) -> f64 {
+        let [x, y, z, w] = self.orientation;
+        // The body z axis' world z component: 1 − 2(x² + y²) for a unit quaternion.
+        let n = x * x + y * y + z * z + w * w;
+        let up = 1.0 - 2.0 * (x * x + y * y) / n;
+        up.clamp(-1.0, 1.0).acos().to_degrees()
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Outcome {
+    Passed,
+    Stuck,
+    Flipped,
+}
+
+/// What a crossing did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Crossing {
+    pub outcome: Outcome,
+    /// When the base crossed the goal line, s (passed only).
+    pub passed_at_s: Option<f64>,
+    /// Furthest x the base reached, m.
+    pub max_x_m: f64,
+    /// Largest tilt, degrees.
+    pub max_tilt_deg: f64,
+    /// Highest the base rose above its start, m.
+    pub max_climb_m: f64,
+}
+
+/// Classifies a run's samples (time order) against the goal line x = `goal_x_m`.
+pub fn classify(samples: &[Sample], goal_x_m: f64) -> Option<Crossing> {
+    let first = samples.first()?;
+    let mut c = Crossing {
+        outcome: Outcome::Stuck,
+        passed_at_s: None,
+        max_x_m: f64::NEG_INFINITY,
+        max_tilt_deg: 0.0,
+        max_climb_m: 0.0,
+    };
+    for s in samples {
+        c.max_x_m = c.max_x_m.max(s.position[0]);
+        c.max_tilt_deg = c.max_tilt_deg.max(s.tilt_deg());
+        c.max_climb_m = c.max_climb_m.max(s.position[2] - first.position[2]);
+        if c.outcome == Outcome::Stuck {
+            if s.tilt_deg() > FLIP_TILT_DEG {
+                c.outcome = Outcome::Flipped;
+            } else if s.position[0] >= goal_x_m {
+                c.outcome = Outcome::Passed;
+                c.passed_at_s = Some(s.t_s);
+            }
+        }
+    }
+    Some(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(t_s: f64, x: f64, pitch_deg: f64) -> Sample {
+        let (s, c) = (pitch_deg.to_radians() / 2.0).sin_cos();
+        Sample {
+            t_s,
+            position: [x, 0.0, 0.1],
+            orientation: [0.0, s, 0.0, c],
+        }
+    }
+
+    #[test]
+    fn tilt_is_the_angle_of_the_body_up_axis() {
+        assert!(at(0.0, 0.0, 0.0).tilt_deg().abs() < 1e-9);
+        assert!((at(0.0, 0.0, 30.0).tilt_deg() - 30.0).abs() < 1e-9);
+        assert!((at(0.0, 0.0, 180.0).tilt_deg() - 180.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn outcomes() {
+        let passed = classify(&[at(0.0, 1.0, 0.0), at(1.0, 5.1, 20.0)], 5.0).unwrap();
+        assert_eq!(passed.outcome, Outcome::Passed);
+        assert_eq!(passed.passed_at_s, Some(1.0));
+        let stuck = classify(&[at(0.0, 1.0, 0.0), at(1.0, 3.0, 40.0)], 5.0).unwrap();
+        assert_eq!(stuck.outcome, Outcome::Stuck);
+        assert_eq!(stuck.max_x_m, 3.0);
+        // Tipping over first counts, even if the body later slides past the line.
+        let flipped = classify(&[at(0.0, 3.0, 100.0), at(1.0, 5.5, 170.0)], 5.0).unwrap();
+        assert_eq!(flipped.outcome, Outcome::Flipped);
+        assert!(classify(&[], 5.0).is_none());
+    }
+}

@@ -1,0 +1,102 @@
+//! The `tracked` report section: the crossing's outcome (see [`crate::crossing`]), how far
+//! and how fast the robot went, from the recorded `robot/0/ground_truth`.
+//!
+//! JSON: `{goal_x_m, outcome, passed_at_s, max_x_m, max_tilt_deg, max_climb_m,
+//! top_speed_m_s, samples}`.
+
+use crate::crossing::{Sample, classify};
+use caravan_report::{Inputs, ReportPlugin, Run, Section};
+use serde::Deserialize;
+
+/// The ground-truth topic of the scenario's robot.
+pub const TRUTH_TOPIC: &str = "robot/0/ground_truth";
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// The goal line: the run passes when the base's x reaches it, m.
+    pub goal_x_m: f64,
+}
+
+/// The samples thinned to one per `every_s`: `[t, x, y, z, tilt]`.
+fn track(samples: &[Sample], every_s: f64) -> Vec<[f64; 5]> {
+    let mut next = f64::NEG_INFINITY;
+    let mut out = Vec::new();
+    for s in samples {
+        if s.t_s >= next {
+            let [x, y, z] = s.position;
+            out.push([s.t_s, x, y, z, s.tilt_deg()]);
+            next = s.t_s + every_s - 1e-9;
+        }
+    }
+    out
+}
+
+pub struct TrackedReport {
+    params: Params,
+}
+
+impl ReportPlugin for TrackedReport {
+    type Params = Params;
+
+    fn new(params: Params, _: &Inputs) -> Result<Self, String> {
+        if !params.goal_x_m.is_finite() {
+            return Err(format!(
+                "key 'goal_x_m': must be a number, got {}",
+                params.goal_x_m
+            ));
+        }
+        Ok(Self { params })
+    }
+
+    fn sections(&self, run: &Run) -> anyhow::Result<Vec<Section>> {
+        let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+        let mut samples = Vec::new();
+        let mut top_speed: f64 = 0.0;
+        for m in run.messages()?.iter().filter(|m| m.topic == TRUTH_TOPIC) {
+            let p = &m.json["pose"]["position"];
+            let q = &m.json["pose"]["orientation"];
+            let v = &m.json["twist"]["linear"];
+            top_speed = top_speed.max(num(&v["x"]).hypot(num(&v["y"])));
+            samples.push(Sample {
+                t_s: m.stamp_ns() as f64 * 1e-9,
+                position: [num(&p["x"]), num(&p["y"]), num(&p["z"])],
+                orientation: [num(&q["x"]), num(&q["y"]), num(&q["z"]), num(&q["w"])],
+            });
+        }
+        let c = classify(&samples, self.params.goal_x_m).ok_or_else(|| {
+            anyhow::anyhow!(
+                "no ground truth on {TRUTH_TOPIC} in the recording (physics `ground_truth = true`)"
+            )
+        })?;
+        let json = serde_json::json!({
+            "goal_x_m": self.params.goal_x_m,
+            "outcome": c.outcome,
+            "passed_at_s": c.passed_at_s,
+            "max_x_m": c.max_x_m,
+            "max_tilt_deg": c.max_tilt_deg,
+            "max_climb_m": c.max_climb_m,
+            "top_speed_m_s": top_speed,
+            "samples": samples.len(),
+            // Every 0.1 s: [t s, x, y, z m, tilt °], for plots and the terrain picture.
+            "track": track(&samples, 0.1),
+        });
+        let markdown = format!(
+            "## Tracked robot: crossing\n\nOutcome **{:?}** (goal line x = {} m{}). Furthest x \
+             {:.3} m, highest climb {:.3} m, largest tilt {:.1}°, top speed {:.3} m/s.\n",
+            c.outcome,
+            self.params.goal_x_m,
+            c.passed_at_s
+                .map_or(String::new(), |t| format!(", reached at {t:.2} s")),
+            c.max_x_m,
+            c.max_climb_m,
+            c.max_tilt_deg,
+            top_speed
+        );
+        Ok(vec![Section {
+            name: "tracked".into(),
+            json,
+            markdown,
+        }])
+    }
+}

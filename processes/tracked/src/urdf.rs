@@ -1,0 +1,265 @@
+//! The robot description (URDF) of a running-gear variant, generated from
+//! [`crate::running_gear`]: a chassis box, two flippers fixed at [`FLIPPER_ANGLE_DEG`] about
+//! the front main wheels' axes, and every wheel a link on a continuous joint about y, its rim
+//! a cylinder and its teeth boxes.
+//!
+//! The flippers are fixed: the reference's runs do not move them, and a movable flipper (a
+//! 0.3 kg arm carrying nine wheels) made rapier's impulse-joint solver diverge within 0.1 s;
+//! its multibody solver holds one, at a tenth of the speed.
+//!
+//! Every wheel joint has the reference's limits (effort 140 N·m, velocity 14 rad/s); every
+//! wheel link its friction (`<gazebo><mu1>100</mu1><mu2>50</mu2>`; Caravan's physics takes
+//! mu1 and the smaller of the two surfaces' coefficients, as ODE does, so the terrain's
+//! friction decides the grip). The robot weighs [`TOTAL_MASS_KG`] in every variant.
+
+use crate::running_gear::{self, Carrier, Side, Variant, Wheel};
+use std::fmt::Write;
+
+/// The whole robot's mass, kg, the same for every variant (chosen; the reference gives the
+/// wheels' only).
+pub const TOTAL_MASS_KG: f64 = 20.0;
+/// The chassis box, m: length, width, height (chosen: the main tracks' length, between them).
+pub const CHASSIS_M: [f64; 3] = [0.44, 0.14, 0.10];
+/// Each flipper arm's mass, kg (chosen; the arm has no collider, its wheels touch).
+pub const FLIPPER_MASS_KG: f64 = 0.3;
+/// The reference's wheel joint limits for its big wheels: effort N·m, velocity rad/s. A
+/// wheel of another radius gets the same rim force and rim speed (the track's motor drives
+/// them all): effort × r/R, velocity × R/r.
+pub const WHEEL_EFFORT_NM: f64 = 140.0;
+pub const WHEEL_VELOCITY_RAD_S: f64 = 14.0;
+/// The reference's anisotropic friction of the wheels (mu1 along, mu2 across).
+pub const WHEEL_MU: [f64; 2] = [100.0, 50.0];
+/// The flippers' angle above the main tracks' line, degrees (their tips up; chosen so that
+/// a flipper's tip clears a 20 cm step).
+pub const FLIPPER_ANGLE_DEG: f64 = 30.0;
+
+/// Inertia of a solid box of `m` kg and full sizes `s`: (ixx, iyy, izz).
+fn box_inertia(m: f64, s: [f64; 3]) -> [f64; 3] {
+    let [x, y, z] = s.map(|v| v * v);
+    [m * (y + z) / 12.0, m * (x + z) / 12.0, m * (x + y) / 12.0]
+}
+
+fn inertial(out: &mut String, m: f64, i: [f64; 3]) {
+    let _ = writeln!(
+        out,
+        "    <inertial><mass value=\"{m}\"/><inertia ixx=\"{:.9}\" iyy=\"{:.9}\" izz=\"{:.9}\" \
+         ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>",
+        i[0], i[1], i[2]
+    );
+}
+
+/// One wheel's link: a cylinder about y (the rim) and, for a gear, a box per tooth.
+fn wheel_link(out: &mut String, w: &Wheel) {
+    let name = w.name();
+    let _ = writeln!(out, "  <link name=\"{name}_wheel\">");
+    let (m, r, h) = (running_gear::WHEEL_MASS_KG, w.radius_m, w.width_m);
+    // Solid cylinder about y.
+    let across = m * (3.0 * r * r + h * h) / 12.0;
+    inertial(out, m, [across, m * r * r / 2.0, across]);
+    let rim = w.radius_m - w.teeth.map_or(0.0, |t| t.depth_m);
+    let _ = writeln!(
+        out,
+        "    <collision><origin rpy=\"1.5707963267949 0 0\"/><geometry><cylinder radius=\"{rim:.6}\" \
+         length=\"{h}\"/></geometry></collision>"
+    );
+    if let Some(t) = w.teeth {
+        // A tooth is a capsule standing radially on the rim, its tip on the circumscribed
+        // radius, as wide as half the tooth pitch at the rim. Rounded tips keep the contact
+        // normal the ground's: box teeth gave box–box contacts whose normals flipped to the
+        // teeth's sides and threw the robot about.
+        let radius = std::f64::consts::TAU * rim / t.count as f64 / 4.0;
+        let inner = rim - t.depth_m;
+        let length = (w.radius_m - radius - inner).max(1e-4);
+        let centre = inner + length / 2.0;
+        for k in 0..t.count {
+            let a = t.phase_rad + std::f64::consts::TAU * k as f64 / t.count as f64;
+            let _ = writeln!(
+                out,
+                "    <collision><origin xyz=\"{:.6} 0 {:.6}\" rpy=\"0 {:.9} 0\"/><geometry>\
+                 <capsule radius=\"{radius:.6}\" length=\"{length:.6}\"/></geometry></collision>",
+                centre * a.cos(),
+                centre * a.sin(),
+                std::f64::consts::FRAC_PI_2 - a
+            );
+        }
+    }
+    let _ = writeln!(out, "  </link>");
+    let _ = writeln!(
+        out,
+        "  <gazebo reference=\"{name}_wheel\"><mu1>{}</mu1><mu2>{}</mu2></gazebo>",
+        WHEEL_MU[0], WHEEL_MU[1]
+    );
+}
+
+fn wheel_joint(out: &mut String, w: &Wheel) {
+    let name = w.name();
+    let scale = w.radius_m / running_gear::BIG_RADIUS_M;
+    let (parent, y) = match w.carrier {
+        Carrier::Chassis => (
+            "base_link".to_string(),
+            w.side.sign() * running_gear::MAIN_Y_M,
+        ),
+        Carrier::Flipper => (format!("{}_flipper", w.side.name()), 0.0),
+    };
+    let _ = writeln!(
+        out,
+        "  <joint name=\"{name}_joint\" type=\"continuous\"><parent link=\"{parent}\"/>\
+         <child link=\"{name}_wheel\"/><origin xyz=\"{:.6} {y} {:.6}\"/><axis xyz=\"0 1 0\"/>\
+         <limit effort=\"{:.6}\" velocity=\"{:.6}\"/></joint>",
+        w.x_m,
+        w.z_m,
+        WHEEL_EFFORT_NM * scale,
+        WHEEL_VELOCITY_RAD_S / scale
+    );
+}
+
+/// The URDF text of `variant`, flippers at [`FLIPPER_ANGLE_DEG`].
+pub fn urdf(variant: Variant) -> String {
+    urdf_with_flippers(variant, FLIPPER_ANGLE_DEG)
+}
+
+/// The URDF text of `variant` with the flippers' tips raised by `flipper_angle_deg` above the
+/// main track's line (0 = in line, 90 = upright), for trying other flipper poses.
+pub fn urdf_with_flippers(variant: Variant, flipper_angle_deg: f64) -> String {
+    let wheels = running_gear::wheels(variant);
+    let flippers = 2.0 * FLIPPER_MASS_KG;
+    let chassis_kg = TOTAL_MASS_KG - flippers - running_gear::WHEEL_MASS_KG * wheels.len() as f64;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "<?xml version=\"1.0\"?>\n<!-- Generated by caravan-tracked-urdf: the tracked robot, \
+         running gear {} ({} wheels). Do not edit; regenerate. -->\n<robot name=\"tracked_{}\">",
+        variant.name(),
+        wheels.len(),
+        variant.name()
+    );
+    let _ = writeln!(out, "  <link name=\"base_link\">");
+    inertial(&mut out, chassis_kg, box_inertia(chassis_kg, CHASSIS_M));
+    let [x, y, z] = CHASSIS_M;
+    let _ = writeln!(
+        out,
+        "    <collision><geometry><box size=\"{x} {y} {z}\"/></geometry></collision>\n  </link>"
+    );
+    let (px, pz) = running_gear::flipper_pivot();
+    for side in Side::BOTH {
+        let name = format!("{}_flipper", side.name());
+        let _ = writeln!(out, "  <link name=\"{name}\">");
+        inertial(
+            &mut out,
+            FLIPPER_MASS_KG,
+            box_inertia(
+                FLIPPER_MASS_KG,
+                [running_gear::FLIPPER_LENGTH_M, 0.02, 0.04],
+            ),
+        );
+        let _ = writeln!(out, "  </link>");
+        // A rotation about y by −angle lifts the flipper's tip (x forward, z up).
+        let _ = writeln!(
+            out,
+            "  <joint name=\"{name}_joint\" type=\"fixed\"><parent link=\"base_link\"/>\
+             <child link=\"{name}\"/><origin xyz=\"{px} {} {pz}\" rpy=\"0 {:.9} 0\"/></joint>",
+            side.sign() * running_gear::FLIPPER_Y_M,
+            -flipper_angle_deg.to_radians()
+        );
+    }
+    for w in &wheels {
+        wheel_link(&mut out, w);
+        wheel_joint(&mut out, w);
+    }
+    out.push_str("</robot>\n");
+    out
+}
+
+/// The name of every wheel joint of a side, in the order of [`running_gear::wheels`].
+pub fn wheel_joints(variant: Variant, side: Side) -> Vec<String> {
+    running_gear::wheels(variant)
+        .iter()
+        .filter(|w| w.side == side)
+        .map(|w| format!("{}_joint", w.name()))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use caravan_world::description::{JointKind, RobotDescription};
+
+    fn parse(v: Variant) -> RobotDescription {
+        let file = format!("{}.urdf", v.name());
+        caravan_world::description::parse(&urdf(v), &file, std::path::Path::new(".")).unwrap()
+    }
+
+    #[test]
+    fn every_variant_loads_with_its_wheels_and_weighs_the_same() {
+        for v in Variant::ALL {
+            let d = parse(v);
+            let wheels = running_gear::wheels(v).len();
+            let continuous = d
+                .joints
+                .iter()
+                .filter(|j| j.kind == JointKind::Continuous)
+                .count();
+            assert_eq!(continuous, wheels, "{v:?}");
+            assert!(d.joints.len() <= 64, "{v:?}: a JointState holds 64");
+            assert!(
+                (d.mass() - TOTAL_MASS_KG).abs() < 1e-9,
+                "{v:?}: {}",
+                d.mass()
+            );
+        }
+    }
+
+    #[test]
+    fn gear_wheels_carry_one_collider_per_tooth_and_round_ones_a_rim_only() {
+        let v4 = parse(Variant::V4);
+        let wheel = v4.link("left_main_0_wheel").unwrap();
+        assert_eq!(v4.links[wheel].collisions.len(), 1 + 12);
+        let v3 = parse(Variant::V3);
+        let wheel = v3.link("left_main_0_wheel").unwrap();
+        assert_eq!(v3.links[wheel].collisions.len(), 1);
+        assert_eq!(v3.links[wheel].friction, Some(100.0));
+    }
+
+    #[test]
+    fn a_gear_is_circumscribed_by_its_radius_and_small_wheels_keep_the_rim_limits() {
+        for v in Variant::ALL {
+            let d = parse(v);
+            let w = d.link("left_main_0_wheel").unwrap();
+            let r = crate::diff_drive::circumscribed_radius(&d.links[w]);
+            let expected = running_gear::wheels(v)[0].radius_m;
+            assert!((r - expected).abs() < 1e-6, "{v:?}: {r} vs {expected}");
+            let j = &d.joints[d.joint("left_main_0_joint").unwrap()];
+            let force = WHEEL_EFFORT_NM / running_gear::BIG_RADIUS_M;
+            assert!(
+                (j.limits.effort / r / force - 1.0).abs() < 1e-4,
+                "{v:?}: {} {r}",
+                j.limits.effort
+            );
+            let speed = WHEEL_VELOCITY_RAD_S * running_gear::BIG_RADIUS_M;
+            assert!((j.limits.velocity * r / speed - 1.0).abs() < 1e-4, "{v:?}");
+        }
+    }
+
+    #[test]
+    fn each_side_lists_its_own_wheel_joints() {
+        let left = wheel_joints(Variant::V4, Side::Left);
+        assert_eq!(left.len(), 18);
+        assert!(left.iter().all(|j| j.starts_with("left_")));
+        assert_eq!(left[0], "left_main_0_joint");
+    }
+
+    #[test]
+    fn the_shipped_descriptions_are_the_generators_output() {
+        let dir =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch/tracked/robots");
+        for v in Variant::ALL {
+            let shipped = std::fs::read_to_string(dir.join(format!("{}.urdf", v.name()))).unwrap();
+            assert!(
+                shipped == urdf(v),
+                "launch/tracked/robots/{}.urdf is stale: regenerate with \
+                 `cargo run -p caravan-tracked --bin caravan-tracked-urdf`",
+                v.name()
+            );
+        }
+    }
+}
