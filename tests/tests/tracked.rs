@@ -64,3 +64,64 @@ fn v4_climbs_a_10_cm_step() {
     assert_eq!(t["outcome"], "passed", "{t}");
     assert!(t["max_climb_m"].as_f64().unwrap() > 0.09, "{t}");
 }
+
+/// Writes a terrain with the real generator: 2 m of ground, a 1 m field of 5 cm holes
+/// among ground blocks, 1 m of run-out.
+fn holes_terrain(dir: &std::path::Path) -> std::path::PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let spec = dir.join("holes.toml");
+    std::fs::write(
+        &spec,
+        "[terrain]\nseed = 4\nfield = [1.0, 3.0]\napproach = 2.0\nrun_out = 1.0\n\
+         [[primitive]]\ntype = \"random\"\nmin = 0.05\nmax = 0.1\n",
+    )
+    .unwrap();
+    let world = dir.join("holes-world.toml");
+    let out = std::process::Command::new(workspace_bin("caravan-tracked-terrain"))
+        .arg(&spec)
+        .arg("--out")
+        .arg(&world)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    world
+}
+
+#[test]
+fn every_variant_makes_a_short_crossing_of_a_generated_terrain() {
+    let dir = std::env::temp_dir().join(format!("caravan-tracked-holes-{}", std::process::id()));
+    let world = holes_terrain(&dir);
+    for variant in ["v1", "v2", "v3", "v4"] {
+        let t = run(
+            "terrain.toml",
+            &[
+                "--set",
+                &format!("args.variant={variant}"),
+                "--set",
+                &format!("args.world={}", world.display()),
+                "--set",
+                "args.goal_x=3.5",
+                "--set",
+                "args.duration=11s",
+            ],
+        );
+        let track = t["track"].as_array().unwrap();
+        // It starts on the ground blocks (0.1 m above the floor), not on the floor.
+        let z0 = track[0][3].as_f64().unwrap();
+        assert!(z0 > 0.17 && z0 < 0.21, "{variant}: starts at z = {z0}: {t}");
+        // It reaches the field (x = 2 m; the base is 0.4 m behind the flippers' tips).
+        assert!(t["max_x_m"].as_f64().unwrap() > 1.7, "{variant}: {t}");
+        let outcome = t["outcome"].as_str().unwrap();
+        let passed = t["max_x_m"].as_f64().unwrap() >= 3.5;
+        assert_eq!(outcome == "passed", passed, "{variant}: {t}");
+        // The big wheels roll over 10 cm holes; the small ones drop in (docs/tracked.md).
+        if variant == "v3" || variant == "v4" {
+            assert_eq!(outcome, "passed", "{variant}: {t}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
