@@ -16,7 +16,14 @@ pub const TRUTH_TOPIC: &str = "robot/0/ground_truth";
 pub struct Params {
     /// The goal line: the run passes when the base's x reaches it, m.
     pub goal_x_m: f64,
+    /// The world file (relative to the launch file), for the picture of the terrain with
+    /// the track driven; none: no picture.
+    #[serde(default)]
+    pub world: Option<String>,
 }
+
+/// The picture of the terrain and the track, in the run directory.
+pub const TERRAIN_PLOT_FILE: &str = "terrain.svg";
 
 /// The samples thinned to one per `every_s`: `[t, x, y, z, tilt]`.
 fn track(samples: &[Sample], every_s: f64) -> Vec<[f64; 5]> {
@@ -34,19 +41,29 @@ fn track(samples: &[Sample], every_s: f64) -> Vec<[f64; 5]> {
 
 pub struct TrackedReport {
     params: Params,
+    /// The world's blocks and its name, when `world` is given.
+    terrain: Option<(crate::rse::Grid, String)>,
 }
 
 impl ReportPlugin for TrackedReport {
     type Params = Params;
 
-    fn new(params: Params, _: &Inputs) -> Result<Self, String> {
+    fn new(params: Params, inputs: &Inputs) -> Result<Self, String> {
         if !params.goal_x_m.is_finite() {
             return Err(format!(
                 "key 'goal_x_m': must be a number, got {}",
                 params.goal_x_m
             ));
         }
-        Ok(Self { params })
+        let terrain = match &params.world {
+            Some(w) => {
+                let world = caravan_world::world::load_world(&inputs.path(w))
+                    .map_err(|e| format!("key 'world': {e}"))?;
+                Some((crate::rse_world::grid_of(&world), world.name))
+            }
+            None => None,
+        };
+        Ok(Self { params, terrain })
     }
 
     fn sections(&self, run: &Run) -> anyhow::Result<Vec<Section>> {
@@ -81,7 +98,7 @@ impl ReportPlugin for TrackedReport {
             // Every 0.1 s: [t s, x, y, z m, tilt °], for plots and the terrain picture.
             "track": track(&samples, 0.1),
         });
-        let markdown = format!(
+        let mut markdown = format!(
             "## Tracked robot: crossing\n\nOutcome **{:?}** (goal line x = {} m{}). Furthest x \
              {:.3} m, highest climb {:.3} m, largest tilt {:.1}°, top speed {:.3} m/s.\n",
             c.outcome,
@@ -93,6 +110,19 @@ impl ReportPlugin for TrackedReport {
             c.max_tilt_deg,
             top_speed
         );
+        if let Some((grid, name)) = &self.terrain {
+            let path: Vec<(f64, f64)> = samples
+                .iter()
+                .map(|s| (s.position[0], s.position[1]))
+                .collect();
+            crate::rse_world::draw(
+                grid,
+                &[path],
+                &format!("{name}: {:?}", c.outcome),
+                &run.dir.join(TERRAIN_PLOT_FILE),
+            )?;
+            markdown.push_str(&format!("\n![terrain and track]({TERRAIN_PLOT_FILE})\n"));
+        }
         Ok(vec![Section {
             name: "tracked".into(),
             json,

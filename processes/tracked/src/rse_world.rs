@@ -95,6 +95,38 @@ pub fn start(grid: &Grid) -> [f64; 3] {
     [x, grid.size_m()[1] / 2.0, GROUND_M]
 }
 
+/// The blocks of any world file: each 0.1 m cell as high as the tallest box over its centre
+/// (0 where none is), so the report can draw a terrain it did not generate.
+pub fn grid_of(world: &caravan_world::world::World) -> Grid {
+    let nx = (world.size[0] / CELL_M).round().max(1.0) as usize;
+    let ny = (world.size[1] / CELL_M).round().max(1.0) as usize;
+    let mut heights = vec![0.0; nx * ny];
+    for o in &world.obstacles {
+        let caravan_world::world::Shape::Box { half_x, half_y } = o.shape else {
+            continue;
+        };
+        let (s, c) = o.yaw.sin_cos();
+        for (i, h) in heights.iter_mut().enumerate() {
+            let (x, y) = (
+                ((i % nx) as f64 + 0.5) * CELL_M - o.center[0],
+                ((i / nx) as f64 + 0.5) * CELL_M - o.center[1],
+            );
+            // The cell centre in the box's own frame.
+            let (bx, by) = (c * x + s * y, -s * x + c * y);
+            if bx.abs() < half_x && by.abs() < half_y {
+                *h = f64::max(*h, o.height);
+            }
+        }
+    }
+    Grid {
+        nx,
+        ny,
+        field_start: 0,
+        field_nx: nx,
+        heights,
+    }
+}
+
 /// The colour of a height, m: dark holes, light ground, warm walls.
 fn colour(h: f64) -> RGBColor {
     match (h * 100.0).round() as u32 {
@@ -224,6 +256,13 @@ mod tests {
                 assert!(STEPS_M.contains(&h));
             }
         }
+    }
+
+    #[test]
+    fn a_world_file_gives_back_its_grid() {
+        let g = grid(2);
+        let w = caravan_world::world::parse_world(&world_text(&g, "rse", 1.0, "test")).unwrap();
+        assert_eq!(grid_of(&w).heights, g.heights);
     }
 
     #[test]
