@@ -3,6 +3,7 @@
 //!
 //! - [`crossing`]: a crossing's outcome (passed, stuck, flipped) from the true pose;
 //! - [`diff_drive`]: the drive controller's limits, wheel speeds and wheel odometry;
+//! - [`passability`]: a sweep's crossings pooled into the passability table;
 //! - [`report`]: the `tracked` report section;
 //! - [`running_gear`]: the wheels of the four running-gear variants;
 //! - [`urdf`]: a variant's robot description;
@@ -11,6 +12,7 @@
 
 pub mod crossing;
 pub mod diff_drive;
+pub mod passability;
 pub mod report;
 pub mod rse;
 pub mod rse_world;

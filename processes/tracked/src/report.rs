@@ -1,10 +1,10 @@
 //! The `tracked` report section: the crossing's outcome (see [`crate::crossing`]), how far
 //! and how fast the robot went, from the recorded `robot/0/ground_truth`.
 //!
-//! JSON: `{goal_x_m, outcome, passed_at_s, max_x_m, max_tilt_deg, max_climb_m,
+//! JSON: `{goal_x_m, outcome, passed, stuck, flipped, passed_at_s, max_x_m, max_tilt_deg, max_climb_m,
 //! top_speed_m_s, samples}`.
 
-use crate::crossing::{Sample, classify};
+use crate::crossing::{Outcome, Sample, classify};
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
 use serde::Deserialize;
 
@@ -89,6 +89,10 @@ impl ReportPlugin for TrackedReport {
         let json = serde_json::json!({
             "goal_x_m": self.params.goal_x_m,
             "outcome": c.outcome,
+            // One flag per outcome, so a sweep counts them with Wilson intervals.
+            "passed": c.outcome == Outcome::Passed,
+            "stuck": c.outcome == Outcome::Stuck,
+            "flipped": c.outcome == Outcome::Flipped,
             "passed_at_s": c.passed_at_s,
             "max_x_m": c.max_x_m,
             "max_tilt_deg": c.max_tilt_deg,

@@ -83,6 +83,20 @@ pub fn world_text(grid: &Grid, name: &str, friction: f64, origin: &str) -> Strin
     out
 }
 
+/// The world file of `spec` (read from a file named `spec_file`, e.g. `random.toml`) with
+/// `seed`: named `<stem>-<seed>`, as `caravan-tracked-terrain` writes it.
+pub fn world_file(spec: &crate::rse::Spec, spec_file: &str, seed: u64) -> (Grid, String) {
+    let grid = crate::rse::generate(spec, seed);
+    let stem = spec_file.strip_suffix(".toml").unwrap_or(spec_file);
+    let text = world_text(
+        &grid,
+        &format!("{stem}-{seed}"),
+        spec.terrain.friction,
+        &format!("{spec_file}, seed {seed}"),
+    );
+    (grid, text)
+}
+
 /// Where a robot starts on `grid`: on the approach, 1 m before the field (or at its middle
 /// if shorter), across the middle, on the ground: (x, y, ground z), m.
 pub fn start(grid: &Grid) -> [f64; 3] {
@@ -263,6 +277,22 @@ mod tests {
         let g = grid(2);
         let w = caravan_world::world::parse_world(&world_text(&g, "rse", 1.0, "test")).unwrap();
         assert_eq!(grid_of(&w).heights, g.heights);
+    }
+
+    #[test]
+    fn the_shipped_seed_1_worlds_are_the_generators_output() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch/tracked");
+        for kind in ["random", "horizontal", "diagonal"] {
+            let file = format!("{kind}.toml");
+            let text = std::fs::read_to_string(root.join("terrains").join(&file)).unwrap();
+            let (_, world) = world_file(&parse_spec(&text).unwrap(), &file, 1);
+            let shipped = std::fs::read_to_string(root.join(format!("worlds/{kind}-1.toml")));
+            assert!(
+                shipped.unwrap() == world,
+                "launch/tracked/worlds/{kind}-1.toml is stale: regenerate with \
+                 `caravan-tracked-terrain launch/tracked/terrains/{file} --seed 1 --out …`"
+            );
+        }
     }
 
     #[test]

@@ -63,6 +63,7 @@ mod locate;
 pub mod plugin;
 mod recording;
 mod section;
+pub mod wilson;
 
 pub use facts::{
     FACTS_FILE, HostFacts, Latency, ProcessRecord, RECORDING_FILE, RESOLVED_LAUNCH_FILE,

@@ -56,20 +56,21 @@ fn parse_seeds(s: &str) -> Result<Seeds, String> {
     Ok(Seeds(out))
 }
 
+/// Writes the world of `seed` to `out`, and its picture to `svg`.
 fn write(
-    grid: &rse::Grid,
     spec: &rse::Spec,
-    name: &str,
-    origin: &str,
+    spec_file: &str,
+    seed: u64,
     out: &Path,
     svg: Option<&Path>,
 ) -> Result<(), String> {
-    let text = rse_world::world_text(grid, name, spec.terrain.friction, origin);
+    let (grid, text) = rse_world::world_file(spec, spec_file, seed);
     std::fs::write(out, text).map_err(|e| format!("{}: {e}", out.display()))?;
     if let Some(svg) = svg {
-        rse_world::draw(grid, &[], &format!("{name} ({origin})"), svg)
+        rse_world::draw(&grid, &[], &format!("{spec_file}, seed {seed}"), svg)
             .map_err(|e| format!("{}: {e}", svg.display()))?;
     }
+    println!("{}", out.display());
     Ok(())
 }
 
@@ -90,33 +91,16 @@ fn run(args: &Args) -> Result<(), String> {
         (Some(seeds), Some(dir), _) => {
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
             for &seed in &seeds.0 {
-                let name = format!("{stem}-{seed}");
-                let out = dir.join(format!("{name}.toml"));
-                let svg = args.pictures.then(|| dir.join(format!("{name}.svg")));
-                let origin = format!("{spec_name}, seed {seed}");
-                write(
-                    &rse::generate(&spec, seed),
-                    &spec,
-                    &name,
-                    &origin,
-                    &out,
-                    svg.as_deref(),
-                )?;
-                println!("{}", out.display());
+                let out = dir.join(format!("{stem}-{seed}.toml"));
+                let svg = args
+                    .pictures
+                    .then(|| dir.join(format!("{stem}-{seed}.svg")));
+                write(&spec, &spec_name, seed, &out, svg.as_deref())?;
             }
         }
         (None, _, Some(out)) => {
             let seed = args.seed.unwrap_or(spec.terrain.seed);
-            let origin = format!("{spec_name}, seed {seed}");
-            write(
-                &rse::generate(&spec, seed),
-                &spec,
-                &stem,
-                &origin,
-                out,
-                args.svg.as_deref(),
-            )?;
-            println!("{}", out.display());
+            write(&spec, &spec_name, seed, out, args.svg.as_deref())?;
         }
         _ => return Err("give --out FILE, or --seeds and --out-dir".into()),
     }

@@ -1,0 +1,160 @@
+//! The passability table: a sweep's crossings pooled per running-gear variant and terrain
+//! kind (over the terrain seeds), with Wilson 95 % intervals, beside the reference's table.
+
+use caravan_report::wilson::wilson95;
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+/// The reference's passability, % passed: (variant, [random, horizontal, diagonal]).
+pub const REFERENCE: [(&str, [u32; 3]); 4] = [
+    ("v1", [0, 0, 0]),
+    ("v3", [15, 10, 0]),
+    ("v2", [100, 100, 50]),
+    ("v4", [100, 100, 40]),
+];
+
+/// The terrain kinds, in the reference table's order.
+pub const TERRAINS: [&str; 3] = ["random", "horizontal", "diagonal"];
+
+/// Crossings of one variant on one terrain kind.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Tally {
+    pub passed: usize,
+    pub stuck: usize,
+    pub flipped: usize,
+    /// Runs without a `tracked` section (the group failed).
+    pub failed: usize,
+}
+
+impl Tally {
+    pub fn runs(&self) -> usize {
+        self.passed + self.stuck + self.flipped + self.failed
+    }
+}
+
+/// Pools a sweep's `summary.json` by (`args.variant`, `args.terrain`).
+pub fn pool(summary: &Value) -> Result<BTreeMap<(String, String), Tally>, String> {
+    let cells = summary["cells"]
+        .as_array()
+        .ok_or("summary.json: no 'cells' list")?;
+    let mut out: BTreeMap<(String, String), Tally> = BTreeMap::new();
+    for cell in cells {
+        let value = |axis: &str| {
+            cell["values"][axis]
+                .as_str()
+                .map(str::to_owned)
+                .ok_or_else(|| format!("cell {}: no '{axis}' axis", cell["id"]))
+        };
+        let tally = out
+            .entry((value("args.variant")?, value("args.terrain")?))
+            .or_default();
+        let count = |flag: &str| cell["flags"][flag]["successes"].as_u64().unwrap_or(0) as usize;
+        let runs = cell["runs"].as_array().map_or(0, Vec::len);
+        let (p, s, f) = (
+            count("tracked.passed"),
+            count("tracked.stuck"),
+            count("tracked.flipped"),
+        );
+        tally.passed += p;
+        tally.stuck += s;
+        tally.flipped += f;
+        tally.failed += runs.saturating_sub(p + s + f);
+    }
+    Ok(out)
+}
+
+/// `k/n (lo–hi %)`, or `–` without runs.
+fn rate(k: usize, n: usize) -> String {
+    if n == 0 {
+        return "–".into();
+    }
+    let (lo, hi) = wilson95(k, n);
+    format!(
+        "{:.0} % ({k}/{n}; {:.0}–{:.0} %)",
+        100.0 * k as f64 / n as f64,
+        100.0 * lo,
+        100.0 * hi
+    )
+}
+
+/// The Markdown table: per variant and terrain, Caravan's pass rate with its interval and
+/// flips, and the reference's pass rate.
+pub fn table(tallies: &BTreeMap<(String, String), Tally>) -> String {
+    let mut out = String::from(
+        "| variant | terrain | passed (95 % Wilson) | flipped | stuck | reference passed |\n\
+         |---|---|---|---|---|---:|\n",
+    );
+    for (variant, reference) in REFERENCE {
+        for (terrain, refp) in TERRAINS.iter().zip(reference) {
+            let t = tallies
+                .get(&(variant.to_string(), terrain.to_string()))
+                .copied()
+                .unwrap_or_default();
+            let n = t.runs();
+            out.push_str(&format!(
+                "| {variant} | {terrain} | {} | {} | {} | {refp} % |\n",
+                rate(t.passed, n),
+                if n == 0 {
+                    "–".into()
+                } else {
+                    format!("{}/{n}", t.flipped)
+                },
+                if n == 0 {
+                    "–".into()
+                } else {
+                    format!("{}/{n}", t.stuck)
+                },
+            ));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn cell(variant: &str, terrain: &str, seed: u32, outcome: &str) -> Value {
+        let flag = |name: &str| json!({"successes": usize::from(outcome == name), "n": 1});
+        json!({
+            "id": format!("{variant},{terrain},{seed}"),
+            "values": {"args.variant": variant, "args.terrain": terrain, "args.terrain_seed": seed},
+            "runs": [{"seed": 1}],
+            "flags": if outcome == "error" { json!({}) } else { json!({
+                "tracked.passed": flag("passed"),
+                "tracked.stuck": flag("stuck"),
+                "tracked.flipped": flag("flipped"),
+            })},
+        })
+    }
+
+    #[test]
+    fn crossings_pool_over_terrain_seeds_per_variant_and_terrain() {
+        let summary = json!({"cells": [
+            cell("v4", "random", 1, "passed"),
+            cell("v4", "random", 2, "passed"),
+            cell("v4", "random", 3, "flipped"),
+            cell("v4", "diagonal", 1, "stuck"),
+            cell("v1", "random", 1, "error"),
+        ]});
+        let t = pool(&summary).unwrap();
+        let v4 = t[&("v4".into(), "random".into())];
+        assert_eq!((v4.passed, v4.flipped, v4.runs()), (2, 1, 3));
+        assert_eq!(t[&("v4".into(), "diagonal".into())].stuck, 1);
+        assert_eq!(t[&("v1".into(), "random".into())].failed, 1);
+        let md = table(&t);
+        assert!(
+            md.contains("| v4 | random | 67 % (2/3; 21–94 %) | 1/3 | 0/3 | 100 % |"),
+            "{md}"
+        );
+        assert!(md.contains("| v2 | random | – | – | – | 100 % |"), "{md}");
+    }
+
+    #[test]
+    fn a_summary_without_the_axes_is_an_error() {
+        let e = pool(&json!({"cells": [{"id": "all", "values": {}}]})).unwrap_err();
+        assert!(e.contains("args.variant"), "{e}");
+        assert!(pool(&json!({})).is_err());
+    }
+}
