@@ -103,6 +103,54 @@ pub fn workspace_root() -> std::path::PathBuf {
         .to_path_buf()
 }
 
+/// A finished scenario run: its report and run directory (removed when dropped).
+pub struct ScenarioRun {
+    /// `report.json`, parsed.
+    pub report: serde_json::Value,
+    /// The run directory.
+    pub dir: std::path::PathBuf,
+    runs: std::path::PathBuf,
+}
+
+impl Drop for ScenarioRun {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.runs);
+    }
+}
+
+/// Runs `launch/<scenario>/<file>` with `extra` arguments for `caravan launch`, under a
+/// unique group name, into a temporary runs directory; panics with the launcher's output
+/// unless the run completes.
+pub fn run_scenario(scenario: &str, file: &str, extra: &[&str]) -> ScenarioRun {
+    let group = TestGroup::new(scenario);
+    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
+    let out = Command::new(workspace_bin("caravan"))
+        .arg("launch")
+        .arg(workspace_root().join("launch").join(scenario).join(file))
+        .args(["--runs-dir".as_ref(), runs.as_os_str()])
+        .args(["--quiet", "--set"])
+        .arg(format!("group.name={}", group.name))
+        .args(extra)
+        .output()
+        .unwrap();
+    let dir = std::fs::read_dir(&runs)
+        .ok()
+        .and_then(|mut d| d.next())
+        .map(|e| e.unwrap().path());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let dir = dir.expect("a run directory");
+    let report = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    ScenarioRun {
+        report: serde_json::from_str(&report).unwrap(),
+        dir,
+        runs,
+    }
+}
+
 /// The interpreter of `<workspace>/.venv`, the environment Python agents run in. The first
 /// call has `python/caravan-python --setup` create it (with the iceoryx2 package from the
 /// package registry), the same set-up a launch file's Python agent gets on first use; it is

@@ -2,43 +2,20 @@
 //! launch file under a unique group name; the `imu` report section must meet the reference's
 //! targets (1e-6 m/s², 1e-6 rad/s) in every phase.
 
-use caravan_tests::{TestGroup, workspace_bin, workspace_root};
+use caravan_tests::run_scenario;
 use serde_json::Value;
 
 /// Runs `launch/imu/<file>` with `extra` arguments; returns the `imu` report section.
 fn run(file: &str, extra: &[&str]) -> Value {
-    let group = TestGroup::new("imu");
-    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
-    let out = std::process::Command::new(workspace_bin("caravan"))
-        .arg("launch")
-        .arg(workspace_root().join("launch/imu").join(file))
-        .args(["--runs-dir".as_ref(), runs.as_os_str()])
-        .args(["--quiet", "--set"])
-        .arg(format!("group.name={}", group.name))
-        .args(extra)
-        .output()
-        .unwrap();
-    let dir = std::fs::read_dir(&runs)
-        .ok()
-        .and_then(|mut d| d.next())
-        .map(|e| e.unwrap().path());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let dir = dir.expect("a run directory");
-    let report: Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let run = run_scenario("imu", file, extra);
     // The readings' plot, named in the section.
-    let plot = report["imu"]["plot"].as_str().expect("a plot");
-    let svg = std::fs::read_to_string(dir.join(plot)).unwrap();
+    let plot = run.report["imu"]["plot"].as_str().expect("a plot");
+    let svg = std::fs::read_to_string(run.dir.join(plot)).unwrap();
     assert!(
         svg.starts_with("<svg") && svg.contains("<polyline"),
         "{plot}"
     );
-    let _ = std::fs::remove_dir_all(&runs);
-    report["imu"].clone()
+    run.report["imu"].clone()
 }
 
 fn assert_met(imu: &Value, phases: &[&str]) {

@@ -2,36 +2,12 @@
 //! shipped launch files, under a unique group name; the `tracked` report section must show
 //! it moving as commanded, level on flat ground, and over a 10 cm step.
 
-use caravan_tests::{TestGroup, workspace_bin, workspace_root};
+use caravan_tests::{run_scenario, workspace_bin};
 use serde_json::Value;
 
 /// Runs `launch/tracked/<file>` with `extra` arguments; returns the `tracked` section.
 fn run(file: &str, extra: &[&str]) -> Value {
-    let group = TestGroup::new("tracked");
-    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
-    let out = std::process::Command::new(workspace_bin("caravan"))
-        .arg("launch")
-        .arg(workspace_root().join("launch/tracked").join(file))
-        .args(["--runs-dir".as_ref(), runs.as_os_str()])
-        .args(["--quiet", "--set"])
-        .arg(format!("group.name={}", group.name))
-        .args(extra)
-        .output()
-        .unwrap();
-    let dir = std::fs::read_dir(&runs)
-        .ok()
-        .and_then(|mut d| d.next())
-        .map(|e| e.unwrap().path());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let dir = dir.expect("a run directory");
-    let report: Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
-    let _ = std::fs::remove_dir_all(&runs);
-    report["tracked"].clone()
+    run_scenario("tracked", file, extra).report["tracked"].clone()
 }
 
 #[test]

@@ -193,12 +193,24 @@ fn finite(key: &str, v: f64) -> Result<(), String> {
     }
 }
 
-fn softness(key: &str, s: f64) -> Result<(), String> {
-    if (0.0..=100.0).contains(&s) {
-        Ok(())
-    } else {
-        Err(format!("{key}: softness {s} is outside [0, 100]"))
+/// A barrier's keys: where (`at`), how thick (`width`), how high, how soft.
+fn wall_keys(
+    key: &dyn Fn(&str) -> String,
+    at: f64,
+    width: f64,
+    height: f64,
+    softness: f64,
+) -> Result<(), String> {
+    finite(&key("at"), at)?;
+    positive(&key("width"), width)?;
+    ladder(&key("height"), height)?;
+    if !(0.0..=100.0).contains(&softness) {
+        return Err(format!(
+            "{}: softness {softness} is outside [0, 100]",
+            key("softness")
+        ));
     }
+    Ok(())
 }
 
 /// Checks every key of a spec.
@@ -238,24 +250,16 @@ pub fn validate(spec: &Spec) -> Result<(), String> {
                 at,
                 width,
                 height,
-                softness: s,
-            } => {
-                finite(&key("at"), at)?;
-                positive(&key("width"), width)?;
-                ladder(&key("height"), height)?;
-                softness(&key("softness"), s)?;
-            }
+                softness,
+            } => wall_keys(&key, at, width, height, softness)?,
             Primitive::DiagonalBarrier {
                 at,
                 width,
                 height,
                 angle_deg,
-                softness: s,
+                softness,
             } => {
-                finite(&key("at"), at)?;
-                positive(&key("width"), width)?;
-                ladder(&key("height"), height)?;
-                softness(&key("softness"), s)?;
+                wall_keys(&key, at, width, height, softness)?;
                 if !(angle_deg.is_finite() && angle_deg.abs() < 90.0) {
                     return Err(format!(
                         "{}: {angle_deg} must be within (−90, 90) degrees",
