@@ -101,3 +101,68 @@ fn every_variant_makes_a_short_crossing_of_a_generated_terrain() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bad_terrain_specs_and_arguments_exit_2_naming_file_and_key() {
+    let dir = std::env::temp_dir().join(format!("caravan-tracked-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let terrain = |spec: Option<&str>, args: &[&str]| {
+        let path = dir.join("bad.toml");
+        if let Some(text) = spec {
+            std::fs::write(&path, text).unwrap();
+        }
+        let out = std::process::Command::new(workspace_bin("caravan-tracked-terrain"))
+            .arg(&path)
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let out = ["--out", "/nonexistent-dir/w.toml"];
+    let head = "[terrain]\nfield = [3.0, 3.0]\n";
+    for (spec, needle) in [
+        (
+            format!(
+                "{head}[[primitive]]\ntype = \"peak\"\ncenter = [1.0, 1.0]\nheight = 0.25\nradius = 1.0\n"
+            ),
+            "primitive[0].height: 0.25 is not a step",
+        ),
+        (
+            format!("{head}[[primitive]]\ntype = \"wall\"\n"),
+            "unknown variant `wall`",
+        ),
+        ("[terrain]\nfield = [3.0]\n".to_string(), "line 2"),
+        (
+            "[terrain]\nfield = [2.95, 3.0]\n".to_string(),
+            "terrain.field[0]",
+        ),
+    ] {
+        let (code, err) = terrain(Some(&spec), &out);
+        assert_eq!(code, Some(2), "{spec}: {err}");
+        assert!(
+            err.contains("bad.toml") && err.contains(needle),
+            "{spec}: {err}"
+        );
+    }
+    // A good spec, an unwritable output: exit 2 naming the output.
+    let (code, err) = terrain(Some(head), &out);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("/nonexistent-dir/w.toml"), "{err}");
+    // Bad arguments.
+    let (code, err) = terrain(None, &["--seeds", "5..2", "--out-dir", "x"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("holds no seed"), "{err}");
+    let (code, _) = terrain(None, &[]);
+    assert_eq!(code, Some(2));
+    // The passability table of a directory without a sweep summary.
+    let out = std::process::Command::new(workspace_bin("caravan-tracked-passability"))
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("summary.json"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
