@@ -11,7 +11,7 @@ use rand_chacha::ChaCha8Rng;
 pub const LASER_STREAM: u64 = 1;
 pub const IMU_STREAM: u64 = 2;
 
-/// A reproducible source of standard normal numbers.
+/// A reproducible source of standard normal (and uniform) numbers.
 pub struct Gaussian {
     rng: ChaCha8Rng,
 }
@@ -30,6 +30,11 @@ impl Gaussian {
         let u1 = 1.0 - self.rng.random::<f64>();
         let u2 = self.rng.random::<f64>();
         (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+
+    /// One U[0, 1) draw.
+    pub fn uniform(&mut self) -> f64 {
+        self.rng.random::<f64>()
     }
 
     /// One N(0, σ²) draw.

@@ -63,6 +63,7 @@ mod locate;
 pub mod plugin;
 mod recording;
 mod section;
+pub mod stats;
 pub mod wilson;
 
 pub use facts::{

@@ -5,7 +5,6 @@
 mod file;
 mod grid;
 mod runner;
-mod stats;
 mod summary;
 
 use crate::launch::command::{EXIT_BAD_INPUT, LaunchArgs};

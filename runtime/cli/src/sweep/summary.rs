@@ -2,8 +2,9 @@
 //! cell and metric, written as `summary.json` and `summary.csv` and printed as a short table.
 
 use super::grid::{Axis, Cell};
-use super::stats::{describe, wilson95};
 use anyhow::{Context, Result};
+use caravan_report::stats::describe;
+use caravan_report::wilson::wilson95;
 use serde_json::{Map, Value, json};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

@@ -1,8 +1,8 @@
-//! Per-cell statistics: mean, sample standard deviation, Student-t 95 % interval of the mean,
-//! and the Wilson 95 % score interval of a success rate (shared with scenarios, in `caravan_report::wilson`).
+//! Statistics of a sample: mean, sample standard deviation and the Student-t 95 % interval
+//! of the mean, for sweeps' cells and scenarios' tables (the Wilson interval of a rate is in
+//! [`crate::wilson`]).
 
-use caravan_report::wilson::Z975;
-pub use caravan_report::wilson::wilson95;
+use crate::wilson::Z975;
 
 /// Two-sided 95 % Student-t critical values for 1…30 degrees of freedom.
 const T975: [f64; 30] = [

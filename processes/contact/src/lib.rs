@@ -1,0 +1,21 @@
+//! Contact force and contact point identification on a planar arm from its joint torques,
+//! after `shared/reference/contact-identification.md`, as a Caravan scenario.
+//!
+//! - [`contour`]: a link's surface, a convex contour of 16 segments;
+//! - [`planar_arm`]: the arm's geometry, kinematics and the torques of a push;
+//! - [`identify`]: the analytical identification (extended wrench, line of action, entry
+//!   point in the friction cone, candidate links, depth fall-back);
+//! - [`depth`]: the sparse depth sensor and its self-filter;
+//! - [`monte_carlo`]: the reference's Table 1 by Monte-Carlo, timed against the optimiser;
+//! - [`optimiser`]: the baseline, the same problem solved by a constrained optimiser;
+//! - [`table`]: the Monte-Carlo trials summarised beside the reference's table;
+//! - [`push`]: random poses and pushes, for the Monte-Carlo and the scripted person;
+
+pub mod contour;
+pub mod depth;
+pub mod identify;
+pub mod monte_carlo;
+pub mod optimiser;
+pub mod planar_arm;
+pub mod push;
+pub mod table;
