@@ -661,6 +661,38 @@ class ForceTorques(ctypes.Structure):
         return "caravan::ForceTorques"
 
 
+class ContactEstimate(ctypes.Structure):
+    """``caravan::ContactEstimate``: 128 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("link_len", ctypes.c_uint32),
+        ("link", ctypes.c_uint8 * 60),
+        ("status", ctypes.c_uint32),
+        ("first_candidate", ctypes.c_uint32),
+        ("last_candidate", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
+        ("point", Vector3),
+        ("force", Vector3),
+    ]
+    SIZE = 128
+    ALIGN = 8
+    OFFSETS = {
+        "link_len": 0,
+        "link": 4,
+        "status": 64,
+        "first_candidate": 68,
+        "last_candidate": 72,
+        "_reserved": 76,
+        "point": 80,
+        "force": 104,
+    }
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::ContactEstimate"
+
+
 class Hello(ctypes.Structure):
     """``caravan::lockstep::Hello``: 4184 bytes, aligned to 8."""
 
@@ -744,6 +776,7 @@ MESSAGE_TYPES = (
     Contacts,
     Wrench,
     ForceTorques,
+    ContactEstimate,
 )
 BY_TYPE_NAME = {t.type_name(): t for t in MESSAGE_TYPES}
 # Every generated structure, the header and lockstep messages included.
@@ -775,6 +808,7 @@ ALL_TYPES = (
     Wrench,
     ForceTorque,
     ForceTorques,
+    ContactEstimate,
     Hello,
     Grant,
     Done,
@@ -860,6 +894,10 @@ class topics:
     @staticmethod
     def ground_truth(i: int) -> str:
         return f"robot/{i}/ground_truth"
+
+    @staticmethod
+    def contact_estimate(i: int) -> str:
+        return f"robot/{i}/contact_estimate"
 
 
 class lockstep:

@@ -14,7 +14,7 @@
 
 use crate::lockstep::{Done, Grant, Hello};
 use crate::{
-    Collision, Contact, Contacts, EncoderTicks, FixedString, FixedVec, ForceTorque, ForceTorques,
+    Collision, Contact, ContactEstimate, Contacts, EncoderTicks, FixedString, FixedVec, ForceTorque, ForceTorques,
     Goal, Header, Imu, JointCommand, JointState, JointValue, LaserScan, LinkState, LinkStates,
     NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Quaternion, Twist, Vector3,
     WheelSetpoint, WheelState, Wrench,
@@ -284,6 +284,7 @@ describe! {
     Wrench { link, frame, _reserved, point, force, torque, duration_s }
     ForceTorque { joint, force, torque }
     ForceTorques { sensors }
+    ContactEstimate { link, status, first_candidate, last_candidate, _reserved, point, force }
     Hello { node, period_ns, triggers }
     Grant { now_ns, tick_ns, stop, _reserved }
     Done { node_hash, now_ns, wake_ns, published }
@@ -334,6 +335,7 @@ pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
     wrench,
     force_torque,
     ground_truth,
+    contact_estimate,
 ];
 
 /// Alignment of a field's element: a scalar's size, or a described struct's alignment.

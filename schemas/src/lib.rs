@@ -22,7 +22,7 @@ mod topic;
 pub mod topics;
 
 pub use articulated::{
-    Contact, Contacts, ForceTorque, ForceTorques, JointCommand, JointState, JointValue, LinkState,
+    Contact, ContactEstimate, Contacts, ForceTorque, ForceTorques, JointCommand, JointState, JointValue, LinkState,
     LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Wrench,
 };
 pub use fixed::{FixedString, FixedVec};

@@ -7,7 +7,7 @@
 //! Where only the name is needed (matching recorded messages), use [`Topic::name`].
 
 use crate::{
-    Collision, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand, JointState,
+    Collision, ContactEstimate, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand, JointState,
     LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Topic, Twist,
     WheelSetpoint, WheelState, Wrench,
 };
@@ -106,6 +106,10 @@ pub fn ground_truth(i: usize) -> Topic<Odometry> {
 pub fn wrench(i: usize) -> Topic<Wrench> {
     robot(i, "wrench")
 }
+/// The contact on robot `i` a perception process estimated (`robot/i/contact_estimate`).
+pub fn contact_estimate(i: usize) -> Topic<ContactEstimate> {
+    robot(i, "contact_estimate")
+}
 
 #[cfg(test)]
 mod tests {
@@ -136,6 +140,7 @@ mod tests {
         check::<LinkStates>(link_states(3), "robot/3/link_states");
         check::<Contacts>(contacts(3), "robot/3/contacts");
         check::<Wrench>(wrench(3), "robot/3/wrench");
+        check::<ContactEstimate>(contact_estimate(3), "robot/3/contact_estimate");
         check::<ForceTorques>(force_torque(3), "robot/3/force_torque");
         check::<Odometry>(ground_truth(3), "robot/3/ground_truth");
         assert_eq!(scan(0).name(), "robot/0/scan");
