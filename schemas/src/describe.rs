@@ -14,10 +14,10 @@
 
 use crate::lockstep::{Done, Grant, Hello};
 use crate::{
-    Collision, Contact, ContactEstimate, Contacts, EncoderTicks, FixedString, FixedVec, ForceTorque, ForceTorques,
-    Goal, Header, Imu, JointCommand, JointState, JointValue, LaserScan, LinkState, LinkStates,
-    NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Quaternion, Twist, Vector3,
-    WheelSetpoint, WheelState, Wrench,
+    Collision, Contact, ContactEstimate, Contacts, EncoderTicks, FixedString, FixedVec,
+    ForceTorque, ForceTorques, Goal, Header, Imu, JointCommand, JointState, JointValue, LaserScan,
+    LinkState, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Quaternion,
+    Twist, Vector3, WheelSetpoint, WheelState, Wrench,
 };
 use core::mem::{align_of, offset_of, size_of};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};

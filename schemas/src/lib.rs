@@ -22,8 +22,9 @@ mod topic;
 pub mod topics;
 
 pub use articulated::{
-    Contact, ContactEstimate, Contacts, ForceTorque, ForceTorques, JointCommand, JointState, JointValue, LinkState,
-    LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Wrench,
+    Contact, ContactEstimate, Contacts, ForceTorque, ForceTorques, JointCommand, JointState,
+    JointValue, LinkState, LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS,
+    NAME_BYTES, Name, Wrench,
 };
 pub use fixed::{FixedString, FixedVec};
 pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3};

@@ -7,9 +7,9 @@
 //! Where only the name is needed (matching recorded messages), use [`Topic::name`].
 
 use crate::{
-    Collision, ContactEstimate, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand, JointState,
-    LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Topic, Twist,
-    WheelSetpoint, WheelState, Wrench,
+    Collision, ContactEstimate, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand,
+    JointState, LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Topic,
+    Twist, WheelSetpoint, WheelState, Wrench,
 };
 
 /// Per-node execution statistics, published by every node (`status`).

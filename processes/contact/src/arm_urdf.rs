@@ -47,7 +47,11 @@ pub fn urdf(arm: &PlanarArm) -> String {
     for (i, l) in arm.lengths.iter().enumerate() {
         let m = MASS_PER_M * l;
         let (ixx, iyy) = (m * (w * w + w * w) / 12.0, m * (l * l + w * w) / 12.0);
-        let parent = if i == 0 { "base".to_string() } else { format!("link{i}") };
+        let parent = if i == 0 {
+            "base".to_string()
+        } else {
+            format!("link{i}")
+        };
         let x = if i == 0 { 0.0 } else { arm.lengths[i - 1] };
         let _ = write!(
             s,
@@ -76,7 +80,11 @@ pub fn urdf(arm: &PlanarArm) -> String {
 pub fn from_description(d: &RobotDescription, radius: f64) -> Result<ArmModel, String> {
     let at = |j: usize| {
         let joint = &d.joints[j];
-        format!("{}{}", d.file, joint.line.map(|l| format!(":{l}")).unwrap_or_default())
+        format!(
+            "{}{}",
+            d.file,
+            joint.line.map(|l| format!(":{l}")).unwrap_or_default()
+        )
     };
     let chain = d.movable_joints();
     let mut base = Point2::origin();
@@ -86,23 +94,44 @@ pub fn from_description(d: &RobotDescription, radius: f64) -> Result<ArmModel, S
     for (k, &j) in chain.iter().enumerate() {
         let joint = &d.joints[j];
         if !matches!(joint.kind, JointKind::Revolute | JointKind::Continuous) {
-            return Err(format!("{}: joint '{}' must be revolute: the arm is planar", at(j), joint.name));
+            return Err(format!(
+                "{}: joint '{}' must be revolute: the arm is planar",
+                at(j),
+                joint.name
+            ));
         }
         if (joint.axis - nalgebra::Vector3::z()).norm() > 1e-9 {
-            return Err(format!("{}: joint '{}' must turn about +z (axis 0 0 1)", at(j), joint.name));
+            return Err(format!(
+                "{}: joint '{}' must turn about +z (axis 0 0 1)",
+                at(j),
+                joint.name
+            ));
         }
         if joint.origin.rotation.angle() > 1e-9 {
-            return Err(format!("{}: joint '{}' has a rotated origin; the arm's joints must not", at(j), joint.name));
+            return Err(format!(
+                "{}: joint '{}' has a rotated origin; the arm's joints must not",
+                at(j),
+                joint.name
+            ));
         }
         let o = joint.origin.translation.vector;
         if k == 0 {
             base = Point2::new(o.x, o.y);
         } else {
             if d.joints[chain[k - 1]].child != joint.parent {
-                return Err(format!("{}: joint '{}' does not follow '{}': the arm must be a chain", at(j), joint.name, d.joints[chain[k - 1]].name));
+                return Err(format!(
+                    "{}: joint '{}' does not follow '{}': the arm must be a chain",
+                    at(j),
+                    joint.name,
+                    d.joints[chain[k - 1]].name
+                ));
             }
             if o.y.abs() > 1e-9 || o.z.abs() > 1e-9 || o.x <= 0.0 {
-                return Err(format!("{}: joint '{}' must sit at (L, 0, 0) of its parent link, L > 0", at(j), joint.name));
+                return Err(format!(
+                    "{}: joint '{}' must sit at (L, 0, 0) of its parent link, L > 0",
+                    at(j),
+                    joint.name
+                ));
             }
             lengths.push(o.x);
         }
@@ -110,15 +139,27 @@ pub fn from_description(d: &RobotDescription, radius: f64) -> Result<ArmModel, S
         joints.push(joint.name.clone());
     }
     let Some(&last) = chain.last() else {
-        return Err(format!("{}: the robot has no joints; an arm needs 3 or more", d.file));
+        return Err(format!(
+            "{}: the robot has no joints; an arm needs 3 or more",
+            d.file
+        ));
     };
     let tip = d
         .child_joints(d.joints[last].child)
         .find(|&j| d.joints[j].kind == JointKind::Fixed)
-        .ok_or_else(|| format!("{}: the last link '{}' needs a fixed joint to a tip frame at (L, 0, 0)", d.file, links[links.len() - 1]))?;
+        .ok_or_else(|| {
+            format!(
+                "{}: the last link '{}' needs a fixed joint to a tip frame at (L, 0, 0)",
+                d.file,
+                links[links.len() - 1]
+            )
+        })?;
     let o = d.joints[tip].origin.translation.vector;
     if o.y.abs() > 1e-9 || o.z.abs() > 1e-9 || o.x <= 0.0 {
-        return Err(format!("{}: the tip frame must sit at (L, 0, 0) of the last link, L > 0", at(tip)));
+        return Err(format!(
+            "{}: the tip frame must sit at (L, 0, 0) of the last link, L > 0",
+            at(tip)
+        ));
     }
     lengths.push(o.x);
     let arm = PlanarArm::new(base, lengths, radius).map_err(|e| format!("{}: {e}", d.file))?;
@@ -131,7 +172,8 @@ mod tests {
     use crate::monte_carlo::reference_arm;
 
     fn parse(text: &str) -> Result<RobotDescription, String> {
-        caravan_world::description::parse(text, "arm.urdf", std::path::Path::new(".")).map_err(|e| e.to_string())
+        caravan_world::description::parse(text, "arm.urdf", std::path::Path::new("."))
+            .map_err(|e| e.to_string())
     }
 
     #[test]
@@ -144,14 +186,32 @@ mod tests {
     }
 
     #[test]
+    fn the_shipped_urdf_is_the_generators_output() {
+        let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../launch/contact/robots/arm.urdf");
+        assert_eq!(
+            std::fs::read_to_string(shipped).unwrap(),
+            urdf(&reference_arm()),
+            "regenerate it: caravan-contact-urdf > launch/contact/robots/arm.urdf"
+        );
+    }
+
+    #[test]
     fn urdfs_of_another_shape_are_refused_with_file_and_line() {
         let good = urdf(&reference_arm());
         let tilted = good.replacen("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"0 1 0\"/>", 1);
         let e = from_description(&parse(&tilted).unwrap(), 0.05).unwrap_err();
-        assert!(e.contains("arm.urdf:") && e.contains("joint1") && e.contains("+z"), "{e}");
+        assert!(
+            e.contains("arm.urdf:") && e.contains("joint1") && e.contains("+z"),
+            "{e}"
+        );
         let no_tip = good.replace("type=\"fixed\"", "type=\"continuous\"");
         assert!(from_description(&parse(&no_tip).unwrap(), 0.05).is_err());
-        let offset = good.replacen("<origin xyz=\"0.4 0 0\"/>", "<origin xyz=\"0.4 0.1 0\"/>", 1);
+        let offset = good.replacen(
+            "<origin xyz=\"0.4 0 0\"/>",
+            "<origin xyz=\"0.4 0.1 0\"/>",
+            1,
+        );
         let e = from_description(&parse(&offset).unwrap(), 0.05).unwrap_err();
         assert!(e.contains("joint2") && e.contains("(L, 0, 0)"), "{e}");
     }

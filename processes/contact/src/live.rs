@@ -82,7 +82,9 @@ pub fn score(
         (i > 0).then(|| &poses[i - 1])
     };
     for e in estimates {
-        let push = pushes.iter().find(|p| p.start_s <= e.t_s && e.t_s < p.end_s);
+        let push = pushes
+            .iter()
+            .find(|p| p.start_s <= e.t_s && e.t_s < p.end_s);
         let Some(push) = push else {
             // Between pushes, once the last push ended settle_s ago (before the first push
             // the arm is still moving into its pose).
@@ -147,4 +149,66 @@ pub fn score(
         },
         plotted,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn estimate(t_s: f64, status: u32, force: [f64; 2], point: [f64; 2]) -> EstimateAt {
+        EstimateAt {
+            t_s,
+            status,
+            link: "link3".into(),
+            force: Some(Vector2::new(force[0], force[1])),
+            point: Some(Point2::new(point[0], point[1])),
+        }
+    }
+
+    #[test]
+    fn estimates_are_scored_in_the_world_after_the_settling_time() {
+        // Link 3 stands at (1, 0) turned 90°: its local (0.2, 0.05) is the world's (0.95, 0.2),
+        // its local force (0, −10) the world's (10, 0).
+        let push = AppliedPush {
+            start_s: 1.0,
+            end_s: 3.0,
+            link: "link3".into(),
+            local_point: Point2::new(0.2, 0.05),
+            local_force: Vector2::new(0.0, -10.0),
+        };
+        let poses = [LinkPoses {
+            t_s: 0.0,
+            poses: [(
+                "link3".to_string(),
+                Isometry2::new(Vector2::new(1.0, 0.0), std::f64::consts::FRAC_PI_2),
+            )]
+            .into(),
+        }];
+        let found = ContactEstimate::FOUND;
+        let estimates = [
+            // While settling: left out.
+            estimate(1.2, found, [0.0, 50.0], [0.0, 0.0]),
+            // 1 N and 3 mm off.
+            estimate(2.0, found, [10.0, 1.0], [0.95, 0.203]),
+            // No point.
+            estimate(
+                2.5,
+                ContactEstimate::NO_SOLUTION,
+                [10.0, 0.0],
+                [f64::NAN, f64::NAN],
+            ),
+            // Between pushes, settled: one says contact, one does not.
+            estimate(3.6, ContactEstimate::NO_CONTACT, [0.0, 0.0], [0.0, 0.0]),
+            estimate(3.7, found, [1.0, 0.0], [0.0, 0.0]),
+        ];
+        let (s, plotted) = score(&[push], &poses, &estimates, 0.5);
+        assert_eq!((s.pushes, s.scored, s.between_pushes), (1, 2, 2));
+        let f = s.force_error_n.unwrap();
+        assert!((f.max - 1.0).abs() < 1e-12 && f.n == 2, "{f:?}");
+        let p = s.point_error_mm.unwrap();
+        assert!((p.mean - 3.0).abs() < 1e-9 && p.n == 1, "{p:?}");
+        assert_eq!((s.no_solution_pct, s.false_contact_pct), (50.0, 50.0));
+        assert_eq!(plotted.len(), 2);
+        assert!((plotted[0].true_force - Vector2::new(10.0, 0.0)).norm() < 1e-12);
+    }
 }

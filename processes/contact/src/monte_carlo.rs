@@ -18,6 +18,10 @@ pub struct Config {
     pub arm: PlanarArm,
     /// Joint angle range of the random poses, rad, one (lower, upper) per joint.
     pub joint_limits: Vec<(f64, f64)>,
+    /// Every joint but the first bends at least this much, rad ≥ 0: the method needs a
+    /// non-singular pose (three joint axes not in line), so near-straight poses, where the
+    /// torques barely tell the force, are not drawn.
+    pub min_bend: f64,
     pub push: PushSpec,
     pub scanner: Scanner,
     /// Depth returns closer than this to the arm's surface are the arm's own, m.
@@ -58,6 +62,7 @@ impl Config {
         Self {
             arm,
             joint_limits,
+            min_bend: 15f64.to_radians(),
             push: PushSpec {
                 links: vec![2, 3],
                 force_n: (90.0, 110.0),
@@ -114,6 +119,9 @@ pub fn run_level(config: &Config, sigma: f64) -> Vec<Trial> {
         .map(|i| {
             let (q, push) = loop {
                 let q = sample_angles(&config.joint_limits, &mut g);
+                if q[1..].iter().any(|a| a.abs() < config.min_bend) {
+                    continue;
+                }
                 if let Some(p) = config.push.sample(&config.arm.pose(&q), &mut g) {
                     break (q, p);
                 }

@@ -5,6 +5,9 @@ use crate::live::ScoredEstimate;
 use plotters::prelude::*;
 use std::path::Path;
 
+/// Picks one component of a force.
+type Component = fn(&nalgebra::Vector2<f64>) -> f64;
+
 /// Most estimates drawn; longer runs are thinned evenly.
 const MAX_POINTS: usize = 3000;
 
@@ -13,7 +16,10 @@ pub fn contact_svg(path: &Path, sigma: f64, scored: &[ScoredEstimate]) -> anyhow
     let shown: Vec<&ScoredEstimate> = scored.iter().step_by(every).collect();
     let (t0, t1) = (
         shown.first().map_or(0.0, |s| s.t_s),
-        shown.last().map_or(1.0, |s| s.t_s).max(shown.first().map_or(0.0, |s| s.t_s) + 1e-3),
+        shown
+            .last()
+            .map_or(1.0, |s| s.t_s)
+            .max(shown.first().map_or(0.0, |s| s.t_s) + 1e-3),
     );
     let root = SVGBackend::new(path, (900, 640)).into_drawing_area();
     root.fill(&WHITE)?;
@@ -32,21 +38,28 @@ pub fn contact_svg(path: &Path, sigma: f64, scored: &[ScoredEstimate]) -> anyhow
         .x_label_area_size(30)
         .y_label_area_size(55)
         .build_cartesian_2d(t0..t1, -f_max..f_max)?;
-    chart.configure_mesh().x_desc("time (s)").y_desc("force (N)").draw()?;
-    let components: [(&str, RGBColor, fn(&nalgebra::Vector2<f64>) -> f64); 2] = [
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc("force (N)")
+        .draw()?;
+    let components: [(&str, RGBColor, Component); 2] = [
         ("F_x", RGBColor(214, 39, 40), |v| v.x),
         ("F_y", RGBColor(31, 119, 180), |v| v.y),
     ];
     for (name, colour, pick) in components {
         chart
-            .draw_series(shown.iter().map(|s| Circle::new((s.t_s, pick(&s.true_force)), 1, colour.filled())))?
+            .draw_series(
+                shown
+                    .iter()
+                    .map(|s| Circle::new((s.t_s, pick(&s.true_force)), 1, colour.filled())),
+            )?
             .label(format!("{name} true"))
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], colour));
-        chart.draw_series(
-            shown
-                .iter()
-                .filter_map(|s| s.force.map(|f| Circle::new((s.t_s, pick(&f)), 2, colour.mix(0.35).filled()))),
-        )?;
+        chart.draw_series(shown.iter().filter_map(|s| {
+            s.force
+                .map(|f| Circle::new((s.t_s, pick(&f)), 2, colour.mix(0.35).filled()))
+        }))?;
     }
     chart
         .configure_series_labels()

@@ -13,7 +13,7 @@ use crate::scenario::ArmParams;
 use crate::table::{Mean, row};
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
 use caravan_schemas::{ContactEstimate, Wrench};
-use nalgebra::{Isometry2, Point2, UnitQuaternion, Quaternion, Vector2};
+use nalgebra::{Isometry2, Point2, Quaternion, UnitQuaternion, Vector2};
 use serde::Deserialize;
 use serde_json::Value;
 
@@ -61,7 +61,12 @@ fn num(v: &Value) -> f64 {
 fn planar(pose: &Value) -> Isometry2<f64> {
     let p = &pose["position"];
     let o = &pose["orientation"];
-    let q = UnitQuaternion::from_quaternion(Quaternion::new(num(&o["w"]), num(&o["x"]), num(&o["y"]), num(&o["z"])));
+    let q = UnitQuaternion::from_quaternion(Quaternion::new(
+        num(&o["w"]),
+        num(&o["x"]),
+        num(&o["y"]),
+        num(&o["z"]),
+    ));
     Isometry2::new(Vector2::new(num(&p["x"]), num(&p["y"])), q.euler_angles().2)
 }
 
@@ -72,13 +77,16 @@ impl ReportPlugin for ContactReport {
         let model = p.arm.load(&inputs.path(&p.arm.urdf))?;
         let ok = |x: f64| x.is_finite() && x >= 0.0;
         if !(ok(p.sigma) && ok(p.settle_s) && ok(p.mu) && p.monte_carlo_trials >= 1) {
-            return Err("keys 'sigma', 'settle_s', 'mu' must be ≥ 0 and 'monte_carlo_trials' ≥ 1".into());
+            return Err(
+                "keys 'sigma', 'settle_s', 'mu' must be ≥ 0 and 'monte_carlo_trials' ≥ 1".into(),
+            );
         }
         Ok(Self { p, model })
     }
 
     fn sections(&self, run: &Run) -> anyhow::Result<Vec<Section>> {
-        let (mut pushes, mut poses, mut estimates) = (Vec::<AppliedPush>::new(), Vec::new(), Vec::new());
+        let (mut pushes, mut poses, mut estimates) =
+            (Vec::<AppliedPush>::new(), Vec::new(), Vec::new());
         let mut q_last: Option<Vec<f64>> = None;
         for m in run.messages()? {
             let t_s = m.stamp_ns() as f64 * 1e-9;
@@ -86,7 +94,10 @@ impl ReportPlugin for ContactReport {
             match m.topic.as_str() {
                 "robot/0/wrench" => {
                     let link = j["link"].as_str().unwrap_or_default().to_string();
-                    if let Some(open) = pushes.iter_mut().find(|p| p.link == link && p.end_s.is_infinite()) {
+                    if let Some(open) = pushes
+                        .iter_mut()
+                        .find(|p| p.link == link && p.end_s.is_infinite())
+                    {
                         open.end_s = t_s;
                     }
                     let f = Vector2::new(num(&j["force"]["x"]), num(&j["force"]["y"]));
@@ -106,7 +117,12 @@ impl ReportPlugin for ContactReport {
                         .as_array()
                         .into_iter()
                         .flatten()
-                        .map(|l| (l["name"].as_str().unwrap_or_default().to_string(), planar(&l["pose"])))
+                        .map(|l| {
+                            (
+                                l["name"].as_str().unwrap_or_default().to_string(),
+                                planar(&l["pose"]),
+                            )
+                        })
                         .collect(),
                 }),
                 "robot/0/joint_states" => {
@@ -115,7 +131,12 @@ impl ReportPlugin for ContactReport {
                         .model
                         .joints
                         .iter()
-                        .map(|n| joints.iter().find(|v| v["name"] == n.as_str()).map(|v| num(&v["position"])))
+                        .map(|n| {
+                            joints
+                                .iter()
+                                .find(|v| v["name"] == n.as_str())
+                                .map(|v| num(&v["position"]))
+                        })
                         .collect();
                 }
                 "robot/0/contact_estimate" => {
@@ -125,7 +146,10 @@ impl ReportPlugin for ContactReport {
                     };
                     estimates.push(EstimateAt {
                         t_s,
-                        status: j["status"].as_u64().unwrap_or(ContactEstimate::NO_SOLUTION as u64) as u32,
+                        status: j["status"]
+                            .as_u64()
+                            .unwrap_or(ContactEstimate::NO_SOLUTION as u64)
+                            as u32,
                         link: j["link"].as_str().unwrap_or_default().to_string(),
                         force: v2(&j["force"]),
                         point: v2(&j["point"]).map(Point2::from),
@@ -135,9 +159,13 @@ impl ReportPlugin for ContactReport {
             }
         }
         if pushes.is_empty() || estimates.is_empty() {
-            anyhow::bail!("the recording needs robot/0/wrench pushes and robot/0/contact_estimate estimates");
+            anyhow::bail!(
+                "the recording needs robot/0/wrench pushes and robot/0/contact_estimate estimates"
+            );
         }
-        let q = q_last.ok_or_else(|| anyhow::anyhow!("no robot/0/joint_states with the arm's joints in the recording"))?;
+        let q = q_last.ok_or_else(|| {
+            anyhow::anyhow!("no robot/0/joint_states with the arm's joints in the recording")
+        })?;
         let (live, plotted) = score(&pushes, &poses, &estimates, self.p.settle_s);
         let mut links: Vec<usize> = pushes
             .iter()
@@ -148,6 +176,7 @@ impl ReportPlugin for ContactReport {
         let mut config = Config::reference();
         config.arm = self.model.arm.clone();
         config.joint_limits = q.iter().map(|q| (*q, *q)).collect();
+        config.min_bend = 0.0;
         config.push.links = links;
         config.push.mu = self.p.mu;
         config.trials = self.p.monte_carlo_trials;
@@ -170,14 +199,24 @@ impl ReportPlugin for ContactReport {
                 "live": live,
                 "monte_carlo": mc,
                 "within_monte_carlo": within_monte_carlo,
+                "plot": PLOT_FILE,
             }),
             markdown,
         }])
     }
 }
 
-fn markdown(sigma: f64, live: &crate::live::LiveScore, mc: &crate::table::Row, within: bool) -> String {
-    let cell = |m: &Option<Mean>| m.as_ref().map_or("–".into(), |m| format!("{:.3} [{:.3}, {:.3}]", m.mean, m.ci95[0], m.ci95[1]));
+fn markdown(
+    sigma: f64,
+    live: &crate::live::LiveScore,
+    mc: &crate::table::Row,
+    within: bool,
+) -> String {
+    let cell = |m: &Option<Mean>| {
+        m.as_ref().map_or("–".into(), |m| {
+            format!("{:.3} [{:.3}, {:.3}]", m.mean, m.ci95[0], m.ci95[1])
+        })
+    };
     let p95 = |m: &Option<Mean>| m.as_ref().map_or("–".into(), |m| format!("{:.3}", m.p95));
     let mut s = format!(
         "## Contact identification\n\n{} pushes, {} settled estimates scored (torque noise σ = {sigma} N·m). \
@@ -190,7 +229,11 @@ fn markdown(sigma: f64, live: &crate::live::LiveScore, mc: &crate::table::Row, w
     );
     for (name, l, m) in [
         ("force error (N)", &live.force_error_n, &mc.force_error_n),
-        ("direction error (°)", &live.direction_error_deg, &mc.direction_error_deg),
+        (
+            "direction error (°)",
+            &live.direction_error_deg,
+            &mc.direction_error_deg,
+        ),
         ("point error (mm)", &live.point_error_mm, &mc.point_error_mm),
     ] {
         s += &format!("| {name} | {} | {} | {} |\n", cell(l), cell(m), p95(m));
@@ -198,7 +241,12 @@ fn markdown(sigma: f64, live: &crate::live::LiveScore, mc: &crate::table::Row, w
     s += &format!(
         "| no solution (%) | {:.2} | {:.2} | |\n| wrong link (%) | {:.2} | {:.2} | |\n\n\
          Between pushes {:.2} % of {} estimates reported a contact. Plot: [{PLOT_FILE}]({PLOT_FILE}).\n",
-        live.no_solution_pct, mc.no_solution_pct, live.wrong_link_pct, mc.wrong_link_pct, live.false_contact_pct, live.between_pushes
+        live.no_solution_pct,
+        mc.no_solution_pct,
+        live.wrong_link_pct,
+        mc.wrong_link_pct,
+        live.false_contact_pct,
+        live.between_pushes
     );
     s
 }

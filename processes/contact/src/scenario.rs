@@ -161,7 +161,8 @@ impl PushParams {
             mu: self.mu,
             hand_radius: self.hand_radius_m,
         };
-        spec.validate(&model.arm).map_err(|e| format!("key 'push': {e}"))?;
+        spec.validate(&model.arm)
+            .map_err(|e| format!("key 'push': {e}"))?;
         let ok = |x: f64| x.is_finite() && x > 0.0;
         if !(self.start_s.is_finite() && self.start_s >= 0.0 && ok(self.push_s) && ok(self.gap_s)) {
             return Err("key 'push': 'start_s' ≥ 0, 'push_s' > 0 and 'gap_s' > 0 must hold".into());
@@ -180,7 +181,7 @@ impl PushParams {
     }
 }
 
-/// `estimator = { torque_sigma = 0.1, torque_floor = 0.01, mu = 0.5 }`.
+/// `estimator = { torque_sigma = 0.1, torque_floor = 0.2, mu = 0.5 }`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EstimatorParams {
@@ -188,8 +189,8 @@ pub struct EstimatorParams {
     /// with it.
     #[serde(default)]
     pub torque_sigma: f64,
-    /// Below this a joint is unloaded whatever the noise, N·m ≥ 0 (the position loops'
-    /// residual).
+    /// Below this a joint is unloaded whatever the noise, N·m ≥ 0: the position loops'
+    /// residual torque, up to about 0.1 N·m 0.75 s after a push ends.
     #[serde(default = "floor")]
     pub torque_floor: f64,
     #[serde(default = "mu")]
@@ -197,14 +198,16 @@ pub struct EstimatorParams {
 }
 
 fn floor() -> f64 {
-    0.01
+    0.2
 }
 
 impl EstimatorParams {
     pub fn settings(&self) -> Result<Settings, String> {
         let ok = |x: f64| x.is_finite() && x >= 0.0;
         if !(ok(self.torque_sigma) && ok(self.torque_floor) && ok(self.mu)) {
-            return Err("key 'estimator': 'torque_sigma', 'torque_floor' and 'mu' must be ≥ 0".into());
+            return Err(
+                "key 'estimator': 'torque_sigma', 'torque_floor' and 'mu' must be ≥ 0".into(),
+            );
         }
         Ok(Settings {
             mu: self.mu,
@@ -233,7 +236,8 @@ mod tests {
 
     #[test]
     fn pushes_alternate_with_pauses_after_the_start() {
-        let p: PushParams = serde_json::from_str(r#"{"start_s": 1.0, "push_s": 2.0, "gap_s": 1.0}"#).unwrap();
+        let p: PushParams =
+            serde_json::from_str(r#"{"start_s": 1.0, "push_s": 2.0, "gap_s": 1.0}"#).unwrap();
         assert_eq!(p.active(0.5), None);
         assert_eq!(p.active(1.0), Some(0));
         assert_eq!(p.active(2.99), Some(0));

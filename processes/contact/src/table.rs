@@ -164,12 +164,18 @@ fn num(x: f64) -> String {
 
 fn cell(m: &Option<Mean>) -> String {
     m.as_ref().map_or("–".into(), |m| {
-        format!("{} [{}, {}]", num(m.mean), num(m.ci95[0]), num(m.ci95[1]))
+        format!(
+            "{} [{}, {}] ({})",
+            num(m.mean),
+            num(m.ci95[0]),
+            num(m.ci95[1]),
+            num(m.median)
+        )
     })
 }
 
-/// The table as Markdown: ours (means with 95 % intervals) beside the reference's, then
-/// the timing.
+/// The table as Markdown: ours (means with 95 % intervals, medians in brackets) beside the
+/// reference's, then the timing.
 pub fn markdown(rows: &[Row]) -> String {
     let mut s = String::from(
         "| σ (N·m) | force error (N) | ref. | direction error (°) | ref. | point error (mm) | ref. | no solution (%) | ref. | wrong link (%) | depth fall-back point error (mm) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",

@@ -76,17 +76,17 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
             return Ok(());
         };
         let pose = r.model.arm.pose(q);
-        let ranges = r
-            .scanner
-            .scan(&pose.contours, hand.as_slice(), &mut noise);
-        let mut scan = LaserScan::default();
-        scan.angle_min = r.scanner.first_angle as f32;
-        scan.angle_max = (r.scanner.first_angle + r.scanner.fov) as f32;
-        scan.angle_increment = r.scanner.increment() as f32;
-        scan.scan_time = period;
-        scan.range_min = 0.0;
-        scan.range_max = r.scanner.max_range as f32;
-        scan.beam_count = ranges.len() as u32;
+        let ranges = r.scanner.scan(&pose.contours, hand.as_slice(), &mut noise);
+        let mut scan = LaserScan {
+            angle_min: r.scanner.first_angle as f32,
+            angle_max: (r.scanner.first_angle + r.scanner.fov) as f32,
+            angle_increment: r.scanner.increment() as f32,
+            scan_time: period,
+            range_min: 0.0,
+            range_max: r.scanner.max_range as f32,
+            beam_count: ranges.len() as u32,
+            ..LaserScan::default()
+        };
         for (slot, range) in scan.ranges.iter_mut().zip(&ranges) {
             *slot = *range as f32;
         }

@@ -39,7 +39,10 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     let q = pose_rad(&model, &p.pose_deg)?;
     let spec = p.push.spec(&model)?;
     // Every push must find a point: refuse a pose whose pushed links are out of reach.
-    if spec.sample(&model.arm.pose(&q), &mut Gaussian::new(0, 0)).is_none() {
+    if spec
+        .sample(&model.arm.pose(&q), &mut Gaussian::new(0, 0))
+        .is_none()
+    {
         return Err("key 'pose_deg': no link in 'push.links' can be touched in this pose".into());
     }
     Ok(Ready {

@@ -1,0 +1,78 @@
+//! Contact identification from joint torques: the live scenario run briefly in lockstep from
+//! its shipped launch file; its report scores every estimate against the push applied.
+
+use caravan_tests::{TestGroup, run_scenario, workspace_bin, workspace_root};
+use std::process::Command;
+
+#[test]
+fn a_live_run_tracks_each_push_within_the_monte_carlo_errors() {
+    // Two pushes (1–3 s and 4–6 s), torque noise σ = 0.1 N·m.
+    let run = run_scenario(
+        "contact",
+        "push.toml",
+        &["--duration", "6.5s", "--set", "args.sigma=0.1"],
+    );
+    let c = &run.report["contact"];
+    let live = &c["live"];
+    assert_eq!(live["pushes"], 2, "{c}");
+    assert!(live["scored"].as_u64().unwrap() > 2000, "{c}");
+    assert_eq!(c["within_monte_carlo"], true, "{c}");
+    // A 100 N push found to within a few newtons and millimetres, nearly always.
+    assert!(live["force_error_n"]["mean"].as_f64().unwrap() < 2.0, "{c}");
+    assert!(
+        live["point_error_mm"]["mean"].as_f64().unwrap() < 5.0,
+        "{c}"
+    );
+    assert!(live["no_solution_pct"].as_f64().unwrap() < 10.0, "{c}");
+    assert_eq!(live["wrong_link_pct"], 0.0, "{c}");
+    // At rest between pushes, (nearly) no contact is claimed.
+    assert!(live["between_pushes"].as_u64().unwrap() > 100, "{c}");
+    assert!(live["false_contact_pct"].as_f64().unwrap() < 10.0, "{c}");
+    let svg = std::fs::read_to_string(run.dir.join(c["plot"].as_str().unwrap())).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("<circle"));
+}
+
+/// Runs the shipped launch file with `set`; returns the exit code and stderr.
+fn launch_with(set: &str) -> (i32, String) {
+    let group = TestGroup::new("contact-bad");
+    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
+    let out = Command::new(workspace_bin("caravan"))
+        .arg("launch")
+        .arg(workspace_root().join("launch/contact/push.toml"))
+        .args(["--quiet", "--duration", "2s", "--set", set, "--set"])
+        .arg(format!("group.name={}", group.name))
+        .arg("--runs-dir")
+        .arg(&runs)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&runs);
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn bad_contact_input_is_named_and_fails_the_launch() {
+    // Checked before anything starts: the report plugin's params and the URDF it reads.
+    let (code, err) = launch_with("report.0.params.settle_s=-1.0");
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("settle_s"), "{err}");
+    let (code, err) = launch_with("args.urdf=robots/none.urdf");
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("none.urdf"), "{err}");
+    // A process's own params: named by the process, and the run fails.
+    for (set, key) in [
+        ("args.pose_deg=[10.0, 20.0]", "pose_deg"),
+        ("process.driver.params.push.links=[0, 3]", "links"),
+        ("process.depth.params.depth.beams=1", "beams"),
+        (
+            "process.contact-id.params.estimator.torque_sigmaa=1.0",
+            "torque_sigmaa",
+        ),
+    ] {
+        let (code, err) = launch_with(set);
+        assert_ne!(code, 0, "{set}: {err}");
+        assert!(err.contains(key), "{set}: {err}");
+    }
+}
