@@ -151,6 +151,28 @@ pub fn run_scenario(scenario: &str, file: &str, extra: &[&str]) -> ScenarioRun {
     }
 }
 
+/// Runs `launch/<file>` for `duration` with `--set set`, under a unique group name, into a
+/// runs directory removed afterwards; returns the exit code (-1 if killed) and stderr. For
+/// tests of bad input.
+pub fn launch_with_set(file: &str, duration: &str, set: &str) -> (i32, String) {
+    let group = TestGroup::new("bad");
+    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
+    let out = Command::new(workspace_bin("caravan"))
+        .arg("launch")
+        .arg(workspace_root().join("launch").join(file))
+        .args(["--quiet", "--duration", duration, "--set", set, "--set"])
+        .arg(format!("group.name={}", group.name))
+        .arg("--runs-dir")
+        .arg(&runs)
+        .output()
+        .expect("run caravan launch");
+    let _ = std::fs::remove_dir_all(&runs);
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
 /// The interpreter of `<workspace>/.venv`, the environment Python agents run in. The first
 /// call has `python/caravan-python --setup` create it (with the iceoryx2 package from the
 /// package registry), the same set-up a launch file's Python agent gets on first use; it is

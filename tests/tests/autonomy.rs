@@ -102,20 +102,8 @@ fn bad_perception_and_planning_params_are_named() {
             ["planner", "v_maxx"],
         ),
     ] {
-        let group = caravan_tests::TestGroup::new("autonomy-bad");
-        let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
-        let out = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
-            .arg("launch")
-            .arg(caravan_tests::workspace_root().join("launch/convoy/convoy.toml"))
-            .args(["--quiet", "--duration", "5s", "--set", set, "--set"])
-            .arg(format!("group.name={}", group.name))
-            .arg("--runs-dir")
-            .arg(&runs)
-            .output()
-            .unwrap();
-        let _ = std::fs::remove_dir_all(&runs);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{set}: launch succeeded\n{stderr}");
+        let (code, stderr) = caravan_tests::launch_with_set("convoy/convoy.toml", "5s", set);
+        assert_ne!(code, 0, "{set}: launch succeeded\n{stderr}");
         for word in expected {
             assert!(stderr.contains(word), "{set}: '{word}' not in\n{stderr}");
         }

@@ -1,8 +1,7 @@
 //! Contact identification from joint torques: the live scenario run briefly in lockstep from
 //! its shipped launch file; its report scores every estimate against the push applied.
 
-use caravan_tests::{TestGroup, run_scenario, workspace_bin, workspace_root};
-use std::process::Command;
+use caravan_tests::{launch_with_set, run_scenario};
 
 #[test]
 fn a_live_run_tracks_each_push_within_the_monte_carlo_errors() {
@@ -32,24 +31,9 @@ fn a_live_run_tracks_each_push_within_the_monte_carlo_errors() {
     assert!(svg.starts_with("<svg") && svg.contains("<circle"));
 }
 
-/// Runs the shipped launch file with `set`; returns the exit code and stderr.
+/// Runs the shipped launch file briefly with `set`: the exit code and stderr.
 fn launch_with(set: &str) -> (i32, String) {
-    let group = TestGroup::new("contact-bad");
-    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
-    let out = Command::new(workspace_bin("caravan"))
-        .arg("launch")
-        .arg(workspace_root().join("launch/contact/push.toml"))
-        .args(["--quiet", "--duration", "2s", "--set", set, "--set"])
-        .arg(format!("group.name={}", group.name))
-        .arg("--runs-dir")
-        .arg(&runs)
-        .output()
-        .unwrap();
-    let _ = std::fs::remove_dir_all(&runs);
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    launch_with_set("contact/push.toml", "2s", set)
 }
 
 #[test]
