@@ -1,0 +1,16 @@
+//! Two-UAV collision avoidance after `shared/reference/uav-avoidance.md`, as a Caravan
+//! scenario: two quadcopters fly head-on at a constant forward speed, the agent changes only
+//! its lateral and vertical velocity, and must pass the other without touching it or the
+//! floor while staying close to its start line.
+//!
+//! - [`encounter`]: the environment's constants, actions, observation, reward and episode ends;
+//! - [`opponent`]: the scripted opponents (straight, zigzag, pursuit);
+//! - [`scenario`]: the evaluation scenarios (the training head-on, S1, S2, S3) and their starts;
+//! - [`policy`]: the policy interface and the sanity baselines (do nothing, side-step);
+//! - [`rollout`]: episodes of the encounter's own kinematics, for unit tests of the rules.
+
+pub mod encounter;
+pub mod opponent;
+pub mod policy;
+pub mod rollout;
+pub mod scenario;
