@@ -899,6 +899,10 @@ class topics:
     def contact_estimate(i: int) -> str:
         return f"robot/{i}/contact_estimate"
 
+    @staticmethod
+    def set_pose(i: int) -> str:
+        return f"robot/{i}/set_pose"
+
 
 class lockstep:
     """The lockstep protocol's constants, as `caravan_schemas::lockstep`."""

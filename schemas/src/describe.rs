@@ -336,6 +336,7 @@ pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
     force_torque,
     ground_truth,
     contact_estimate,
+    set_pose,
 ];
 
 /// Alignment of a field's element: a scalar's size, or a described struct's alignment.

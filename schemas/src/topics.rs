@@ -8,8 +8,8 @@
 
 use crate::{
     Collision, ContactEstimate, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand,
-    JointState, LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Topic,
-    Twist, WheelSetpoint, WheelState, Wrench,
+    JointState, LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D,
+    Topic, Twist, WheelSetpoint, WheelState, Wrench,
 };
 
 /// Per-node execution statistics, published by every node (`status`).
@@ -106,6 +106,11 @@ pub fn ground_truth(i: usize) -> Topic<Odometry> {
 pub fn wrench(i: usize) -> Topic<Wrench> {
     robot(i, "wrench")
 }
+/// Moves kinematic robot `i` to a pose at once, at rest (`robot/i/set_pose`): a new episode
+/// without restarting the group, as Gazebo's `set_entity_state`.
+pub fn set_pose(i: usize) -> Topic<Pose3D> {
+    robot(i, "set_pose")
+}
 /// The contact on robot `i` a perception process estimated (`robot/i/contact_estimate`).
 pub fn contact_estimate(i: usize) -> Topic<ContactEstimate> {
     robot(i, "contact_estimate")
@@ -141,6 +146,7 @@ mod tests {
         check::<Contacts>(contacts(3), "robot/3/contacts");
         check::<Wrench>(wrench(3), "robot/3/wrench");
         check::<ContactEstimate>(contact_estimate(3), "robot/3/contact_estimate");
+        check::<Pose3D>(set_pose(3), "robot/3/set_pose");
         check::<ForceTorques>(force_torque(3), "robot/3/force_torque");
         check::<Odometry>(ground_truth(3), "robot/3/ground_truth");
         assert_eq!(scan(0).name(), "robot/0/scan");

@@ -32,7 +32,8 @@ robots = [
        {{ type = "position", joints = ["hand_joint"], kp = 20.0, ki = 50.0, kd = 0.5 }},
      ] }},
   {{ urdf = "{box_}", poses = [[3.0, 3.0, 0.0]], contacts = true }},
-  {{ urdf = "{box_}", base = "kinematic", poses = [[3.0, 1.0, 1.5, 0.0, 0.0, 0.0]] }},
+  {{ urdf = "{box_}", base = "kinematic", poses = [[3.0, 1.0, 1.5, 0.0, 0.0, 0.0]],
+     ground_truth = true }},
   {{ urdf = "{mass}", base = "fixed", poses = [[1.0, 3.0, 1.0, 0.0, 0.0, 0.0]],
      force_torque = ["sensor_joint"], link_states = true }},
 ]
@@ -181,14 +182,29 @@ fn joints_links_contacts_wrenches_and_kinematic_bases_on_topics() {
     assert!(messages(&s, "robot/0/contacts").is_empty());
     assert!(messages(&s, "robot/0/wheel_state").is_empty());
 
-    // The kinematic box flies at 0.5 m/s along x and does not fall.
+    // The kinematic box flies at 0.5 m/s along x and does not fall; at 2 s `set_pose` puts
+    // it back to (3, 2, 1) m, from where it flies on.
     let twist = messages(&s, "robot/2/twist_true");
     let v = &at(&twist, 4.95)["linear"];
     assert!((f(&v["x"]) - 0.5).abs() < 1e-6, "{v}");
     assert!(f(&v["z"]).abs() < 1e-9, "{v}");
     let pose = messages(&s, "robot/2/pose_true");
-    let moved = f(&at(&pose, 4.95)["x"]) - f(&at(&pose, 1.0)["x"]);
-    assert!((moved - 0.5 * 3.95).abs() < 0.02, "moved {moved} m");
+    let moved = f(&at(&pose, 1.9)["x"]) - f(&at(&pose, 1.0)["x"]);
+    assert!((moved - 0.5 * 0.9).abs() < 0.02, "moved {moved} m");
+    assert!((f(&at(&pose, 1.9)["y"]) - 1.0).abs() < 1e-9);
+    let truth = messages(&s, "robot/2/ground_truth");
+    let after = &at(&truth, 4.95)["pose"]["position"];
+    assert!(
+        (f(&after["y"]) - 2.0).abs() < 1e-9 && (f(&after["z"]) - 1.0).abs() < 1e-9,
+        "{after}"
+    );
+    let moved = f(&at(&pose, 4.95)["x"]) - f(&at(&pose, 2.5)["x"]);
+    assert!((moved - 0.5 * 2.45).abs() < 0.02, "moved {moved} m");
+    assert!(
+        (f(&at(&pose, 2.2)["x"]) - 3.1).abs() < 0.06,
+        "{}",
+        at(&pose, 2.2)
+    );
 
     // The force–torque sensor carries the hanging 1 kg test mass: its weight in the sensor's
     // frame, turned 0.5 rad about x.

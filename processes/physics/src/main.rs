@@ -14,7 +14,7 @@ use caravan::{Node, NodeIdentity, Publisher, Subscriber, Trigger};
 use caravan_physics::messages::{self, CommandReader};
 use caravan_physics::{Params, Simulation};
 use caravan_schemas::{
-    Contacts, ForceTorques, JointCommand, JointState, LinkStates, Odometry, Pose2D, Twist,
+    Contacts, ForceTorques, JointCommand, JointState, LinkStates, Odometry, Pose2D, Pose3D, Twist,
     WheelSetpoint, WheelState, Wrench, topics,
 };
 use std::process::ExitCode;
@@ -84,6 +84,7 @@ struct RobotPorts {
     force_torque: Option<Publisher<ForceTorques>>,
     ground_truth: Option<Publisher<Odometry>>,
     cmd_vel: Option<Subscriber<Twist>>,
+    set_pose: Option<Subscriber<Pose3D>>,
     wrench: Subscriber<Wrench>,
 }
 
@@ -107,6 +108,7 @@ impl RobotPorts {
             .then(|| node.publisher(&topics::link_states(i)));
         let contacts = out.contacts.then(|| node.publisher(&topics::contacts(i)));
         let cmd_vel = out.cmd_vel.then(|| node.subscriber(&topics::cmd_vel(i)));
+        let set_pose = out.cmd_vel.then(|| node.subscriber(&topics::set_pose(i)));
         let force_torque = out
             .force_torque
             .then(|| node.publisher(&topics::force_torque(i)));
@@ -123,6 +125,7 @@ impl RobotPorts {
             force_torque: force_torque.transpose()?,
             ground_truth: ground_truth.transpose()?,
             cmd_vel: cmd_vel.transpose()?,
+            set_pose: set_pose.transpose()?,
             wrench: node.subscriber(&topics::wrench(i))?,
         })
     }
@@ -143,6 +146,11 @@ impl RobotPorts {
             while let Some(cmd) = command.receive()? {
                 let targets = commands.targets(sim, i, &cmd);
                 sim.set_targets(i, &targets);
+            }
+        }
+        if let Some(set_pose) = &self.set_pose {
+            while let Some(pose) = set_pose.receive()? {
+                sim.set_pose(i, &pose);
             }
         }
         if let Some(cmd_vel) = &self.cmd_vel

@@ -76,6 +76,8 @@ impl Simulation {
         fn set_targets(&mut self, i: usize, targets: &[Target]);
         /// Sets a kinematic robot's velocity command; ignored for other bases.
         fn set_cmd_vel(&mut self, i: usize, cmd: &Twist);
+        /// Moves a kinematic robot's base to a pose at once, at rest; ignored for other bases.
+        fn set_pose(&mut self, i: usize, pose: &Pose3D);
         /// Starts a wrench on robot `i`; replaces the one acting on the same link.
         fn apply_wrench(&mut self, i: usize, w: &WrenchCommand) -> Result<(), String>;
         /// Advances by one physics step.

@@ -99,11 +99,17 @@ mod tests {
         };
         let (dt, mut y, mut lo, mut hi) = (1e-3, 0.0f64, 0.0f64, 0.0f64);
         for k in 0..8000 {
-            y += z.velocity(1.0, k as f64 * dt, &Vector3::zeros(), &Vector3::zeros()).y * dt;
+            y += z
+                .velocity(1.0, k as f64 * dt, &Vector3::zeros(), &Vector3::zeros())
+                .y
+                * dt;
             lo = lo.min(y);
             hi = hi.max(y);
         }
-        assert!((hi - 1.0).abs() < 2e-3 && (lo + 1.0).abs() < 2e-3, "{lo} {hi}");
+        assert!(
+            (hi - 1.0).abs() < 2e-3 && (lo + 1.0).abs() < 2e-3,
+            "{lo} {hi}"
+        );
         assert!(y.abs() < 2e-3, "back at the start after two periods: {y}");
     }
 

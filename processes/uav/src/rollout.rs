@@ -25,7 +25,9 @@ pub fn episode(
     let (mut steps, mut total) = (0, 0.0);
     loop {
         let action = policy.act(&e.observe(&s));
-        s.agent_v = e.apply(&s.agent_v, action).expect("the policy's action is valid");
+        s.agent_v = e
+            .apply(&s.agent_v, action)
+            .expect("the policy's action is valid");
         s.opponent_v = scenario
             .opponent
             .velocity(e.speed_m_s, s.t_s, &s.opponent, &s.agent);

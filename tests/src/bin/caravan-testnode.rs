@@ -161,11 +161,15 @@ fn subscribe(node: &mut Node, p: &Params) -> Result<(), Error> {
 
 /// Commands for the physics topics test, by simulated time: from 0.5 s robot 0's joints
 /// `upper_joint`, `fore_joint`, `hand_joint` to positions 0.2, −0.2, 0 rad and robot 2 (a
-/// kinematic base) to 0.5 m/s along x; at 3 s a 10 N downward force on robot 0's `hand`,
-/// 0.3 m along the link, for 1 s.
+/// kinematic base) to 0.5 m/s along x; at 2 s robot 2 back to (3, 2, 1) m (`set_pose`), where it
+/// flies on; at 3 s a 10 N downward force on robot 0's `hand`, 0.3 m along the link, for 1 s.
 fn arm_commands(node: &mut Node) -> Result<(), Error> {
-    use caravan_schemas::{JointCommand, JointValue, Name, Twist, Vector3, Wrench, topics};
+    use caravan_schemas::{
+        JointCommand, JointValue, Name, Pose3D, Quaternion, Twist, Vector3, Wrench, topics,
+    };
     let joints = node.publisher(&topics::joint_command(0))?;
+    let set_pose = node.publisher(&topics::set_pose(2))?;
+    let mut moved = false;
     let wrench = node.publisher(&topics::wrench(0))?;
     let cmd_vel = node.publisher(&topics::cmd_vel(2))?;
     let mut pushed = false;
@@ -190,6 +194,20 @@ fn arm_commands(node: &mut Node) -> Result<(), Error> {
             let mut v = Twist::default();
             v.linear.x = 0.5;
             cmd_vel.publish(&v)?;
+        }
+        if t >= 2.0 && !moved {
+            moved = true;
+            set_pose.publish(&Pose3D {
+                position: Vector3 {
+                    x: 3.0,
+                    y: 2.0,
+                    z: 1.0,
+                },
+                orientation: Quaternion {
+                    w: 1.0,
+                    ..Quaternion::default()
+                },
+            })?;
         }
         if t >= 3.0 && !pushed {
             pushed = true;

@@ -178,6 +178,33 @@ impl Simulation {
         self.robots[i].cmd_vel = *cmd;
     }
 
+    /// Moves a kinematic robot at once so that its base link stands at `pose` (map frame),
+    /// every body of the robot by the same rigid motion, and stops it (velocities and the
+    /// velocity command zero): a new episode's start without restarting the group. Ignored
+    /// for other bases, which the solver owns.
+    pub fn set_pose(&mut self, i: usize, pose: &caravan_schemas::Pose3D) {
+        if self.robots[i].base != Base::Kinematic {
+            return;
+        }
+        let (p, q) = (&pose.position, &pose.orientation);
+        let target = nalgebra::Isometry3::from_parts(
+            nalgebra::Translation3::new(p.x, p.y, p.z),
+            nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                q.w, q.x, q.y, q.z,
+            )),
+        );
+        let rb = &self.scene.robots[i];
+        let bodies = &mut self.scene.physics.bodies;
+        let motion = super::shapes::pose(&target) * bodies[rb.base()].position().inverse();
+        for &handle in &rb.bodies {
+            let body = &mut bodies[handle];
+            body.set_position(motion * *body.position(), true);
+            body.set_linvel(Vector::ZERO, true);
+            body.set_angvel(Vector::ZERO, true);
+        }
+        self.robots[i].cmd_vel = Twist::default();
+    }
+
     /// Starts a wrench on robot `i`; replaces the one acting on the same link. Errors name
     /// an unknown link.
     pub fn apply_wrench(&mut self, i: usize, w: &WrenchCommand) -> Result<(), String> {
