@@ -494,6 +494,37 @@ rate = "7Hz"
 "#;
 
 #[test]
+fn a_process_that_ends_the_group_completes_the_run_early() {
+    // 20 steps at 10 Hz: the counter exits at 1.9 s of a 100 s run, and takes the group with it.
+    let s = Scenario::new(
+        "ends",
+        r#"clock = "lockstep"
+duration = "100s"
+
+[[process]]
+name = "counter"
+exec = "caravan-testnode steps"
+rate = "10Hz"
+ends_group = true
+params = { count = 20 }
+
+[[process]]
+name = "idle"
+exec = "caravan-testnode idle"
+rate = "10Hz"
+"#,
+    );
+    let out = s.run(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("ended the group"), "{}", stderr(&out));
+    let report = s.report();
+    assert_eq!(report["run"]["outcome"], "completed");
+    let t = report["run"]["sim_time_s"].as_f64().unwrap();
+    assert!((1.9..=2.0).contains(&t), "{t}");
+    assert_eq!(node(&report, "counter")["steps"], 20);
+}
+
+#[test]
 fn included_files_and_templates_run_as_one_group() {
     let s = Scenario::new("include", INCLUDING);
     std::fs::write(s.dir.join("base.toml"), base()).unwrap();

@@ -5,6 +5,7 @@
 //! - `subscribe`: receives `count` messages from `topic`, checks values and sequence numbers,
 //!   prints `ready` once subscribed.
 //! - `idle`: steps at the launch rate doing nothing.
+//! - `steps`: steps `count` times at the launch rate, then exits 0.
 //! - `params`: only parses its params (`gain: f64`, `name: String`).
 //! - `lockstep-source` / `lockstep-sink`: see the lockstep protocol test.
 //! - `hang`: steps at 10 Hz and hangs in its step after `count` steps.
@@ -67,6 +68,15 @@ fn run(mode: &str) -> Result<(), Error> {
         "subscribe" => subscribe(&mut node, &p)?,
         "idle" => {
             node.run(Trigger::every_hz(10.0), |_| Ok(()))?;
+        }
+        "steps" => {
+            let count = p.count;
+            node.run(Trigger::every_hz(10.0), |step| {
+                if step.index() + 1 >= count {
+                    step.stop();
+                }
+                Ok(())
+            })?;
         }
         "params" => {}
         "lockstep-source" => {

@@ -148,6 +148,9 @@ pub struct ProcessSpec {
     pub max_restarts: u32,
     /// Whether the group stops when this process fails for good.
     pub required: bool,
+    /// Whether the group stops when this process exits at all (an exit 0 then completes the
+    /// run): a process that knows when the experiment is over, such as an episode counter.
+    pub ends_group: bool,
     pub env: BTreeMap<String, String>,
     /// The directory of the launch file that defined the process, absolute: relative `exec`
     /// paths start there, and the process gets it as `CARAVAN_LAUNCH_DIR`.

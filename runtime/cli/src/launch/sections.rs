@@ -48,6 +48,7 @@ const PROCESS_KEYS: &[&str] = &[
     "restart_backoff",
     "max_restarts",
     "required",
+    "ends_group",
     "env",
 ];
 const REPORT_KEYS: &[&str] = &["exec", "params"];
@@ -308,6 +309,7 @@ impl Checker<'_> {
                 })
                 .unwrap_or(ProcessSpec::DEFAULT_MAX_RESTARTS),
             required: self.get(s, "required", boolean).unwrap_or(true),
+            ends_group: self.get(s, "ends_group", boolean).unwrap_or(false),
             env: self.get(s, "env", env).unwrap_or_default(),
             launch_dir: dir.to_path_buf(),
         }

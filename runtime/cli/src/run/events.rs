@@ -65,7 +65,8 @@ pub fn supervise(
                 last_error,
             }) => {
                 let name = sup.names()[index].clone();
-                control.deaths.lock().unwrap().push(name);
+                control.deaths.lock().unwrap().push(name.clone());
+                let ends = lf.processes.iter().any(|p| p.name == name && p.ends_group);
                 match sup.on_exit(index, generation, status, usage, &last_error, stopping) {
                     Ok(Some(at)) => next_restart = Some(next_restart.map_or(at, |n| n.min(at))),
                     Ok(None) => {}
@@ -74,6 +75,13 @@ pub fn supervise(
                         (outcome, failure) = ("failed", Some(why));
                         begin_stop(sup, &mut stopping, &mut kill_at);
                     }
+                }
+                if ends && !stopping {
+                    console.say(&format!("process '{name}' ended the group (ends_group)"));
+                    if !status.success() {
+                        (outcome, failure) = ("failed", Some(format!("process '{name}' failed")));
+                    }
+                    begin_stop(sup, &mut stopping, &mut kill_at);
                 }
                 if !stopping && sup.all_done() {
                     begin_stop(sup, &mut stopping, &mut kill_at);
