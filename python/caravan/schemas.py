@@ -693,6 +693,108 @@ class ContactEstimate(ctypes.Structure):
         return "caravan::ContactEstimate"
 
 
+class EnvStep(ctypes.Structure):
+    """``caravan::EnvStep``: 296 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("episode", ctypes.c_uint64),
+        ("step", ctypes.c_uint32),
+        ("terminated", ctypes.c_uint32),
+        ("truncated", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
+        ("reward", ctypes.c_double),
+        ("observation_len", ctypes.c_uint32),
+        ("observation", ctypes.c_double * 32),
+    ]
+    SIZE = 296
+    ALIGN = 8
+    OFFSETS = {
+        "episode": 0,
+        "step": 8,
+        "terminated": 12,
+        "truncated": 16,
+        "_reserved": 20,
+        "reward": 24,
+        "observation_len": 32,
+        "observation": 40,
+    }
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::EnvStep"
+
+
+class AgentAction(ctypes.Structure):
+    """``caravan::AgentAction``: 88 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("episode", ctypes.c_uint64),
+        ("step", ctypes.c_uint32),
+        ("discrete", ctypes.c_int32),
+        ("continuous_len", ctypes.c_uint32),
+        ("continuous", ctypes.c_double * 8),
+    ]
+    SIZE = 88
+    ALIGN = 8
+    OFFSETS = {"episode": 0, "step": 8, "discrete": 12, "continuous_len": 16, "continuous": 24}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::AgentAction"
+
+
+class NamedValue(ctypes.Structure):
+    """``caravan::NamedValue``: 40 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("name_len", ctypes.c_uint32),
+        ("name", ctypes.c_uint8 * 28),
+        ("value", ctypes.c_double),
+    ]
+    SIZE = 40
+    ALIGN = 8
+    OFFSETS = {"name_len": 0, "name": 4, "value": 32}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::NamedValue"
+
+
+class EpisodeEnd(ctypes.Structure):
+    """``caravan::EpisodeEnd``: 704 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("episode", ctypes.c_uint64),
+        ("steps", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
+        ("outcome_len", ctypes.c_uint32),
+        ("outcome", ctypes.c_uint8 * 28),
+        ("total_reward", ctypes.c_double),
+        ("metrics_len", ctypes.c_uint32),
+        ("metrics", NamedValue * 16),
+    ]
+    SIZE = 704
+    ALIGN = 8
+    OFFSETS = {
+        "episode": 0,
+        "steps": 8,
+        "_reserved": 12,
+        "outcome_len": 16,
+        "outcome": 20,
+        "total_reward": 48,
+        "metrics_len": 56,
+        "metrics": 64,
+    }
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::EpisodeEnd"
+
+
 class Hello(ctypes.Structure):
     """``caravan::lockstep::Hello``: 4184 bytes, aligned to 8."""
 
@@ -777,6 +879,9 @@ MESSAGE_TYPES = (
     Wrench,
     ForceTorques,
     ContactEstimate,
+    EnvStep,
+    AgentAction,
+    EpisodeEnd,
 )
 BY_TYPE_NAME = {t.type_name(): t for t in MESSAGE_TYPES}
 # Every generated structure, the header and lockstep messages included.
@@ -809,6 +914,10 @@ ALL_TYPES = (
     ForceTorque,
     ForceTorques,
     ContactEstimate,
+    EnvStep,
+    AgentAction,
+    NamedValue,
+    EpisodeEnd,
     Hello,
     Grant,
     Done,
@@ -822,6 +931,9 @@ class topics:
     MAP = "map"
     GOAL = "goal"
     COLLISIONS = "collisions"
+    AGENT_OBSERVATION = "agent/observation"
+    AGENT_ACTION = "agent/action"
+    AGENT_EPISODE = "agent/episode"
 
     @staticmethod
     def scan(i: int) -> str:

@@ -14,10 +14,10 @@
 
 use crate::lockstep::{Done, Grant, Hello};
 use crate::{
-    Collision, Contact, ContactEstimate, Contacts, EncoderTicks, FixedString, FixedVec,
-    ForceTorque, ForceTorques, Goal, Header, Imu, JointCommand, JointState, JointValue, LaserScan,
-    LinkState, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Quaternion,
-    Twist, Vector3, WheelSetpoint, WheelState, Wrench,
+    AgentAction, Collision, Contact, ContactEstimate, Contacts, EncoderTicks, EnvStep, EpisodeEnd,
+    FixedString, FixedVec, ForceTorque, ForceTorques, Goal, Header, Imu, JointCommand, JointState,
+    JointValue, LaserScan, LinkState, LinkStates, NamedValue, NodeStatus, OccupancyGrid, Odometry,
+    Path2D, Pose2D, Pose3D, Quaternion, Twist, Vector3, WheelSetpoint, WheelState, Wrench,
 };
 use core::mem::{align_of, offset_of, size_of};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
@@ -285,6 +285,10 @@ describe! {
     ForceTorque { joint, force, torque }
     ForceTorques { sensors }
     ContactEstimate { link, status, first_candidate, last_candidate, _reserved, point, force }
+    EnvStep { episode, step, terminated, truncated, _reserved, reward, observation }
+    AgentAction { episode, step, discrete, continuous }
+    NamedValue { name, value }
+    EpisodeEnd { episode, steps, _reserved, outcome, total_reward, metrics }
     Hello { node, period_ns, triggers }
     Grant { now_ns, tick_ns, stop, _reserved }
     Done { node_hash, now_ns, wake_ns, published }
@@ -310,6 +314,9 @@ pub const TOPIC_CONSTANTS: &[(&str, GlobalTopic)] = topic_names![
     MAP = map,
     GOAL = goal,
     COLLISIONS = collisions,
+    AGENT_OBSERVATION = agent_observation,
+    AGENT_ACTION = agent_action,
+    AGENT_EPISODE = agent_episode,
 ];
 
 /// A per-robot topic helper with its message type erased: robot index to topic name.

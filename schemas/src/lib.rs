@@ -7,6 +7,7 @@
 
 mod articulated;
 pub mod describe;
+mod episodes;
 mod fixed;
 mod geometry;
 mod header;
@@ -25,6 +26,10 @@ pub use articulated::{
     Contact, ContactEstimate, Contacts, ForceTorque, ForceTorques, JointCommand, JointState,
     JointValue, LinkState, LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS,
     NAME_BYTES, Name, Wrench,
+};
+pub use episodes::{
+    AgentAction, EnvStep, EpisodeEnd, MAX_ACTION, MAX_EPISODE_METRICS, MAX_OBSERVATION, NamedValue,
+    ShortName,
 };
 pub use fixed::{FixedString, FixedVec};
 pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3};
@@ -112,6 +117,12 @@ pub fn wire_size<T: Message>(message: &T) -> usize {
         header + held(&m.contacts)
     } else if let Some(m) = any.downcast_ref::<ForceTorques>() {
         header + held(&m.sensors)
+    } else if let Some(m) = any.downcast_ref::<EnvStep>() {
+        header + core::mem::offset_of!(EnvStep, observation) + held(&m.observation)
+    } else if let Some(m) = any.downcast_ref::<AgentAction>() {
+        header + core::mem::offset_of!(AgentAction, continuous) + held(&m.continuous)
+    } else if let Some(m) = any.downcast_ref::<EpisodeEnd>() {
+        header + core::mem::offset_of!(EpisodeEnd, metrics) + held(&m.metrics)
     } else {
         header + core::mem::size_of::<T>()
     }

@@ -7,11 +7,24 @@
 //! Where only the name is needed (matching recorded messages), use [`Topic::name`].
 
 use crate::{
-    Collision, ContactEstimate, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand,
-    JointState, LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D,
-    Topic, Twist, WheelSetpoint, WheelState, Wrench,
+    AgentAction, Collision, ContactEstimate, Contacts, EncoderTicks, EnvStep, EpisodeEnd,
+    ForceTorques, Goal, Imu, JointCommand, JointState, LaserScan, LinkStates, NodeStatus,
+    OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Topic, Twist, WheelSetpoint, WheelState,
+    Wrench,
 };
 
+/// An episodic environment's steps, to its agent (`agent/observation`).
+pub fn agent_observation() -> Topic<EnvStep> {
+    Topic::new("agent/observation")
+}
+/// The agent's actions (`agent/action`).
+pub fn agent_action() -> Topic<AgentAction> {
+    Topic::new("agent/action")
+}
+/// Each finished episode, summed up (`agent/episode`).
+pub fn agent_episode() -> Topic<EpisodeEnd> {
+    Topic::new("agent/episode")
+}
 /// Per-node execution statistics, published by every node (`status`).
 pub fn status() -> Topic<NodeStatus> {
     Topic::new("status")

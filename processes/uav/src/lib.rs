@@ -4,13 +4,19 @@
 //! floor while staying close to its start line.
 //!
 //! - [`encounter`]: the environment's constants, actions, observation, reward and episode ends;
+//! - [`metrics`]: the measures of an episode the reference never took;
 //! - [`opponent`]: the scripted opponents (straight, zigzag, pursuit);
 //! - [`scenario`]: the evaluation scenarios (the training head-on, S1, S2, S3) and their starts;
 //! - [`policy`]: the policy interface and the sanity baselines (do nothing, side-step);
+//! - [`world`]: between the encounter's frame and the group's;
+//! - [`report`]: the report plugin's `uav` section;
 //! - [`rollout`]: episodes of the encounter's own kinematics, for unit tests of the rules.
 
 pub mod encounter;
+pub mod metrics;
 pub mod opponent;
 pub mod policy;
+pub mod report;
 pub mod rollout;
 pub mod scenario;
+pub mod world;

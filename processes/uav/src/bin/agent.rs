@@ -1,0 +1,73 @@
+//! `caravan-uav-agent`: a policy as a process. On every `agent/observation` it answers with an
+//! action on `agent/action` (none once the episode has ended). Params:
+//! `{ policy = "do_nothing" | "side_step", encounter = { … } }`.
+
+use caravan::{Node, NodeIdentity, Trigger};
+use caravan_schemas::{AgentAction, topics};
+use caravan_uav::encounter::{Action, Encounter};
+use caravan_uav::policy::{DoNothing, Policy, SideStep};
+use serde::Deserialize;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    caravan::node_main("caravan-uav-agent", setup, run)
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Params {
+    policy: String,
+    #[serde(default)]
+    encounter: Encounter,
+}
+
+fn setup(p: Params, _: &NodeIdentity) -> Result<Box<dyn Policy>, String> {
+    p.encounter
+        .validate()
+        .map_err(|e| format!("key 'encounter': {e}"))?;
+    Ok(match p.policy.as_str() {
+        "do_nothing" => Box::new(DoNothing),
+        "side_step" => Box::new(SideStep::new(&p.encounter)),
+        other => {
+            return Err(format!(
+                "key 'policy': '{other}' is not one of do_nothing, side_step"
+            ));
+        }
+    })
+}
+
+fn run(mut node: Node, mut policy: Box<dyn Policy>) -> Result<(), caravan::Error> {
+    let observations = node.subscriber(&topics::agent_observation())?;
+    let actions = node.publisher(&topics::agent_action())?;
+    let trigger = node.trigger(Trigger::on(topics::agent_observation().name()))?;
+    node.run(trigger, |_| {
+        while let Some(o) = observations.receive()? {
+            if o.step == 0 {
+                policy.reset();
+            }
+            if o.terminated != 0 || o.truncated != 0 {
+                continue;
+            }
+            let obs = o.observation.as_slice();
+            let Ok(obs) = <[f64; 6]>::try_from(obs) else {
+                return Err(caravan::Error::Step(format!(
+                    "agent/observation holds {} numbers; the encounter has 6",
+                    obs.len()
+                )));
+            };
+            let mut a = caravan_schemas::placement_new::<AgentAction>();
+            a.episode = o.episode;
+            a.step = o.step;
+            match policy.act(&obs) {
+                Action::Discrete(i) => a.discrete = i as i32,
+                Action::Continuous(c) => {
+                    a.discrete = -1;
+                    a.continuous.set_from_slice(&c);
+                }
+            }
+            actions.publish(&a)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}

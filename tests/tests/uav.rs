@@ -1,0 +1,66 @@
+//! Two-UAV collision avoidance: episodes run inside one lockstep group (physics, environment,
+//! scripted opponent, policy process), ended by the environment after a number of episodes;
+//! the report counts the outcomes.
+
+use caravan_tests::{launch_with_set, run_scenario};
+use serde_json::Value;
+
+fn uav(policy: &str, scenario: &str, episodes: u32) -> Value {
+    let run = run_scenario(
+        "uav",
+        "encounter.toml",
+        &[
+            "--set",
+            &format!("args.policy={policy}"),
+            "--set",
+            &format!("args.scenario={scenario}"),
+            "--set",
+            &format!("args.episodes={episodes}"),
+        ],
+    );
+    assert_eq!(
+        run.report["run"]["outcome"], "completed",
+        "{}",
+        run.report["run"]
+    );
+    let u = run.report["uav"].clone();
+    assert_eq!(u["episodes"], episodes, "{u}");
+    u
+}
+
+#[test]
+fn doing_nothing_head_on_collides_in_every_episode() {
+    let u = uav("do_nothing", "head_on", 4);
+    assert_eq!(u["outcomes"]["collided"]["count"], 4, "{u}");
+    // Head-on: the centres come within the collision radius.
+    assert!(
+        u["metrics"]["closest_m"]["max"].as_f64().unwrap() < 0.5,
+        "{u}"
+    );
+}
+
+#[test]
+fn the_side_step_passes_shifted_straight_opponents() {
+    let u = uav("side_step", "s1", 8);
+    assert_eq!(u["outcomes"]["passed"]["count"], 8, "{u}");
+    assert!(
+        u["metrics"]["closest_m"]["min"].as_f64().unwrap() >= 0.5,
+        "{u}"
+    );
+    // The agent left its line and came back toward it: a deviation, but under a metre.
+    let dev = u["metrics"]["max_deviation_m"]["mean"].as_f64().unwrap();
+    assert!(dev > 0.1 && dev < 1.0, "{u}");
+}
+
+#[test]
+fn bad_uav_params_name_the_key() {
+    for (set, key) in [
+        ("args.scenario=s4", "scenario"),
+        ("args.episodes=0", "episodes"),
+        ("args.policy=td4", "policy"),
+    ] {
+        let (code, err) = launch_with_set("uav/encounter.toml", "10s", set);
+        assert_ne!(code, 0, "{set}: {err}");
+        assert!(err.contains(key), "{set}: {err}");
+    }
+}
