@@ -64,3 +64,15 @@ fn bad_uav_params_name_the_key() {
         assert!(err.contains(key), "{set}: {err}");
     }
 }
+
+#[test]
+fn a_gymnasium_agent_plays_episodes_through_the_bridge() {
+    // The first run installs gymnasium into .venv-gym.
+    let run = run_scenario("uav", "gym.toml", &["--set", "args.episodes=3"]);
+    let u = &run.report["uav"];
+    assert_eq!(u["episodes"], 3, "{u}");
+    let log = std::fs::read_to_string(run.dir.join("logs/agent.log")).unwrap();
+    assert!(log.contains("played 3 episodes"), "{log}");
+    // Random increments make it leave its line: every episode records actions.
+    assert_eq!(u["metrics"]["action_change"]["n"], 3, "{u}");
+}
