@@ -136,12 +136,12 @@ class CaravanEnv(gym.Env):
         while e.step != 0:
             e = self._next()
         self.episode = e.episode
-        return self._observation(e), {"episode": e.episode}
+        return self._observation(e), {"episode_number": e.episode}
 
     def step(self, action):
         self._actions.put(action)
         e = self._next()
-        info = {"episode": e.episode, "step": e.step}
+        info = {"episode_number": e.episode, "step": e.step}
         return self._observation(e), float(e.reward), bool(e.terminated), bool(e.truncated), info
 
     def close(self) -> None:

@@ -76,3 +76,11 @@ fn a_gymnasium_agent_plays_episodes_through_the_bridge() {
     // Random increments make it leave its line: every episode records actions.
     assert_eq!(u["metrics"]["action_change"]["n"], 3, "{u}");
 }
+
+#[test]
+fn the_shipped_learned_policy_passes_in_the_agent_process() {
+    // TD3 trained on the head-on scenario only (launch/uav/train.toml), run by the Rust agent
+    // from its JSON weights, against shifted straight opponents.
+    let u = uav("mlp", "s1", 6);
+    assert_eq!(u["outcomes"]["passed"]["count"], 6, "{u}");
+}

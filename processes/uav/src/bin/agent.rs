@@ -1,10 +1,12 @@
 //! `caravan-uav-agent`: a policy as a process. On every `agent/observation` it answers with an
 //! action on `agent/action` (none once the episode has ended). Params:
-//! `{ policy = "do_nothing" | "side_step", encounter = { … } }`.
+//! `{ policy = "do_nothing" | "side_step" | "mlp", weights = "policies/td3.json", encounter = { … } }`
+//! (`weights`, relative to the launch file, for `mlp`: a trained actor).
 
 use caravan::{Node, NodeIdentity, Trigger};
 use caravan_schemas::{AgentAction, topics};
 use caravan_uav::encounter::{Action, Encounter};
+use caravan_uav::mlp::Mlp;
 use caravan_uav::policy::{DoNothing, Policy, SideStep};
 use serde::Deserialize;
 use std::process::ExitCode;
@@ -18,19 +20,36 @@ fn main() -> ExitCode {
 struct Params {
     policy: String,
     #[serde(default)]
+    weights: Option<String>,
+    #[serde(default)]
     encounter: Encounter,
 }
 
-fn setup(p: Params, _: &NodeIdentity) -> Result<Box<dyn Policy>, String> {
+fn setup(p: Params, identity: &NodeIdentity) -> Result<Box<dyn Policy>, String> {
     p.encounter
         .validate()
         .map_err(|e| format!("key 'encounter': {e}"))?;
     Ok(match p.policy.as_str() {
         "do_nothing" => Box::new(DoNothing),
         "side_step" => Box::new(SideStep::new(&p.encounter)),
+        "mlp" => {
+            let path = p
+                .weights
+                .ok_or("key 'weights': the policy 'mlp' needs a weights file")?;
+            let text = std::fs::read_to_string(identity.resolve_path(&path))
+                .map_err(|e| format!("key 'weights': cannot read {path}: {e}"))?;
+            let mlp = Mlp::parse(&text, 6).map_err(|e| format!("key 'weights': {path}: {e}"))?;
+            if mlp.outputs() != 2 {
+                return Err(format!(
+                    "key 'weights': {path}: 2 outputs expected, got {}",
+                    mlp.outputs()
+                ));
+            }
+            Box::new(mlp)
+        }
         other => {
             return Err(format!(
-                "key 'policy': '{other}' is not one of do_nothing, side_step"
+                "key 'policy': '{other}' is not one of do_nothing, side_step, mlp"
             ));
         }
     })
