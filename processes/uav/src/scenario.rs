@@ -2,6 +2,7 @@
 //! (the opponent's start shifted in y and z, flying straight), S2 (shifted start, zigzag), S3
 //! (shifted start, pursuit). Starts are drawn from the episode's seed.
 
+use crate::encounter::Encounter;
 use crate::opponent::Opponent;
 use caravan_sensor::noise::Gaussian;
 use serde::{Deserialize, Serialize};
@@ -68,6 +69,15 @@ impl Scenario {
     pub fn offset(&self, g: &mut Gaussian) -> [f64; 2] {
         [(), ()].map(|_| (2.0 * g.uniform() - 1.0) * self.offset_m)
     }
+}
+
+/// Checks the params a scenario's processes share: the encounter's constants and the
+/// scenario's name.
+pub fn checked(encounter: &Encounter, scenario: &str) -> Result<Scenario, String> {
+    encounter
+        .validate()
+        .map_err(|e| format!("key 'encounter': {e}"))?;
+    Scenario::named(scenario).map_err(|e| format!("key 'scenario': {e}"))
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! drones' ground truth as a [`State`], and velocity and pose commands.
 
 use crate::encounter::State;
-use caravan_schemas::{Odometry, Pose3D, Quaternion, Twist, Vector3 as V3};
+use caravan_schemas::{Odometry, Pose3D, Quaternion, Twist, Vector3 as V3, topics};
 use nalgebra::Vector3;
 use serde::Deserialize;
 
@@ -66,5 +66,36 @@ pub fn twist(v: &Vector3<f64>) -> Twist {
             z: v.z,
         },
         ..Twist::default()
+    }
+}
+
+/// Both drones' latest ground truth (`robot/0/ground_truth`, `robot/1/ground_truth`).
+pub struct Truth {
+    subscribers: [caravan::Subscriber<Odometry>; 2],
+    last: [Option<Odometry>; 2],
+}
+
+impl Truth {
+    pub fn open(node: &caravan::Node) -> Result<Self, caravan::Error> {
+        Ok(Self {
+            subscribers: [
+                node.subscriber(&topics::ground_truth(0))?,
+                node.subscriber(&topics::ground_truth(1))?,
+            ],
+            last: [None, None],
+        })
+    }
+
+    /// The agent's and the opponent's newest ground truth, once both have arrived.
+    pub fn poll(&mut self) -> Result<Option<(Odometry, Odometry)>, caravan::Error> {
+        for (slot, sub) in self.last.iter_mut().zip(&self.subscribers) {
+            if let Some(m) = sub.latest()? {
+                *slot = Some(*m);
+            }
+        }
+        Ok(match self.last {
+            [Some(a), Some(o)] => Some((a, o)),
+            _ => None,
+        })
     }
 }

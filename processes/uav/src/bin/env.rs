@@ -5,12 +5,12 @@
 //! After `episodes` episodes it exits, which ends the group (`ends_group = true`).
 
 use caravan::{Node, NodeIdentity, Trigger};
-use caravan_schemas::{EnvStep, EpisodeEnd, NamedValue, Odometry, ShortName, topics};
+use caravan_schemas::{EnvStep, EpisodeEnd, NamedValue, ShortName, topics};
 use caravan_sensor::noise::Gaussian;
 use caravan_uav::encounter::{Action, Encounter, Outcome, State};
 use caravan_uav::metrics::EpisodeMetrics;
 use caravan_uav::scenario::Scenario;
-use caravan_uav::world::{Frame, twist};
+use caravan_uav::world::{Frame, Truth, twist};
 use nalgebra::Vector3;
 use serde::Deserialize;
 use std::process::ExitCode;
@@ -163,24 +163,16 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
         ],
         observations: node.publisher(&topics::agent_observation())?,
     };
-    let truth = [
-        node.subscriber(&topics::ground_truth(0))?,
-        node.subscriber(&topics::ground_truth(1))?,
-    ];
+    let mut truth = Truth::open(&node)?;
     let summaries = node.publisher(&topics::agent_episode())?;
     let actions = node.subscriber(&topics::agent_action())?;
     let mut g = Gaussian::new(r.seed, 0);
     let period_ns = (e.step_s * 1e9).round() as u64;
-    let mut last: [Option<Odometry>; 2] = [None, None];
     let mut ep: Option<Episode> = None;
     let trigger = node.trigger(Trigger::every_hz(240.0))?;
     node.run(trigger, |step| {
         let now = step.now_ns();
-        for (slot, sub) in last.iter_mut().zip(&truth) {
-            if let Some(m) = sub.latest()? {
-                *slot = Some(*m);
-            }
-        }
+        let latest = truth.poll()?;
         let ep = match &mut ep {
             Some(ep) => ep,
             None => ep.insert(begin(&r, 1, now, &mut g, &ports)?),
@@ -211,11 +203,11 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
         if now < ep.next_ns {
             return Ok(());
         }
-        let [Some(agent), Some(opponent)] = &last else {
+        let Some((agent, opponent)) = latest else {
             return Ok(());
         };
         ep.step += 1;
-        let s = r.frame.state(agent, opponent, ep.step as f64 * e.step_s);
+        let s = r.frame.state(&agent, &opponent, ep.step as f64 * e.step_s);
         let outcome = e.outcome(&s);
         let reward = e.reward(&s, outcome);
         ep.total_reward += reward;

@@ -3,10 +3,10 @@
 //! `agent/observation`.
 
 use caravan::{Node, NodeIdentity, Trigger};
-use caravan_schemas::{Odometry, topics};
+use caravan_schemas::topics;
 use caravan_uav::encounter::Encounter;
 use caravan_uav::scenario::Scenario;
-use caravan_uav::world::{Frame, twist};
+use caravan_uav::world::{Frame, Truth, twist};
 use serde::Deserialize;
 use std::process::ExitCode;
 
@@ -44,12 +44,8 @@ fn setup(p: Params, _: &NodeIdentity) -> Result<Ready, String> {
 
 fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
     let cmd_vel = node.publisher(&topics::cmd_vel(1))?;
-    let truth = [
-        node.subscriber(&topics::ground_truth(0))?,
-        node.subscriber(&topics::ground_truth(1))?,
-    ];
+    let mut truth = Truth::open(&node)?;
     let observations = node.subscriber(&topics::agent_observation())?;
-    let mut last: [Option<Odometry>; 2] = [None, None];
     let mut started_ns: Option<u64> = None;
     let trigger = node.trigger(Trigger::every_hz(240.0))?;
     node.run(trigger, |step| {
@@ -58,16 +54,11 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
                 started_ns = Some(o.header().stamp_ns);
             }
         }
-        for (slot, sub) in last.iter_mut().zip(&truth) {
-            if let Some(m) = sub.latest()? {
-                *slot = Some(*m);
-            }
-        }
-        let (Some(t0), [Some(agent), Some(own)]) = (started_ns, &last) else {
+        let (Some(t0), Some((agent, own))) = (started_ns, truth.poll()?) else {
             return Ok(());
         };
         let t_s = step.now_ns().saturating_sub(t0) as f64 * 1e-9;
-        let s = r.frame.state(agent, own, t_s);
+        let s = r.frame.state(&agent, &own, t_s);
         let v = r
             .scenario
             .opponent
