@@ -156,6 +156,11 @@ impl Encounter {
         Ok(())
     }
 
+    /// The agent step, whole nanoseconds (the schedule's unit).
+    pub fn step_ns(&self) -> u64 {
+        (self.step_s * 1e9).round() as u64
+    }
+
     /// The agent's start position.
     pub fn agent_start(&self) -> Vector3<f64> {
         Vector3::new(0.0, 0.0, self.altitude_m)

@@ -119,7 +119,7 @@ fn begin(
         number,
         step: 0,
         observed_ns: now,
-        next_ns: now + (e.step_s * 1e9).round() as u64,
+        next_ns: now + e.step_ns(),
         acted: false,
         agent_v: start.agent_v,
         total_reward: 0.0,
@@ -167,7 +167,6 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
     let summaries = node.publisher(&topics::agent_episode())?;
     let actions = node.subscriber(&topics::agent_action())?;
     let mut g = Gaussian::new(r.seed, 0);
-    let period_ns = (e.step_s * 1e9).round() as u64;
     let mut ep: Option<Episode> = None;
     let trigger = node.trigger(Trigger::every_hz(240.0))?;
     node.run(trigger, |step| {
@@ -216,7 +215,7 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
             .observations
             .publish(&observation(&e, &s, ep.number, ep.step, reward, outcome))?;
         ep.observed_ns = now;
-        ep.next_ns += period_ns;
+        ep.next_ns += e.step_ns();
         ep.acted = false;
         if let Some(outcome) = outcome {
             summaries.publish(&summary(ep, outcome))?;
