@@ -33,6 +33,7 @@ ENV_EPOCH_NS = "CARAVAN_EPOCH_NS"
 ENV_SEED = "CARAVAN_SEED"
 ENV_LAUNCH_DIR = "CARAVAN_LAUNCH_DIR"
 ENV_NETWORK = "CARAVAN_NETWORK"
+ENV_CHECK = "CARAVAN_CHECK"
 
 # Service limits of a group (``caravan::group``), used when no config file is given.
 MAX_PUBLISHERS = 80
@@ -50,6 +51,21 @@ class CaravanError(Exception):
 class BadInput(CaravanError):
     """Bad params, environment or input files: the node did nothing (exit status 2, as
     ``caravan::node_main``)."""
+
+
+class CheckPassed(SystemExit):
+    """Raised when a node that only checks its input (``CARAVAN_CHECK``) reaches the point
+    where it would join the group: everything it read so far was good. A ``SystemExit`` with
+    status 0, so a script ends cleanly there with or without ``caravan.main``."""
+
+    def __init__(self) -> None:
+        super().__init__(0)
+
+
+def check_only() -> bool:
+    """True when the launcher started this process only to check its params and inputs
+    before the group starts (``CARAVAN_CHECK``, as ``caravan::check_only``)."""
+    return os.environ.get(ENV_CHECK, "") not in ("", "0")
 
 
 # --- durations and rates -------------------------------------------------------------------
@@ -185,7 +201,8 @@ class Identity(SimpleNamespace):
                 raise BadInput(f"{var}: '{value}' is not {what}") from None
 
         host = optional(ENV_HOST) or "localhost"
-        _warn_unemulated_network(optional(ENV_NETWORK), required(ENV_NODE), host)
+        if not check_only():
+            _warn_unemulated_network(optional(ENV_NETWORK), required(ENV_NODE), host)
         return cls(
             group=required(ENV_GROUP),
             name=required(ENV_NODE),

@@ -33,9 +33,11 @@ from .schemas import Done, Grant, Header, Hello, NodeStatus, lockstep, name_hash
 from .identity import (
     BadInput,
     CaravanError,
+    CheckPassed,
     Identity,
     STATUS_PERIOD_NS,
     T,
+    check_only,
     group_config,
     load_config,
     parse_params,
@@ -83,6 +85,10 @@ class Node:
         iox.set_log_level_from_env_or(iox.LogLevel.Warn)
         validate_group(identity.group)
         self.identity = identity
+        if check_only():
+            # The launcher only checks this node's input: read params and files, join nothing.
+            # Opening a port or running is where the check ends (``CheckPassed``).
+            return
         self.lockstep = identity.clock == "lockstep"
         config = (
             load_config(identity.iceoryx_config)
@@ -139,12 +145,14 @@ class Node:
         """A publisher of ``msg_type`` (a class from ``caravan.schemas``) on ``topic``. The
         defaults match Rust's ``Topic::new`` (keep the newest 8); ``lossless`` matches
         ``Topic::lossless`` (depth 256, publishers wait)."""
+        _end_of_check()
         return Publisher(self, msg_type, topic, depth or (256 if lossless else 8), lossless)
 
     def subscriber(
         self, msg_type: Type[T], topic: str, depth: Optional[int] = None, lossless: bool = False
     ) -> Subscriber:
         """A subscriber of ``msg_type`` on ``topic``; ``publisher`` explains the delivery."""
+        _end_of_check()
         return Subscriber(self, msg_type, topic, depth or (256 if lossless else 8), lossless)
 
     def run(self, step: Callable[[Step], Any], rate: Any = None, on: Optional[str] = None) -> None:
@@ -152,6 +160,7 @@ class Node:
         message arrives on topic ``on``, until SIGTERM/SIGINT, the lockstep scheduler's stop, or
         ``s.stop()``. The launch file's ``rate``/``on`` take precedence. A final status is
         published on exit."""
+        _end_of_check()
         if self.identity.rate_override:
             period_ns, trigger = parse_rate(self.identity.rate_override), None
         elif self.identity.on_override:
@@ -403,10 +412,19 @@ class _LockstepClient:
         self._send(self.done_port, done, self.done_notifier)
 
 
+def _end_of_check() -> None:
+    if check_only():
+        raise CheckPassed()
+
+
 def main(agent: Callable[[], Any]) -> None:
     """Runs ``agent()`` and exits as Rust nodes do: status 0 on success; with a one-line
     message, 2 on ``BadInput`` (bad params or input files: nothing ran) and 1 on any other
-    ``CaravanError`` (a mismatched topic, a transport failure…)."""
+    ``CaravanError`` (a mismatched topic, a transport failure…).
+
+    Before the group starts, ``caravan launch`` runs the agent once with ``CARAVAN_CHECK`` set:
+    ``Node.from_env()`` then joins nothing, and the agent's first port or ``run`` ends the
+    check with status 0, so its params and files are checked before anything starts."""
     try:
         agent()
     except CaravanError as e:

@@ -17,6 +17,11 @@ pub const EXIT_FAILURE: u8 = 1;
 ///    half-starts it; its error is one paragraph naming the key;
 /// 3. the node joins the group and `run` steps it until the group stops.
 ///
+/// Before it starts anything, `caravan launch` runs every Caravan program once with
+/// `CARAVAN_CHECK=1` ([`crate::check_only`]): the node then stops after step 2, exiting 0 when
+/// its params and inputs are good and 2 with the message when not, so a bad process param,
+/// world or robot description stops the launch before any process of the group runs.
+///
 /// Errors are printed as `program: message`. The exit code is [`EXIT_BAD_INPUT`] (2) for bad
 /// params or input (`setup` failing, or `run` returning [`Error::Params`], [`Error::Env`] or
 /// [`Error::Input`]) and [`EXIT_FAILURE`] (1) for a failure at run time.
@@ -61,6 +66,9 @@ pub fn node_main<P: DeserializeOwned, S>(
             let node = identity.name.clone();
             (EXIT_BAD_INPUT, Error::Params { node, message })
         })?;
+        if crate::check_only() {
+            return Ok(());
+        }
         let node = Node::new(identity).map_err(classify)?;
         run(node, ready).map_err(classify)
     })();

@@ -28,6 +28,16 @@ pub mod env_vars {
     pub const RUN_DIR: &str = "CARAVAN_RUN_DIR";
     /// The group's hosts, links and CPU slowdowns, as JSON (`caravan::network::Network`).
     pub const NETWORK: &str = "CARAVAN_NETWORK";
+    /// Set (to `1`) when the launcher only wants the node to check its params and inputs:
+    /// the node exits 0 or 2 without joining the group (see [`crate::node_main`]).
+    pub const CHECK: &str = "CARAVAN_CHECK";
+}
+
+/// True when the launcher started this process only to check its params and inputs
+/// ([`env_vars::CHECK`]): a node that does not use [`crate::node_main`] should then validate
+/// what it can and exit, 0 when its input is good and 2 when not, without joining the group.
+pub fn check_only() -> bool {
+    std::env::var_os(env_vars::CHECK).is_some_and(|v| !v.is_empty() && v != "0")
 }
 
 /// Identity and settings of one node.

@@ -42,11 +42,11 @@ pub use clock::ClockMode;
 pub use entry::{EXIT_BAD_INPUT, EXIT_FAILURE, node_main};
 pub use error::Error;
 pub use executor::Step;
-pub use identity::{NodeIdentity, env_vars};
+pub use identity::{NodeIdentity, check_only, env_vars};
 pub use node::{Node, NodeBuilder};
 pub use params::parse_params;
 pub use publisher::{Loan, Publisher};
-pub use rate::{Trigger, parse_duration, parse_rate};
+pub use rate::{MAX_DURATION, MIN_PERIOD, Trigger, parse_duration, parse_rate, seconds};
 pub use stats::StepStats;
 pub use subscriber::{Received, Subscriber};
 

@@ -30,7 +30,16 @@ impl Trigger {
     }
 }
 
-/// Parses a rate: a frequency (`"50Hz"`, `"2.5 kHz"`) or a period (`"20ms"`, `"1s"`).
+/// The longest duration Caravan accepts anywhere (ten years): nothing in a group runs longer,
+/// and simulated time (u64 nanoseconds, 584 years) and deadlines never overflow below it.
+pub const MAX_DURATION: Duration = Duration::from_secs(10 * 365 * 24 * 3600);
+
+/// The shortest period a rate may have (1 µs, 1 MHz): a node cannot usefully step faster.
+/// The launcher also keeps lockstep periods at or above the group's tick.
+pub const MIN_PERIOD: Duration = Duration::from_micros(1);
+
+/// Parses a rate: a frequency (`"50Hz"`, `"2.5 kHz"`) or a period (`"20ms"`, `"1s"`), with a
+/// period between [`MIN_PERIOD`] and [`MAX_DURATION`].
 pub fn parse_rate(text: &str) -> Result<Duration, Error> {
     let t = text.trim();
     let lower = t.to_ascii_lowercase();
@@ -45,14 +54,27 @@ pub fn parse_rate(text: &str) -> Result<Duration, Error> {
             if !(f.is_finite() && f > 0.0) {
                 return Err(bad_rate(text));
             }
-            Duration::from_secs_f64(1.0 / (f * scale))
+            let secs = 1.0 / (f * scale);
+            match Duration::try_from_secs_f64(secs) {
+                Ok(period) if period <= MAX_DURATION => period,
+                _ => return Err(rate_out_of_range(text)),
+            }
         }
         None => parse_duration(t).map_err(|_| bad_rate(text))?,
     };
     if period.is_zero() {
         return Err(bad_rate(text));
     }
+    if period < MIN_PERIOD {
+        return Err(rate_out_of_range(text));
+    }
     Ok(period)
+}
+
+fn rate_out_of_range(text: &str) -> Error {
+    Error::Config(format!(
+        "rate '{text}' is out of range: its period must be between 1 µs (1 MHz) and ten years"
+    ))
 }
 
 fn bad_rate(text: &str) -> Error {
@@ -82,7 +104,24 @@ pub fn parse_duration(text: &str) -> Result<Duration, Error> {
     if !secs.is_finite() || secs < 0.0 {
         return Err(bad_duration(text));
     }
-    Ok(Duration::from_secs_f64(secs))
+    match Duration::try_from_secs_f64(secs) {
+        Ok(d) if d <= MAX_DURATION => Ok(d),
+        _ => Err(Error::Config(format!(
+            "duration '{text}' is too long; Caravan accepts at most ten years"
+        ))),
+    }
+}
+
+/// Checks a number of seconds given on a command line (`--seconds 2.5`): finite, not negative,
+/// at most [`MAX_DURATION`].
+pub fn seconds(value: f64) -> Result<Duration, String> {
+    if !value.is_finite() || value < 0.0 {
+        return Err(format!("{value} is not a number of seconds (0 or more)"));
+    }
+    match Duration::try_from_secs_f64(value) {
+        Ok(d) if d <= MAX_DURATION => Ok(d),
+        _ => Err(format!("{value} s is too long; at most ten years")),
+    }
 }
 
 fn bad_duration(text: &str) -> Error {
@@ -109,5 +148,25 @@ mod tests {
         for bad in ["", "fast", "0Hz", "-5Hz", "10 parsecs", "0s", "Hz"] {
             assert!(parse_rate(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn huge_and_tiny_values_are_errors_not_panics() {
+        for bad in ["1e-30Hz", "1e9Hz", "1e300Hz", "1ns", "2777777777777778h"] {
+            assert!(parse_rate(bad).is_err(), "{bad}");
+        }
+        for bad in [
+            "2777777777777778h",
+            "99999999999999999999999s",
+            "1e400s",
+            "11000000000000000000000000000000ns",
+        ] {
+            assert!(parse_duration(bad).is_err(), "{bad}");
+        }
+        assert!(parse_duration("87600h").is_ok());
+        for bad in [f64::NAN, f64::INFINITY, -1.0, 1e300] {
+            assert!(seconds(bad).is_err(), "{bad}");
+        }
+        assert_eq!(seconds(1.5), Ok(Duration::from_millis(1500)));
     }
 }

@@ -30,6 +30,36 @@ pub fn live_nodes(group: &str) -> Result<Vec<LiveNode>> {
     Ok(nodes)
 }
 
+/// The lock a launcher holds on its group's name for as long as it runs: taking it is atomic,
+/// so of two launches of one group started at the same instant exactly one gets it. The lock
+/// is released when the file is closed, including when the launcher dies.
+pub struct GroupLock {
+    _file: std::fs::File,
+}
+
+/// Takes `group`'s lock, or `None` when another launcher holds it.
+pub fn lock_group(group: &str) -> Result<Option<GroupLock>> {
+    use std::os::unix::fs::OpenOptionsExt;
+    use std::os::unix::io::AsRawFd;
+    let path = std::env::temp_dir().join(format!("caravan-group-{group}.lock"));
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .mode(0o600)
+        .open(&path)
+        .map_err(|e| anyhow!("cannot open the group lock {}: {e}", path.display()))?;
+    // SAFETY: flock on a descriptor this function owns.
+    if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+        let e = std::io::Error::last_os_error();
+        if e.raw_os_error() == Some(libc::EWOULDBLOCK) {
+            return Ok(None);
+        }
+        return Err(anyhow!("cannot lock {}: {e}", path.display()));
+    }
+    Ok(Some(GroupLock { _file: file }))
+}
+
 pub fn group_is_running(group: &str) -> Result<bool> {
     Ok(caravan::group::groups_with_resources()
         .iter()
@@ -58,10 +88,18 @@ pub fn running_groups() -> Result<Vec<String>> {
 
 /// The group named, or the only running one.
 pub fn choose_group(named: Option<&str>) -> Result<String> {
-    if let Some(g) = named {
-        return Ok(g.to_string());
-    }
     let running = running_groups()?;
+    if let Some(g) = named {
+        // Joining a group that is not running would create its shared memory.
+        if running.iter().any(|r| r == g) {
+            return Ok(g.to_string());
+        }
+        let which = match running.as_slice() {
+            [] => "no Caravan group is running".to_string(),
+            list => format!("running: {}", list.join(", ")),
+        };
+        return Err(anyhow!("no group '{g}' is running ({which})"));
+    }
     match running.as_slice() {
         [one] => Ok(one.clone()),
         [] => Err(anyhow!("no Caravan group is running")),
@@ -73,20 +111,50 @@ pub fn choose_group(named: Option<&str>) -> Result<String> {
     }
 }
 
-/// `caravan clean`: sweeps every group without a live process.
-pub fn clean() -> Result<()> {
-    let mut any = false;
+#[derive(clap::Args)]
+pub struct CleanArgs {
+    /// The group to clean
+    #[arg(long, short, conflicts_with = "all")]
+    pub group: Option<String>,
+    /// Clean every group none of whose processes is alive
+    #[arg(long)]
+    pub all: bool,
+}
+
+/// `caravan clean`: removes the resources of the group named, of the only stale group, or
+/// (`--all`) of every stale group. A running group is never touched.
+pub fn clean(args: &CleanArgs) -> Result<()> {
+    let mut stale = Vec::new();
     for group in caravan::group::groups_with_resources() {
-        if live_nodes(&group)?.is_empty() {
-            let n = caravan::group::remove_resources(&group)?;
-            println!("removed {n} stale entries of group '{group}'");
-            any = true;
-        } else {
-            println!("group '{group}' is running; left alone");
+        let running = !live_nodes(&group)?.is_empty();
+        match &args.group {
+            Some(g) if *g != group => {}
+            Some(g) if running => return Err(anyhow!("group '{g}' is running; stop it first")),
+            _ if running => {}
+            _ => stale.push(group),
         }
     }
-    if !any {
-        println!("nothing to clean");
+    let chosen = match (&args.group, args.all, stale.as_slice()) {
+        (Some(g), _, []) => {
+            println!("group '{g}' left nothing to clean");
+            return Ok(());
+        }
+        (_, _, []) => {
+            println!("nothing to clean");
+            return Ok(());
+        }
+        (None, false, [_, _, ..]) => {
+            return Err(anyhow!(
+                "{} groups left shared memory behind ({}); name one with --group, or clean them all with --all",
+                stale.len(),
+                stale.join(", ")
+            ));
+        }
+        _ => stale,
+    };
+    for group in chosen {
+        let n = caravan::group::remove_resources(&group)?;
+        println!("removed {n} stale entries of group '{group}'");
     }
     Ok(())
 }

@@ -7,6 +7,15 @@ use clap::{Args, Subcommand};
 use iceoryx2::prelude::*;
 use std::time::{Duration, Instant};
 
+/// A `--seconds` value: finite, not negative, at most ten years.
+pub fn seconds_arg(text: &str) -> Result<Duration, String> {
+    let value: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number of seconds"))?;
+    caravan::seconds(value)
+}
+
 #[derive(Args)]
 pub struct GroupArg {
     /// The group; defaults to the only running one
@@ -33,8 +42,8 @@ pub enum TopicCommand {
         #[command(flatten)]
         group: GroupArg,
         /// Measure for this many seconds
-        #[arg(long, default_value_t = 5.0)]
-        seconds: f64,
+        #[arg(long, default_value = "5", value_parser = seconds_arg)]
+        seconds: Duration,
     },
 }
 
@@ -90,15 +99,10 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
             let group = choose_group(group.group.as_deref())?;
             let started = Instant::now();
             let mut n = 0u64;
-            follow(
-                &group,
-                &topic,
-                Some(Duration::from_secs_f64(seconds)),
-                |_, _| {
-                    n += 1;
-                    false
-                },
-            )?;
+            follow(&group, &topic, Some(seconds), |_, _| {
+                n += 1;
+                false
+            })?;
             let secs = started.elapsed().as_secs_f64();
             println!(
                 "{topic}: {n} messages in {secs:.2} s = {:.2} Hz",

@@ -43,8 +43,9 @@ enum Command {
         /// The run directory (runs/<group>-<time>)
         run_dir: std::path::PathBuf,
     },
-    /// Remove shared memory left behind by groups whose processes are all gone
-    Clean,
+    /// Remove shared memory left behind by a group whose processes are all gone: the group
+    /// named, else the only such group; --all removes every such group's
+    Clean(clean::CleanArgs),
     /// Latency benchmarks
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -71,7 +72,7 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         }),
-        Command::Clean => clean::clean().map(|_| ExitCode::SUCCESS),
+        Command::Clean(args) => clean::clean(&args).map(|_| ExitCode::SUCCESS),
         Command::Bench(cmd) => bench::run(cmd).map(|_| ExitCode::SUCCESS),
         Command::Schemas(args) => schemas_py::run(&args).map(|_| ExitCode::SUCCESS),
     };

@@ -66,7 +66,8 @@ pub struct RunFacts {
     pub clock: String,
     pub seed: u64,
     pub launch_file: String,
-    /// "completed", "interrupted" or "failed".
+    /// "completed"; "degraded" (completed, but a process was restarted on the way, so its
+    /// state was lost); "interrupted" or "failed".
     pub outcome: String,
     pub failure: Option<String>,
     pub sim_time_s: f64,

@@ -30,6 +30,16 @@ struct Params {
 
 fn main() {
     let mode = std::env::args().nth(1).unwrap_or_default();
+    if caravan::check_only() {
+        // The launcher's check before the group starts: only the params can be checked here.
+        let checked = caravan::NodeIdentity::from_env()
+            .and_then(|id| caravan::parse_params::<Params>(&id.name, &id.params));
+        if let Err(e) = checked {
+            eprintln!("caravan-testnode {mode}: {e}");
+            std::process::exit(2);
+        }
+        return;
+    }
     if let Err(e) = run(&mode) {
         eprintln!("caravan-testnode {mode}: {e}");
         std::process::exit(1);

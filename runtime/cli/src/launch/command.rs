@@ -37,8 +37,9 @@ pub struct LaunchArgs {
 /// Exit code for bad input: nothing was started.
 pub const EXIT_BAD_INPUT: u8 = 2;
 
-/// Loads and validates the launch file with the command line's overrides, and has every
-/// report plugin check its params (`PROGRAM --check`), so that nothing bad gets started.
+/// Loads and validates the launch file with the command line's overrides, has every process
+/// check its params and inputs (`CARAVAN_CHECK=1`, see [`run::preflight`]) and every report
+/// plugin its params (`PROGRAM --check`), so that nothing bad gets started.
 pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
     let mut sets = args.set.clone();
     if let Some(d) = &args.duration {
@@ -50,7 +51,12 @@ pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
     if let Some(s) = args.seed {
         sets.push(format!("group.seed={s}"));
     }
-    let lf = super::load::load(&args.file, &sets, &run::exec::resolve_exec)?;
+    let lf = super::load::load_checked(
+        &args.file,
+        &sets,
+        &run::exec::resolve_exec,
+        &run::preflight::check_processes,
+    )?;
     let problems: Vec<Problem> = report_entries(&lf)
         .iter()
         .filter_map(|entry| {
@@ -82,11 +88,18 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     };
     let reports = report_entries(&lf);
     let group = lf.group.name.clone();
-    if crate::clean::group_is_running(&group)? {
+    let already = || {
         eprintln!(
             "caravan: group '{group}' is already running; stop it, or give this run another name with --set group.name=…"
         );
-        return Ok(EXIT_BAD_INPUT);
+        Ok(EXIT_BAD_INPUT)
+    };
+    // Held until the run ends: a second launch of the group gets the message above.
+    let Some(_lock) = crate::clean::lock_group(&group)? else {
+        return already();
+    };
+    if crate::clean::group_is_running(&group)? {
+        return already();
     }
     crate::clean::remove_stale(&group)?;
     let dir = run_dir(&args.runs_dir, &group)?;

@@ -81,10 +81,23 @@ pub struct Ctx<'a> {
 
 /// Loads and validates `path` with `overrides` (`KEY=VALUE`) applied. `resolve_exec` finds a
 /// bare program name (workspace binaries, then PATH).
+#[cfg(test)]
 pub fn load(
     path: &Path,
     overrides: &[String],
     resolve_exec: &dyn Fn(&str) -> Option<PathBuf>,
+) -> Result<LaunchFile, LaunchError> {
+    load_checked(path, overrides, resolve_exec, &|_| Vec::new())
+}
+
+/// [`load`], then `check_processes` on the valid file: the problems it returns (each process's
+/// own check of its params and inputs) are reported at the process's params in the file, or at
+/// the override that set them, like every other problem.
+pub fn load_checked(
+    path: &Path,
+    overrides: &[String],
+    resolve_exec: &dyn Fn(&str) -> Option<PathBuf>,
+    check_processes: &dyn Fn(&LaunchFile) -> Vec<ProcessProblem>,
 ) -> Result<LaunchFile, LaunchError> {
     let source = match Source::read(path, 0) {
         Ok(s) => Rc::new(s),
@@ -159,31 +172,86 @@ pub fn load(
     let hosts = check.hosts(&root);
     let links = check.links(&root, &hosts);
     let processes = check.processes(&root, &hosts);
+    for (i, p) in processes.iter().enumerate() {
+        let period = p.rate.as_deref().and_then(|r| caravan::parse_rate(r).ok());
+        if group.clock == caravan::ClockMode::Lockstep
+            && let Some(period) = period.filter(|&period| period < group.tick)
+        {
+            let mut at = root.at("process");
+            at.extend([Seg::Index(i), Seg::Key("rate".into())]);
+            check.problem(
+                &at,
+                format!(
+                    "process '{}': a period of {period:?} is shorter than the group's tick ({:?}); a lockstep node steps at most once a tick",
+                    p.name, group.tick
+                ),
+            );
+        }
+    }
     let reports = check.reports(&root);
     let mut problems: Vec<Problem> = rejected.into_iter().map(|(_, p)| p).collect();
     problems.extend(ctx.problems);
     if !ctx.incomplete {
+        problems.extend(std::mem::take(&mut check.problems));
+    }
+    let mut lf = None;
+    if problems.is_empty() {
+        let file = LaunchFile {
+            path: path.to_path_buf(),
+            group,
+            hosts,
+            links,
+            processes,
+            reports,
+            resolved_toml: String::new(),
+        };
+        for p in check_processes(&file) {
+            let mut at = root.at("process");
+            at.push(Seg::Index(p.index));
+            at.push(Seg::Key("params".into()));
+            at.extend(p.key.as_deref().map(key_path).unwrap_or_default());
+            check.problem(&at, p.message);
+        }
         problems.extend(check.problems);
+        lf = Some(file);
     }
-    if !problems.is_empty() {
-        problems.sort_by_key(|p| (p.rank, p.line.unwrap_or(0)));
-        // A file included twice says the same twice.
-        let mut seen = std::collections::HashSet::new();
-        problems.retain(|p| seen.insert(p.to_string()));
-        return Err(LaunchError::Invalid(problems));
+    match lf {
+        Some(mut lf) if problems.is_empty() => {
+            if resolved.rebuilt {
+                tidy(&mut resolved.doc);
+            }
+            lf.resolved_toml = resolved.doc.to_string();
+            Ok(lf)
+        }
+        _ => {
+            problems.sort_by_key(|p| (p.rank, p.line.unwrap_or(0)));
+            // A file included twice says the same twice.
+            let mut seen = std::collections::HashSet::new();
+            problems.retain(|p| seen.insert(p.to_string()));
+            Err(LaunchError::Invalid(problems))
+        }
     }
-    if resolved.rebuilt {
-        tidy(&mut resolved.doc);
+}
+
+/// `a.b[2].c` as path segments.
+fn key_path(key: &str) -> Vec<Seg> {
+    let mut segs = Vec::new();
+    for part in key.split('.') {
+        let mut rest = part;
+        if let Some(open) = rest.find('[') {
+            segs.push(Seg::Key(rest[..open].to_string()));
+            rest = &rest[open..];
+            while let Some(close) = rest.find(']') {
+                if let Ok(i) = rest[1..close].parse() {
+                    segs.push(Seg::Index(i));
+                }
+                rest = &rest[close + 1..];
+            }
+        } else {
+            segs.push(Seg::Key(rest.to_string()));
+        }
     }
-    Ok(LaunchFile {
-        path: path.to_path_buf(),
-        group,
-        hosts,
-        links,
-        processes,
-        reports,
-        resolved_toml: resolved.doc.to_string(),
-    })
+    segs
 }
 
 fn rejected_problem(r: overrides::Rejected) -> Problem {

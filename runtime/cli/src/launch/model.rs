@@ -40,12 +40,16 @@ pub struct GroupSpec {
     pub grace: Duration,
     /// Lockstep: wall time a node may take for one step before it is deemed hung and killed.
     pub step_timeout: Duration,
+    /// Lockstep: wall time every process has, from its start, to join the schedule; the group
+    /// fails when one has not (a program that never joins would stall it forever).
+    pub join_timeout: Duration,
 }
 
 impl GroupSpec {
     pub const DEFAULT_TICK: Duration = Duration::from_millis(1);
     pub const DEFAULT_GRACE: Duration = Duration::from_secs(3);
     pub const DEFAULT_STEP_TIMEOUT: Duration = Duration::from_secs(30);
+    pub const DEFAULT_JOIN_TIMEOUT: Duration = Duration::from_secs(60);
 }
 
 /// One entry of `[hosts]`.
@@ -152,9 +156,24 @@ pub struct ProcessSpec {
     /// run): a process that knows when the experiment is over, such as an episode counter.
     pub ends_group: bool,
     pub env: BTreeMap<String, String>,
+    /// Whether the launcher runs the program once with `CARAVAN_CHECK=1` before the group
+    /// starts, to check its params and inputs; `None` does so for Caravan's own programs
+    /// (workspace binaries and `caravan-python` agents), which all understand it.
+    pub check: Option<bool>,
     /// The directory of the launch file that defined the process, absolute: relative `exec`
     /// paths start there, and the process gets it as `CARAVAN_LAUNCH_DIR`.
     pub launch_dir: PathBuf,
+}
+
+/// What a process's check (`CARAVAN_CHECK=1`) found wrong with its input, before the group
+/// started.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProcessProblem {
+    /// Index of the process in [`LaunchFile::processes`].
+    pub index: usize,
+    /// The params key the message names (dotted, as `poses[0].x`), when it names one.
+    pub key: Option<String>,
+    pub message: String,
 }
 
 /// One `[[report]]` entry: an executable that computes report sections after the run.

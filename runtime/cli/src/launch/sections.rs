@@ -24,6 +24,7 @@ const GROUP_KEYS: &[&str] = &[
     "record",
     "grace",
     "step_timeout",
+    "join_timeout",
 ];
 const HOST_KEYS: &[&str] = &["cpu_slowdown"];
 const LINK_KEYS: &[&str] = &[
@@ -50,6 +51,7 @@ const PROCESS_KEYS: &[&str] = &[
     "required",
     "ends_group",
     "env",
+    "check",
 ];
 const REPORT_KEYS: &[&str] = &["exec", "params"];
 
@@ -64,6 +66,7 @@ impl Checker<'_> {
             record: Vec::new(),
             grace: GroupSpec::DEFAULT_GRACE,
             step_timeout: GroupSpec::DEFAULT_STEP_TIMEOUT,
+            join_timeout: GroupSpec::DEFAULT_JOIN_TIMEOUT,
         };
         let Some(s) = self.table(root, "group", "group".into(), Some(GROUP_KEYS)) else {
             if root.get("group").is_none() {
@@ -92,6 +95,9 @@ impl Checker<'_> {
         group.step_timeout = self
             .get(&s, "step_timeout", positive_duration)
             .unwrap_or(GroupSpec::DEFAULT_STEP_TIMEOUT);
+        group.join_timeout = self
+            .get(&s, "join_timeout", positive_duration)
+            .unwrap_or(GroupSpec::DEFAULT_JOIN_TIMEOUT);
         group
     }
 
@@ -257,6 +263,17 @@ impl Checker<'_> {
         let exec = self.exec(s, dir);
         let host = self.get(s, "host", string);
         if let Some(h) = &host
+            && hosts.is_empty()
+            && h != ProcessSpec::DEFAULT_HOST
+        {
+            self.key_problem(
+                s,
+                "host",
+                format!(
+                    "host '{h}' is not declared: the file has no [hosts] table; declare it there, or leave 'host' out to run on this machine"
+                ),
+            );
+        } else if let Some(h) = &host
             && !hosts.is_empty()
             && !hosts.contains_key(h)
         {
@@ -311,6 +328,7 @@ impl Checker<'_> {
             required: self.get(s, "required", boolean).unwrap_or(true),
             ends_group: self.get(s, "ends_group", boolean).unwrap_or(false),
             env: self.get(s, "env", env).unwrap_or_default(),
+            check: self.get(s, "check", boolean),
             launch_dir: dir.to_path_buf(),
         }
     }

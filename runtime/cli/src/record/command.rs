@@ -5,7 +5,7 @@ use crate::inspect::GroupArg;
 use anyhow::Result;
 use clap::Args;
 use iceoryx2::prelude::*;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 #[derive(Args)]
 pub struct RecordArgs {
@@ -17,8 +17,8 @@ pub struct RecordArgs {
     #[command(flatten)]
     pub group: GroupArg,
     /// Stop after this many seconds (default: until Ctrl-C)
-    #[arg(long)]
-    pub seconds: Option<f64>,
+    #[arg(long, value_parser = crate::inspect::seconds_arg)]
+    pub seconds: Option<std::time::Duration>,
 }
 
 /// `caravan record`: records a running group's topics until Ctrl-C.
@@ -35,9 +35,7 @@ pub fn record(args: RecordArgs) -> Result<()> {
         &patterns,
         false,
     )?;
-    let end = args
-        .seconds
-        .map(|s| Instant::now() + Duration::from_secs_f64(s));
+    let end = args.seconds.map(|s| Instant::now() + s);
     let config = caravan::group::config(&group)?;
     crate::run::driver::record_until(
         &config,

@@ -7,7 +7,8 @@
 //! `report.json` layout (version 1; fields are only ever added):
 //! - `version`: 1
 //! - `group`: `{name, clock, seed, launch_file}`
-//! - `run`: `{outcome ("completed" | "interrupted" | "failed"), failure (string or null),
+//! - `run`: `{outcome ("completed" | "degraded" | "interrupted" | "failed"), failure (string
+//!   or null; for "degraded", which processes were restarted),
 //!   sim_time_s, wall_time_s, real_time_factor}`
 //! - `nodes[]`: `{name, host, required, restarts, exit_status, period_ms (null when stepped by
 //!   messages), steps, rate_hz, deadline_misses, jitter_p50_ms, jitter_p99_ms, jitter_max_ms,

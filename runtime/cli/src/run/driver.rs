@@ -32,6 +32,8 @@ pub struct DriverConfig {
     pub expected: Vec<String>,
     /// Wall time a lockstep step may take before the node is deemed hung.
     pub step_timeout: Duration,
+    /// Wall time the processes have to join the lockstep schedule.
+    pub join_timeout: Duration,
 }
 
 /// What the driver reports when it ends.
@@ -106,7 +108,17 @@ fn run_lockstep(
     let end_ns = cfg.duration.map(|d| d.as_nanos() as u64);
     let mut now_ns = 0;
     let result = (|| -> Result<()> {
-        scheduler.wait_for_nodes(&cfg.expected, watchdog)?;
+        let waiting_since = Instant::now();
+        scheduler.wait_for_nodes(&cfg.expected, |missing: &[&str]| {
+            if waiting_since.elapsed() > cfg.join_timeout {
+                return Err(format!(
+                    "not joined after {:?} (join_timeout); a lockstep process must be a Caravan node, \
+                     or run the group with clock = \"realtime\"",
+                    cfg.join_timeout
+                ));
+            }
+            watchdog(missing)
+        })?;
         recorder.discover()?;
         while let Some(next) = scheduler.next_time_ns() {
             if end_ns.is_some_and(|end| next > end) {

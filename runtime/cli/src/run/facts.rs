@@ -42,13 +42,14 @@ pub fn collect(
         .iter()
         .map(|(n, s)| (n.clone(), s.type_name.clone()))
         .collect();
+    let (outcome, failure) = degrade(ending, &processes);
     RunFacts {
         group: lf.group.name.clone(),
         clock: lf.group.clock.to_string(),
         seed: lf.group.seed,
         launch_file: lf.path.display().to_string(),
-        outcome: ending.outcome.to_string(),
-        failure: ending.failure,
+        outcome,
+        failure,
         sim_time_s,
         wall_time_s,
         processes,
@@ -67,4 +68,23 @@ pub fn collect(
             .collect(),
         reports: Vec::new(),
     }
+}
+
+/// A run that completed though a process was restarted is "degraded": the restarted process
+/// lost what it held (physics its bodies' state, an agent its history), so the run is not the
+/// one its launch file and seed describe. `failure` then says which restarted.
+fn degrade(ending: Ending, processes: &[ProcessRecord]) -> (String, Option<String>) {
+    let restarted: Vec<String> = processes
+        .iter()
+        .filter(|p| p.restarts > 0)
+        .map(|p| format!("'{}' ({}×)", p.name, p.restarts))
+        .collect();
+    if ending.outcome != "completed" || restarted.is_empty() {
+        return (ending.outcome.to_string(), ending.failure);
+    }
+    let why = format!(
+        "restarted during the run, losing their state: {}",
+        restarted.join(", ")
+    );
+    ("degraded".to_string(), Some(why))
 }

@@ -8,6 +8,7 @@ pub mod exec;
 mod facts;
 mod network;
 pub mod output;
+pub mod preflight;
 pub mod supervisor;
 
 use crate::launch::model::{Exec, LaunchFile};
@@ -90,6 +91,7 @@ pub fn run_group(
             duration: lf.group.duration,
             expected: sup.names(),
             step_timeout: lf.group.step_timeout,
+            join_timeout: lf.group.join_timeout,
         },
         lockstep,
         control.clone(),
@@ -98,7 +100,9 @@ pub fn run_group(
     );
     let started = Instant::now();
     sup.start_all()?;
-    let ending = events::supervise(lf, &mut sup, &events, &control, console, started)?;
+    let ending = events::supervise(lf, &mut sup, &events, &control, console, started);
+    sup.kill_leftovers();
+    let ending = ending?;
     let wall_time_s = started.elapsed().as_secs_f64();
     signals_handle.close();
     let _ = finish_tx.send(());
@@ -121,12 +125,26 @@ fn environment(
     dir: &Path,
     config_path: &Path,
 ) -> Result<BTreeMap<String, String>> {
-    let mut env = BTreeMap::new();
-    env.insert(caravan::env_vars::GROUP.to_string(), lf.group.name.clone());
+    let mut env = group_environment(lf)?;
     env.insert(
         caravan::env_vars::ICEORYX_CONFIG.to_string(),
         std::path::absolute(config_path)?.display().to_string(),
     );
+    env.insert(
+        caravan::env_vars::RUN_DIR.to_string(),
+        std::path::absolute(dir)?.display().to_string(),
+    );
+    env.insert(
+        caravan::env_vars::EPOCH_NS.to_string(),
+        caravan::wall_clock_ns().to_string(),
+    );
+    Ok(env)
+}
+
+/// The part of [`environment`] that does not depend on the run: what a process's check sees.
+fn group_environment(lf: &LaunchFile) -> Result<BTreeMap<String, String>> {
+    let mut env = BTreeMap::new();
+    env.insert(caravan::env_vars::GROUP.to_string(), lf.group.name.clone());
     env.insert(
         caravan::env_vars::CLOCK.to_string(),
         lf.group.clock.to_string(),
@@ -141,13 +159,5 @@ fn environment(
             serde_json::to_string(&net)?,
         );
     }
-    env.insert(
-        caravan::env_vars::RUN_DIR.to_string(),
-        std::path::absolute(dir)?.display().to_string(),
-    );
-    env.insert(
-        caravan::env_vars::EPOCH_NS.to_string(),
-        caravan::wall_clock_ns().to_string(),
-    );
     Ok(env)
 }

@@ -74,6 +74,45 @@ pub struct Planned {
     pub args: Vec<String>,
 }
 
+impl Planned {
+    /// The command that starts the process: its program, arguments and environment (`env`,
+    /// what every process of the group gets, then its own), stdin closed, in a process group of
+    /// its own that ends with the launcher.
+    pub fn command(&self, env: &BTreeMap<String, String>) -> Command {
+        let spec = &self.spec;
+        let mut cmd = Command::new(&self.program);
+        cmd.args(&self.args)
+            .envs(env)
+            .env(caravan::env_vars::NODE, &spec.name)
+            .env(caravan::env_vars::HOST, &spec.host)
+            .env(caravan::env_vars::PARAMS, spec.params.to_string())
+            .envs(&spec.env)
+            .stdin(Stdio::null())
+            // Own process group: Ctrl-C reaches the launcher only, which stops the group in
+            // order instead of every process racing to exit; and stopping the group signals
+            // whatever the process started too.
+            .process_group(0);
+        // SAFETY: prctl is async-signal-safe; it only sets this child's parent-death signal.
+        unsafe {
+            // If the launcher is killed (even with SIGKILL) its processes get SIGTERM and exit
+            // cleanly instead of living on as orphans holding the group's shared memory.
+            cmd.pre_exec(|| {
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        if let Some(rate) = &spec.rate {
+            cmd.env(caravan::env_vars::RATE, rate);
+        }
+        if let Some(on) = &spec.on {
+            cmd.env(caravan::env_vars::ON, on);
+        }
+        cmd
+    }
+}
+
 struct Proc {
     plan: Planned,
     pid: Option<i32>,
@@ -87,9 +126,19 @@ struct Proc {
 
 pub struct Supervisor {
     procs: Vec<Proc>,
+    /// Every process group started (one per spawn, led by the spawned process): what a process
+    /// left running in its group is killed when the group ends.
+    groups: Vec<i32>,
     env: BTreeMap<String, String>,
     events: Sender<Event>,
     console: Console,
+}
+
+/// Signals the process group that `leader` (a process we spawned) leads: the process and
+/// whatever it started. A process group's id is not reused while any of its members lives.
+fn signal_group(leader: i32, signal: i32) {
+    // SAFETY: kill(2) with a negative pid signals that process group; no memory is touched.
+    unsafe { libc::kill(-leader, signal) };
 }
 
 fn describe(status: &ExitStatus) -> String {
@@ -125,6 +174,7 @@ impl Supervisor {
         }
         Ok(Self {
             procs,
+            groups: Vec::new(),
             env,
             events,
             console,
@@ -150,38 +200,12 @@ impl Supervisor {
             .console
             .prefix(index, &self.procs[index].plan.spec.name);
         let p = &mut self.procs[index];
-        let spec = &p.plan.spec;
-        let mut cmd = Command::new(&p.plan.program);
-        cmd.args(&p.plan.args)
-            .envs(&self.env)
-            .env(caravan::env_vars::NODE, &spec.name)
-            .env(caravan::env_vars::HOST, &spec.host)
-            .env(caravan::env_vars::PARAMS, spec.params.to_string())
-            .envs(&spec.env)
-            .stdin(Stdio::null())
+        let mut child = p
+            .plan
+            .command(&self.env)
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
-            // Own process group: Ctrl-C reaches the launcher only, which stops the group in
-            // order instead of every process racing to exit.
-            .process_group(0);
-        // SAFETY: prctl is async-signal-safe; it only sets this child's parent-death signal.
-        unsafe {
-            // If the launcher is killed (even with SIGKILL) its processes get SIGTERM and exit
-            // cleanly instead of living on as orphans holding the group's shared memory.
-            cmd.pre_exec(|| {
-                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                Ok(())
-            });
-        }
-        if let Some(rate) = &spec.rate {
-            cmd.env(caravan::env_vars::RATE, rate);
-        }
-        if let Some(on) = &spec.on {
-            cmd.env(caravan::env_vars::ON, on);
-        }
-        let mut child = cmd.spawn()?;
+            .spawn()?;
         self.console.pump(
             child.stdout.take().expect("piped"),
             prefix.clone(),
@@ -192,6 +216,7 @@ impl Supervisor {
                 .pump(child.stderr.take().expect("piped"), prefix, p.log.clone());
         p.pid = Some(child.id() as i32);
         p.generation += 1;
+        self.groups.push(child.id() as i32);
         let (events, generation) = (self.events.clone(), p.generation);
         // One reaper per child: it is reaped the moment it exits, so no zombie keeps
         // iceoryx2's process locks alive.
@@ -300,8 +325,7 @@ impl Supervisor {
             .find(|p| p.plan.spec.name == name)
             .and_then(|p| p.pid)
         {
-            // SAFETY: signalling a child we spawned and have not reaped yet.
-            unsafe { libc::kill(pid, libc::SIGKILL) };
+            signal_group(pid, libc::SIGKILL);
         }
     }
 
@@ -309,9 +333,16 @@ impl Supervisor {
         for p in &mut self.procs {
             p.restart_at = None;
             if let Some(pid) = p.pid {
-                // SAFETY: signalling a child we spawned and have not reaped yet.
-                unsafe { libc::kill(pid, signal) };
+                signal_group(pid, signal);
             }
+        }
+    }
+
+    /// Kills what the group's processes left behind in their process groups (a child started
+    /// in the background that outlived its parent). Call once every process has exited.
+    pub fn kill_leftovers(&mut self) {
+        for group in self.groups.drain(..) {
+            signal_group(group, libc::SIGKILL);
         }
     }
 

@@ -43,13 +43,13 @@ pub struct Finished {
 }
 
 /// The finished run in a run's `--runs-dir`: a run directory whose `report.json` says it
-/// completed or failed (an interrupted one is not finished).
+/// completed, degraded or failed (an interrupted one is not finished).
 pub fn finished_run(dir: &Path) -> Option<(PathBuf, Value)> {
     let (run_dir, report) = last_run(dir)?;
     let report = report?;
     matches!(
         report["run"]["outcome"].as_str(),
-        Some("completed" | "failed")
+        Some("completed" | "degraded" | "failed")
     )
     .then_some((run_dir, report))
 }
@@ -180,7 +180,7 @@ fn run_one(exe: &Path, task: Task, running: &Mutex<Running>, done: &Sender<Finis
     finished.interrupted = stopping
         && outcome
             .as_ref()
-            .is_none_or(|o| !matches!(o.as_str(), Some("completed" | "failed")));
+            .is_none_or(|o| !matches!(o.as_str(), Some("completed" | "degraded" | "failed")));
     let _ = done.send(finished);
 }
 

@@ -422,7 +422,7 @@ fn launch_bad_override() {
     assert_eq!(
         lines,
         [
-            "--set process.physics.colour=red: process 'physics', key 'colour': unknown key; expected one of: name, exec, args, host, rate, on, params, restart, restart_backoff, max_restarts, required, ends_group, env"
+            "--set process.physics.colour=red: process 'physics', key 'colour': unknown key; expected one of: name, exec, args, host, rate, on, params, restart, restart_backoff, max_restarts, required, ends_group, env, check"
         ]
     );
 }
@@ -436,13 +436,22 @@ fn launch_unknown_host() {
             "FILE:16: process 'physics', key 'host': host 'sym' is not declared under [hosts]; did you mean 'sim'?"
         ]
     );
-    // Without [hosts], any host goes.
+    // Without [hosts], only this machine is known.
     let text = BASE.replace("[hosts.sim]\n[hosts.rpi-0]\ncpu_slowdown = 12.0\n", "");
     let text = text.replace(
         "[[links]]\nbetween = [\"rpi-*\", \"sim\"]\nlatency = \"6ms\"\n",
         "",
     );
-    assert_eq!(load_text(&text, &[]).unwrap().processes[0].host, "sim");
+    let err = load_text(&text, &[]).unwrap_err().to_string();
+    assert!(
+        err.contains("key 'host': host 'sim' is not declared: the file has no [hosts] table"),
+        "{err}"
+    );
+    let text = text.replace("host = \"sim\"", "host = \"localhost\"");
+    assert_eq!(
+        load_text(&text, &[]).unwrap().processes[0].host,
+        "localhost"
+    );
 }
 
 #[test]

@@ -1,0 +1,260 @@
+//! Hostile input and faults against the real CLI (the reliability issue's cases): each is
+//! bad input (exit 2, named, nothing started) or a clear run-time failure, and none hangs,
+//! panics, leaks shared memory or leaves a process behind.
+
+use caravan_tests::{PINGPONG, Scenario, ping_pong, workspace_bin, workspace_root};
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+fn caravan(args: &[&str]) -> Output {
+    Command::new(workspace_bin("caravan"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Checks `out` is bad input: exit 2, every `expected` text in its message, no panic, and no
+/// run directory or shared memory of the group made.
+fn assert_refused(s: &Scenario, out: &Output, expected: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for e in expected {
+        assert!(err.contains(e), "expected '{e}' in: {err}");
+    }
+    assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}
+
+fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
+    // Polling with sleeps is fine in a test helper; nothing asserts how long it takes.
+    for _ in 0..300 {
+        if cond() {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    panic!("gave up waiting: {what}");
+}
+
+#[test]
+fn huge_or_tiny_durations_and_rates_are_bad_input_not_panics() {
+    let s = Scenario::new("durations", PINGPONG);
+    for (set, expected) in [
+        ("group.duration=99999999999999999999h", "too long"),
+        ("group.grace=2777777777777778h", "too long"),
+        ("group.step_timeout=1e400s", "not a duration"),
+        ("process.ping.rate=1e-30Hz", "out of range"),
+        ("process.ping.rate=1e9Hz", "out of range"),
+        ("process.ping.rate=2000Hz", "shorter than the group's tick"),
+    ] {
+        let out = s.run(&["--set", set]);
+        assert_refused(&s, &out, &[set, expected]);
+    }
+    let out = s.run(&["--duration", "1e300h"]);
+    assert_refused(&s, &out, &["not a duration"]);
+    let out = caravan(&["topic", "hz", "demo/ping", "--seconds", "1e300"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("too long"), "{}", stderr(&out));
+}
+
+#[test]
+fn a_bad_process_param_is_refused_before_anything_starts() {
+    let s = Scenario::new(
+        "param",
+        &ping_pong().replace("params = { gain = 2.0 }", "params = { gain = \"high\" }"),
+    );
+    let out = s.run(&[]);
+    // Named where it is written: the file, the process's params line, the key.
+    let line = std::fs::read_to_string(&s.file)
+        .unwrap()
+        .lines()
+        .position(|l| l.contains("gain = \"high\""))
+        .unwrap()
+        + 1;
+    let at = format!("launch.toml:{line}");
+    assert_refused(
+        &s,
+        &out,
+        &[&at, "process 'pong'", "key 'gain'", "expected f64"],
+    );
+    // An unknown key, blamed on the override that set it.
+    let s = Scenario::new("param-set", ping_pong());
+    let out = s.run(&["--set", "process.pong.params.gian=1.0"]);
+    assert_refused(&s, &out, &["--set process.pong.params.gian=1.0", "'gian'"]);
+}
+
+#[test]
+fn a_missing_world_or_robot_file_is_refused_before_anything_starts() {
+    let convoy = workspace_root().join("launch/convoy/convoy.toml");
+    for (set, expected) in [
+        (
+            "process.physics.params.world=no-such-world.toml",
+            "no-such-world.toml",
+        ),
+        (
+            "process.physics.params.urdf=no-such-robot.urdf",
+            "no-such-robot.urdf",
+        ),
+        ("process.physics.params.substeps=0", "key 'substeps'"),
+    ] {
+        // A scenario only for its unique group name, runs directory and checks.
+        let s = Scenario::new("convoy-input", "");
+        let out = Command::new(workspace_bin("caravan"))
+            .arg("launch")
+            .arg(&convoy)
+            .args(["--quiet", "--set", set, "--set"])
+            .arg(format!("group.name={}", s.group.name))
+            .arg("--runs-dir")
+            .arg(s.dir.join("runs"))
+            .output()
+            .unwrap();
+        assert_refused(&s, &out, &["process 'physics'", expected]);
+    }
+}
+
+#[test]
+fn an_undeclared_host_is_bad_input() {
+    let s = Scenario::new(
+        "nohost",
+        &ping_pong().replace("name = \"ping\"\n", "name = \"ping\"\nhost = \"nohost\"\n"),
+    );
+    let out = s.run(&[]);
+    assert_refused(&s, &out, &["key 'host'", "'nohost' is not declared"]);
+}
+
+#[test]
+fn a_lockstep_process_that_never_joins_fails_the_group_at_its_join_timeout() {
+    let s = Scenario::new(
+        "nojoin",
+        &format!(
+            "join_timeout = \"2s\"\n{}\n[[process]]\nname = \"sleeper\"\nexec = \"sleep 300\"\n",
+            ping_pong()
+        ),
+    );
+    let out = s.run(&[]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("sleeper") && err.contains("join_timeout"),
+        "{err}"
+    );
+    assert_eq!(s.report()["run"]["outcome"], "failed");
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}
+
+fn alive(pid: i32) -> bool {
+    // A zombie has exited; only its parent's wait is missing.
+    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+        !stat
+            .rsplit(')')
+            .next()
+            .unwrap_or("")
+            .trim_start()
+            .starts_with('Z')
+    })
+}
+
+#[test]
+fn a_process_that_forks_leaves_no_orphan() {
+    // One process exits at once, leaving a child in the background; another is stopped with
+    // the group while its background child runs. Neither child may outlive the group.
+    let s = Scenario::new("fork", "");
+    let pids = s.dir.join("pids");
+    std::fs::create_dir_all(&pids).unwrap();
+    let body = format!(
+        "clock = \"realtime\"\nduration = \"2s\"\n\n\
+         [[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n\n\
+         [[process]]\nname = \"leaver\"\nexec = \"sh\"\n\
+         args = [\"-c\", \"sleep 300 & echo $! > {0}/leaver\"]\n\n\
+         [[process]]\nname = \"waiter\"\nexec = \"sh\"\n\
+         args = [\"-c\", \"sleep 300 & echo $! > {0}/waiter; wait\"]\n",
+        pids.display()
+    );
+    std::fs::write(
+        &s.file,
+        format!("[group]\nname = \"{}\"\n{body}", s.group.name),
+    )
+    .unwrap();
+    let out = s.run(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for who in ["leaver", "waiter"] {
+        let pid: i32 = std::fs::read_to_string(pids.join(who))
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap();
+        wait_until(&format!("{who}'s background child {pid} is gone"), || {
+            !alive(pid)
+        });
+    }
+}
+
+#[test]
+fn two_launches_of_one_group_at_once_one_is_refused() {
+    let s = Scenario::new(
+        "twice",
+        &format!(
+            "clock = \"realtime\"\nduration = \"3s\"\n{}",
+            &ping_pong()["clock = \"lockstep\"\nduration = \"10s\"\n".len()..]
+        ),
+    );
+    let start = || {
+        s.command(&[])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (first, second) = (start(), start());
+    let outs = [
+        first.wait_with_output().unwrap(),
+        second.wait_with_output().unwrap(),
+    ];
+    let codes: Vec<Option<i32>> = outs.iter().map(|o| o.status.code()).collect();
+    let refused = outs
+        .iter()
+        .filter(|o| o.status.code() == Some(2))
+        .collect::<Vec<_>>();
+    assert_eq!(refused.len(), 1, "{codes:?}");
+    assert!(
+        stderr(refused[0]).contains("is already running"),
+        "{}",
+        stderr(refused[0])
+    );
+    assert!(codes.contains(&Some(0)), "{codes:?}");
+    assert_eq!(s.run_dirs().len(), 1);
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}
+
+#[test]
+fn inspecting_a_missing_group_fails_and_creates_nothing() {
+    let s = Scenario::new("missing", "");
+    let g = s.group.name.as_str();
+    for args in [
+        vec!["topic", "list", "--group", g],
+        vec!["topic", "echo", "demo/ping", "-n", "1", "--group", g],
+        vec!["topic", "hz", "demo/ping", "--seconds", "1", "--group", g],
+        vec!["node", "list", "--group", g],
+        vec!["record", "-o", "x.mcap", "--group", g],
+    ] {
+        let out = caravan(&args);
+        assert_ne!(out.status.code(), Some(0), "{args:?}");
+        assert!(
+            stderr(&out).contains(&format!("no group '{g}' is running")),
+            "{args:?}: {}",
+            stderr(&out)
+        );
+        assert!(
+            s.shm_entries().is_empty(),
+            "{args:?}: {:?}",
+            s.shm_entries()
+        );
+    }
+    assert!(!Path::new("x.mcap").exists());
+}
