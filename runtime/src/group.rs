@@ -103,6 +103,33 @@ pub fn remove_resources(group: &str) -> Result<usize, Error> {
     Ok(removed)
 }
 
+/// Makes `group`'s shared-memory files private to their owner (0600). iceoryx2 creates one of
+/// them, its global management segment, readable and writable by everyone; another user could
+/// then write into the group. Every process of a group runs as the launcher's user, so nothing
+/// else needs access. Returns how many files were changed.
+pub fn make_private(group: &str) -> usize {
+    use std::os::unix::fs::PermissionsExt;
+    let prefix = prefix(group);
+    let Ok(entries) = std::fs::read_dir("/dev/shm") else {
+        return 0;
+    };
+    let mut changed = 0;
+    for entry in entries.flatten() {
+        let ours = entry.file_name().to_string_lossy().starts_with(&prefix);
+        let open = entry
+            .metadata()
+            .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o077 != 0);
+        if ours
+            && open
+            && std::fs::set_permissions(entry.path(), std::fs::Permissions::from_mode(0o600))
+                .is_ok()
+        {
+            changed += 1;
+        }
+    }
+    changed
+}
+
 /// Deletes files under `dir` (recursively) whose name starts with `prefix`, and directories
 /// left empty by that.
 fn remove_prefixed(dir: &StdPath, prefix: &str) -> usize {

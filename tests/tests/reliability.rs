@@ -258,3 +258,71 @@ fn inspecting_a_missing_group_fails_and_creates_nothing() {
     }
     assert!(!Path::new("x.mcap").exists());
 }
+
+#[test]
+fn no_file_of_a_running_group_is_open_to_other_users() {
+    use std::os::unix::fs::PermissionsExt;
+    let s = Scenario::new(
+        "private",
+        &format!(
+            "clock = \"realtime\"\nduration = \"20s\"\n{}",
+            &ping_pong()["clock = \"lockstep\"\nduration = \"10s\"\n".len()..]
+        ),
+    );
+    let child = s.command(&[]).spawn().unwrap();
+    wait_until("both nodes run", || {
+        let out = caravan(&["node", "list", "--group", &s.group.name]);
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        text.contains("ping") && text.contains("pong")
+    });
+    let open: Vec<String> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .flatten()
+        .filter(|e| {
+            let name = e.file_name().to_string_lossy().to_string();
+            name.starts_with(&caravan::group::prefix(&s.group.name))
+                && e.metadata().unwrap().permissions().mode() & 0o077 != 0
+        })
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .collect();
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(child.wait_with_output().unwrap().status.success());
+    assert!(open.is_empty(), "open to other users: {open:?}");
+}
+
+#[test]
+fn a_trigger_nothing_publishes_is_a_warning_in_the_report() {
+    let s = Scenario::new(
+        "trigger",
+        &ping_pong().replace("on = \"demo/ping\"", "on = \"demo/nobody\""),
+    );
+    let out = s.run(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = s.report();
+    let warnings = report["run"]["warnings"].as_array().unwrap();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    let w = warnings[0].as_str().unwrap();
+    assert!(w.contains("'pong'") && w.contains("'demo/nobody'"), "{w}");
+    assert!(stderr(&out).contains("warning:"), "{}", stderr(&out));
+    let md = std::fs::read_to_string(s.run_dirs()[0].join("report.md")).unwrap();
+    assert!(md.contains("**Warning:**"), "{md}");
+}
+
+#[test]
+fn seeds_and_params_that_cannot_be_passed_on_are_bad_input() {
+    let s = Scenario::new("seed", ping_pong());
+    let out = s.run(&["--seed", "18446744073709551615"]);
+    assert_refused(&s, &out, &["--seed", "18446744073709551615"]);
+    let out = s.run(&["--seed", "-1"]);
+    assert_refused(&s, &out, &["--seed", "-1"]);
+    let out = s.run(&["--set", "group.seed=18446744073709551615"]);
+    assert_refused(&s, &out, &["larger than 9223372036854775807"]);
+    let big = "x".repeat(125_000); // under the 128 KiB an argument may take
+    let out = s.run(&["--set", &format!("process.pong.params.note=\"{big}\"")]);
+    assert_refused(
+        &s,
+        &out,
+        &["process 'pong'", "key 'params'", "'note'", "name the file"],
+    );
+}

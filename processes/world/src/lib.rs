@@ -5,6 +5,7 @@
 pub mod description;
 pub mod geometry;
 pub mod kinematics;
+pub mod limits;
 pub mod robot;
 pub mod world;
 

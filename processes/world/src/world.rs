@@ -204,11 +204,7 @@ pub fn load_world(path: &Path) -> Result<World, WorldError> {
 pub fn parse_world(text: &str) -> Result<World, String> {
     let f: File = toml::from_str(text).map_err(|e| e.to_string().trim_end().replace('\n', " "))?;
     let positive = |what: String, v: f64| {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
-            Err(format!("{what} must be positive, got {v}"))
-        }
+        crate::limits::length(&what, v, crate::limits::MAX_WORLD_EXTENT_M).map(|_| ())
     };
     positive("world.size[0]".into(), f.world.size[0])?;
     positive("world.size[1]".into(), f.world.size[1])?;
@@ -449,5 +445,11 @@ radius = 0.1
     fn negative_sizes_are_rejected() {
         let e = parse_world("[world]\nname = \"x\"\nsize = [1.0, -1.0]\n").unwrap_err();
         assert!(e.contains("world.size[1]"), "{e}");
+    }
+
+    #[test]
+    fn absurd_sizes_are_rejected() {
+        let e = parse_world("[world]\nname = \"x\"\nsize = [1e308, 1e308]\n").unwrap_err();
+        assert!(e.contains("world.size[0]") && e.contains("10000 m"), "{e}");
     }
 }

@@ -83,6 +83,10 @@ pub struct RunFacts {
     /// The report plugins, in launch-file order.
     #[serde(default)]
     pub reports: Vec<ReportEntry>,
+    /// Suspicious but legal things the launcher noticed (a process stepped by a topic on which
+    /// nothing arrived), one sentence each.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 impl RunFacts {
@@ -98,10 +102,10 @@ impl RunFacts {
 
     /// Writes `run.json` into `run_dir`.
     pub fn save(&self, run_dir: &Path) -> anyhow::Result<()> {
-        std::fs::write(
-            run_dir.join(FACTS_FILE),
-            serde_json::to_string_pretty(self)? + "\n",
-        )?;
+        use anyhow::Context;
+        let path = run_dir.join(FACTS_FILE);
+        std::fs::write(&path, serde_json::to_string_pretty(self)? + "\n")
+            .with_context(|| format!("cannot write {}", path.display()))?;
         Ok(())
     }
 

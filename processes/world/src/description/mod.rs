@@ -466,11 +466,7 @@ fn inertial(l: &urdf_rs::Link) -> Result<Option<Inertial>, String> {
 }
 
 fn positive(what: &str, v: f64) -> Result<f64, String> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("{what} must be positive, got {v}"))
-    }
+    crate::limits::length(what, v, crate::limits::MAX_PART_SIZE_M)
 }
 
 fn geometry(g: &urdf_rs::Geometry, dir: &Path) -> Result<Geometry, String> {

@@ -219,3 +219,17 @@ fn gazebo_friction_is_read_and_checked() {
     let e = error(&with("-1"));
     assert!(e.contains("mu1") && e.contains("upper"), "{e}");
 }
+
+#[test]
+fn absurd_shape_sizes_name_the_link() {
+    for (radius, says) in [("0", "must be positive"), ("1e308", "more than the 100 m")] {
+        let text = format!(
+            r#"<robot name="r"><link name="wheel">{LINK}<collision><geometry><cylinder radius="{radius}" length="0.02"/></geometry></collision></link></robot>"#
+        );
+        let e = parse_str(&text).unwrap_err().to_string();
+        assert!(
+            e.contains("'wheel'") && e.contains("radius") && e.contains(says),
+            "{e}"
+        );
+    }
+}

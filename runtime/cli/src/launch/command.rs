@@ -23,8 +23,8 @@ pub struct LaunchArgs {
     /// Clock mode
     #[arg(long, value_parser = ["realtime", "lockstep"])]
     pub clock: Option<String>,
-    /// Random seed of the group
-    #[arg(long)]
+    /// Random seed of the group (0 to 9223372036854775807, the integers TOML holds)
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
     pub seed: Option<u64>,
     /// Directory that receives the run directory
     #[arg(long, default_value = "runs")]
@@ -103,10 +103,14 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     }
     crate::clean::remove_stale(&group)?;
     let dir = run_dir(&args.runs_dir, &group)?;
-    std::fs::write(dir.join("launch.toml"), &lf.resolved_toml)?;
+    let resolved = dir.join("launch.toml");
+    std::fs::write(&resolved, &lf.resolved_toml)
+        .with_context(|| format!("cannot write {}", resolved.display()))?;
     let config_path = dir.join("iceoryx2.toml");
-    caravan::group::write_config(&group, &config_path)?;
-    std::fs::create_dir_all(dir.join("logs"))?;
+    caravan::group::write_config(&group, &config_path)
+        .with_context(|| format!("cannot write {}", config_path.display()))?;
+    std::fs::create_dir_all(dir.join("logs"))
+        .with_context(|| format!("cannot create {}", dir.join("logs").display()))?;
     console.say(&format!(
         "group '{group}' ({} clock), run directory {}",
         lf.group.clock,
@@ -121,6 +125,9 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     let _ = caravan::group::remove_resources(&group);
     let facts = result?;
     let failed = facts.outcome == "failed";
+    for w in &facts.warnings {
+        eprintln!("caravan: warning: {w}");
+    }
     facts.save(&dir)?;
     let written = report::write(&dir)?;
     for failure in &written.failures {

@@ -40,6 +40,17 @@ pub fn probability(item: &Item) -> Result<f64, String> {
 }
 
 pub fn unsigned(item: &Item) -> Result<u64, String> {
+    // An integer too large for TOML reaches here from `--set` as a string of digits.
+    if item
+        .as_str()
+        .is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
+    {
+        return Err(format!(
+            "{} is larger than {}, the largest integer TOML holds",
+            item.as_str().unwrap_or_default(),
+            i64::MAX
+        ));
+    }
     item.as_integer()
         .and_then(|i| u64::try_from(i).ok())
         .ok_or_else(|| expected("a non-negative integer", item))
@@ -115,11 +126,29 @@ pub fn env(item: &Item) -> Result<BTreeMap<String, String>, String> {
     Ok(env)
 }
 
+/// The most a process's params may take as JSON: they travel in one environment variable,
+/// which Linux limits to 128 KiB (MAX_ARG_STRLEN).
+pub const MAX_PARAMS_BYTES: usize = 120_000;
+
 pub fn params(item: &Item) -> Result<serde_json::Value, String> {
     if !item.is_table_like() {
         return Err(expected("a table", item));
     }
-    to_json(item, "params")
+    let value = to_json(item, "params")?;
+    let size = value.to_string().len();
+    if size > MAX_PARAMS_BYTES {
+        let largest = value.as_object().and_then(|o| {
+            o.iter()
+                .map(|(k, v)| (v.to_string().len(), k))
+                .max()
+                .map(|(n, k)| format!(" (key '{k}' alone takes {n})"))
+        });
+        return Err(format!(
+            "the params take {size} bytes as JSON{}, more than the {MAX_PARAMS_BYTES} a process's environment holds; put large data in a file and name the file in params",
+            largest.unwrap_or_default()
+        ));
+    }
+    Ok(value)
 }
 
 /// Params are handed to nodes as JSON; TOML datetimes become strings.

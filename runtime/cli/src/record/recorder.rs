@@ -44,6 +44,8 @@ pub struct Recorder {
     /// Topic hashes discovery already looked at, recorded or not.
     seen: BTreeSet<u64>,
     writer: mcap::Writer<BufWriter<File>>,
+    /// The MCAP file, for messages about it (a full disk).
+    path: std::path::PathBuf,
     channels: BTreeMap<String, u16>,
     sequences: BTreeMap<u16, u32>,
     stats: BTreeMap<String, TopicStats>,
@@ -90,6 +92,7 @@ impl Recorder {
             status_tap: None,
             seen: BTreeSet::new(),
             writer,
+            path: path.to_path_buf(),
             channels: BTreeMap::new(),
             sequences: BTreeMap::new(),
             stats: BTreeMap::new(),
@@ -97,6 +100,10 @@ impl Recorder {
             status_heard: BTreeMap::new(),
             buffer: Vec::new(),
         })
+    }
+
+    fn cannot_write(&self) -> String {
+        format!("cannot write the recording {}", self.path.display())
     }
 
     /// Whether any of `published` (topic hashes) was never looked at by discovery.
@@ -191,14 +198,14 @@ impl Recorder {
             Some(&id) => id,
             None => {
                 let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
-                let schema_id = self.writer.add_schema(
-                    type_name,
-                    "jsonschema",
-                    schema.to_string().as_bytes(),
-                )?;
+                let schema_id =
+                    self.writer
+                        .add_schema(type_name, "jsonschema", schema.to_string().as_bytes());
+                let schema_id = schema_id.with_context(|| self.cannot_write())?;
                 let id = self
                     .writer
-                    .add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
+                    .add_channel(schema_id, &topic, "json", &BTreeMap::new());
+                let id = id.with_context(|| self.cannot_write())?;
                 self.channels.insert(topic.clone(), id);
                 id
             }
@@ -213,7 +220,7 @@ impl Recorder {
         }
         let sequence = self.sequences.entry(channel).or_insert(0);
         *sequence += 1;
-        self.writer.write_to_known_channel(
+        let written = self.writer.write_to_known_channel(
             &mcap::records::MessageHeader {
                 channel_id: channel,
                 sequence: *sequence,
@@ -221,7 +228,8 @@ impl Recorder {
                 publish_time: msg.header.stamp_ns,
             },
             &serde_json::to_vec(&record)?,
-        )?;
+        );
+        written.with_context(|| self.cannot_write())?;
         let stats = self.stats.entry(topic).or_insert_with(|| TopicStats {
             type_name: type_name.to_string(),
             messages: 0,
@@ -252,9 +260,7 @@ impl Recorder {
                 s.missed = tap.missed();
             }
         }
-        self.writer
-            .finish()
-            .context("cannot finish the MCAP file")?;
+        self.writer.finish().with_context(|| self.cannot_write())?;
         Ok(Recording {
             topics: self.stats,
             node_status: self.node_status,

@@ -23,6 +23,9 @@ pub fn render(r: &Value) -> String {
             .map(|f| format!(" ({f})"))
             .unwrap_or_default()
     );
+    for w in run["warnings"].as_array().into_iter().flatten() {
+        let _ = writeln!(md, "**Warning:** {}\n", w.as_str().unwrap_or(""));
+    }
     let _ = writeln!(
         md,
         "Simulated {} s in {} s of wall time: real-time factor {}.\n",

@@ -23,6 +23,7 @@ pub struct Control {
 }
 
 pub struct DriverConfig {
+    pub group: String,
     pub iceoryx: iceoryx2::config::Config,
     pub record_path: PathBuf,
     pub patterns: Vec<String>,
@@ -55,6 +56,8 @@ pub fn spawn(
     std::thread::spawn(move || {
         let mut recorder =
             Recorder::create(&cfg.iceoryx, &cfg.record_path, &cfg.patterns, lockstep)?;
+        // The recorder's node made the group's global files; keep them to this user.
+        caravan::group::make_private(&cfg.group);
         let sim_time_ns = if lockstep {
             run_lockstep(&cfg, &mut recorder, &control, &events, &finish)?
         } else {

@@ -43,6 +43,7 @@ pub fn collect(
         .map(|(n, s)| (n.clone(), s.type_name.clone()))
         .collect();
     let (outcome, failure) = degrade(ending, &processes);
+    let warnings = never_triggered(lf, &recording.node_status);
     RunFacts {
         group: lf.group.name.clone(),
         clock: lf.group.clock.to_string(),
@@ -67,7 +68,29 @@ pub fn collect(
             })
             .collect(),
         reports: Vec::new(),
+        warnings,
     }
+}
+
+/// Processes stepped by a topic (`on`) that never stepped: nothing published it (or a cycle of
+/// triggers waits on itself). Legal, so a warning rather than an error.
+fn never_triggered(
+    lf: &LaunchFile,
+    status: &std::collections::BTreeMap<String, serde_json::Value>,
+) -> Vec<String> {
+    lf.processes
+        .iter()
+        .filter_map(|p| {
+            let topic = p.on.as_ref()?;
+            let steps = status.get(&p.name).and_then(|s| s["steps"].as_u64());
+            (steps.unwrap_or(0) == 0).then(|| {
+                format!(
+                    "process '{}' is stepped by messages on '{topic}' and never stepped: no message arrived (does a process publish '{topic}'?)",
+                    p.name
+                )
+            })
+        })
+        .collect()
 }
 
 /// A run that completed though a process was restarted is "degraded": the restarted process

@@ -84,6 +84,7 @@ pub fn run_group(
     )?;
     let driver = driver::spawn(
         DriverConfig {
+            group: lf.group.name.clone(),
             iceoryx: caravan::group::load_config(config_path)?,
             record_path: dir.join(caravan_report::RECORDING_FILE),
             patterns: lf.group.record.clone(),
