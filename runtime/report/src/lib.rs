@@ -59,6 +59,7 @@
 pub mod bench;
 mod facts;
 pub mod format;
+pub mod fuzz;
 mod locate;
 pub mod plugin;
 mod recording;

@@ -2,6 +2,7 @@
 //! report entries.
 
 mod args;
+mod fuzz;
 mod include;
 mod report;
 mod template;
