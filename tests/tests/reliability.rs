@@ -326,3 +326,56 @@ fn seeds_and_params_that_cannot_be_passed_on_are_bad_input() {
         &["process 'pong'", "key 'params'", "'note'", "name the file"],
     );
 }
+
+#[test]
+fn chaos_kills_of_restartable_followers_are_survived_and_reported() {
+    // The ground-truth convoy in lockstep; followers 3 and 4 may fail and restart, and a chaos
+    // process SIGKILLs one of them at random steps, four times in all.
+    let s = Scenario::new("chaos", "");
+    let kills = s.dir.join("kills");
+    let convoy = workspace_root().join("launch/convoy/convoy-truth.toml");
+    let body = format!(
+        "[[include]]\nfile = \"{convoy}\"\nset = [\"group.name={group}\", \"group.duration=40s\"]\n\n\
+         [[process]]\nname = \"chaos\"\nexec = \"caravan-testnode chaos\"\nrate = \"10Hz\"\n\
+         params = {{ count = 4, victims = [\"follower-3\", \"follower-4\"], out = \"{out}\" }}\n",
+        convoy = convoy.display(),
+        group = s.group.name,
+        out = kills.display(),
+    );
+    std::fs::write(&s.file, body).unwrap();
+    let policy = "restart=\"always\"";
+    let mut sets = Vec::new();
+    for f in ["follower-3", "follower-4"] {
+        sets.push(format!("process.{f}.required=false"));
+        sets.push(format!("process.{f}.{policy}"));
+        sets.push(format!("process.{f}.max_restarts=10"));
+        sets.push(format!("process.{f}.restart_backoff=\"50ms\""));
+    }
+    let args: Vec<&str> = sets.iter().flat_map(|s| ["--set", s.as_str()]).collect();
+    let out = s.run(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let killed = std::fs::read_to_string(&kills).unwrap();
+    let killed: Vec<&str> = killed.lines().collect();
+    assert_eq!(killed.len(), 4, "{killed:?}");
+    let report = s.report();
+    assert_eq!(report["run"]["outcome"], "degraded");
+    for f in ["follower-3", "follower-4"] {
+        let times = killed
+            .iter()
+            .filter(|l| l.starts_with(&format!("{f} ")))
+            .count();
+        let node = report["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|n| n["name"] == f)
+            .unwrap();
+        assert_eq!(node["restarts"], times as u64, "{f}: {killed:?}");
+    }
+    assert_eq!(report["run"]["sim_time_s"], 40.0);
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+    for line in &killed {
+        let pid: i32 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+        assert!(!alive(pid), "{line} still runs");
+    }
+}

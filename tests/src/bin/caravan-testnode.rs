@@ -11,6 +11,8 @@
 //! - `hang`: steps at 10 Hz and hangs in its step after `count` steps.
 //! - `wrong-type`: after `count` ms, publishes `WheelSetpoint`s on `topic` (type-mismatch tests).
 //! - `arm-commands`: the physics topics test's commands, see [`arm_commands`].
+//! - `chaos`: at random steps (seeded by the group seed), SIGKILLs one of the live `victims`,
+//!   `count` times in all, and appends `victim pid` for each kill to the file `out`.
 
 use caravan::{Error, Node, Topic, Trigger};
 use caravan_schemas::Pose2D;
@@ -26,6 +28,8 @@ struct Params {
     out: String,
     gain: f64,
     name: String,
+    /// `chaos`: the processes it may kill.
+    victims: Vec<String>,
 }
 
 fn main() {
@@ -89,6 +93,7 @@ fn run(mode: &str) -> Result<(), Error> {
             })?;
         }
         "params" => {}
+        "chaos" => chaos(&mut node, &p)?,
         "lockstep-source" => {
             let publisher = node.publisher(&Topic::<Pose2D>::new(&p.topic))?;
             node.run(Trigger::every_hz(10.0), |step| {
@@ -247,6 +252,55 @@ fn arm_commands(node: &mut Node) -> Result<(), Error> {
                 duration_s: 1.0,
                 ..Wrench::default()
             })?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn chaos(node: &mut Node, p: &Params) -> Result<(), Error> {
+    use iceoryx2::node::NodeView;
+    let config = match &node.identity().iceoryx_config {
+        Some(path) => caravan::group::load_config(path)?,
+        None => caravan::group::config(&node.identity().group)?,
+    };
+    // A small xorshift stream: reproducible kill steps without another dependency.
+    let mut state = node.identity().node_seed() | 1;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut kills = 0;
+    let out = p.out.clone();
+    let victims = p.victims.clone();
+    node.run(Trigger::every_hz(10.0), |_| {
+        if kills >= p.count || next() % 10 != 0 {
+            return Ok(());
+        }
+        let victim = &victims[(next() % victims.len() as u64) as usize];
+        let mut pid = None;
+        let _ = iceoryx2::node::Node::<iceoryx2::prelude::ipc::Service>::list(&config, |state| {
+            if let iceoryx2::node::NodeState::Alive(view) = state
+                && let Some(details) = view.details()
+                && details.name().to_string() == *victim
+            {
+                pid = Some(details.process_id().value());
+            }
+            iceoryx2::prelude::CallbackProgression::Continue
+        });
+        // A victim that is restarting is not there: try again at a later step.
+        if let Some(pid) = pid {
+            // SAFETY: kill(2) on a process of the group under test.
+            unsafe { libc::kill(pid, libc::SIGKILL) };
+            kills += 1;
+            let mut f = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&out)
+                .map_err(|e| Error::Input(format!("{out}: {e}")))?;
+            let _ = writeln!(f, "{victim} {pid}");
         }
         Ok(())
     })?;
