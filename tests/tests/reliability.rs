@@ -379,3 +379,19 @@ fn chaos_kills_of_restartable_followers_are_survived_and_reported() {
         assert!(!alive(pid), "{line} still runs");
     }
 }
+
+#[test]
+fn a_realtime_node_that_never_reports_fails_the_group_at_its_join_timeout() {
+    let s = Scenario::new(
+        "mute",
+        "clock = \"realtime\"\nduration = \"30s\"\njoin_timeout = \"2s\"\n\n\
+         [[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\n\n\
+         [[process]]\nname = \"mute\"\nexec = \"caravan-testnode mute\"\n",
+    );
+    let out = s.run(&[]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("'mute' has not reported a status"), "{err}");
+    assert_eq!(s.report()["run"]["outcome"], "failed");
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}

@@ -11,6 +11,7 @@
 //! - `hang`: steps at 10 Hz and hangs in its step after `count` steps.
 //! - `wrong-type`: after `count` ms, publishes `WheelSetpoint`s on `topic` (type-mismatch tests).
 //! - `arm-commands`: the physics topics test's commands, see [`arm_commands`].
+//! - `mute`: joins the group and sleeps forever without stepping (no status).
 //! - `chaos`: at random steps (seeded by the group seed), SIGKILLs one of the live `victims`,
 //!   `count` times in all, and appends `victim pid` for each kill to the file `out`.
 
@@ -94,6 +95,10 @@ fn run(mode: &str) -> Result<(), Error> {
         }
         "params" => {}
         "chaos" => chaos(&mut node, &p)?,
+        "mute" => loop {
+            // Joins the group but never steps, so it never publishes a status.
+            std::thread::sleep(std::time::Duration::from_secs(3600));
+        },
         "lockstep-source" => {
             let publisher = node.publisher(&Topic::<Pose2D>::new(&p.topic))?;
             node.run(Trigger::every_hz(10.0), |step| {

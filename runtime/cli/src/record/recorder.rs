@@ -245,6 +245,11 @@ impl Recorder {
 
     /// Running nodes whose once-a-second status has not arrived for `timeout`: in realtime a
     /// node whose step never returns stops publishing it.
+    /// Whether node `name` has published a status.
+    pub fn has_reported(&self, name: &str) -> bool {
+        self.status_heard.contains_key(name)
+    }
+
     pub fn silent_nodes(&self, timeout: std::time::Duration) -> Vec<String> {
         self.status_heard
             .iter()

@@ -33,8 +33,11 @@ pub struct DriverConfig {
     pub expected: Vec<String>,
     /// Wall time a lockstep step may take before the node is deemed hung.
     pub step_timeout: Duration,
-    /// Wall time the processes have to join the lockstep schedule.
+    /// Wall time the processes have to join the lockstep schedule, or in realtime to publish
+    /// their first status.
     pub join_timeout: Duration,
+    /// Realtime: the processes that are Caravan nodes, which publish a status once a second.
+    pub reporting: Vec<String>,
 }
 
 /// What the driver reports when it ends.
@@ -63,6 +66,7 @@ pub fn spawn(
         } else {
             let started = Instant::now();
             let mut reported = BTreeSet::new();
+            let mut awaited = cfg.reporting.clone();
             record_until(
                 &cfg.iceoryx,
                 &mut recorder,
@@ -81,6 +85,19 @@ pub fn spawn(
                             now_ns,
                             timeout: cfg.step_timeout,
                         });
+                    }
+                    // A Caravan node that never published a status is as stuck as a hung one.
+                    if !awaited.is_empty() && started.elapsed() > cfg.join_timeout {
+                        let names: Vec<String> = std::mem::take(&mut awaited)
+                            .into_iter()
+                            .filter(|n| !recorder.has_reported(n))
+                            .collect();
+                        if !names.is_empty() {
+                            let _ = events.send(Event::Silent {
+                                names,
+                                timeout: cfg.join_timeout,
+                            });
+                        }
                     }
                     finish.try_recv().is_ok()
                 },

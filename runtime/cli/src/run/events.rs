@@ -110,6 +110,16 @@ pub fn supervise(
                     sup.kill(&name);
                 }
             }
+            Ok(Event::Silent { names, timeout }) => {
+                let running: Vec<String> =
+                    names.into_iter().filter(|n| sup.is_running(n)).collect();
+                for name in running {
+                    console.say(&format!(
+                        "process '{name}' has not reported a status in {timeout:?} since the start (join_timeout); killing it"
+                    ));
+                    sup.kill(&name);
+                }
+            }
             Ok(Event::DriverDone(result)) => {
                 if let Err(why) = result {
                     console.say(&why);

@@ -93,6 +93,11 @@ pub fn run_group(
             expected: sup.names(),
             step_timeout: lf.group.step_timeout,
             join_timeout: lf.group.join_timeout,
+            reporting: plan(lf)
+                .iter()
+                .filter(|p| preflight::is_checked(p))
+                .map(|p| p.spec.name.clone())
+                .collect(),
         },
         lockstep,
         control.clone(),

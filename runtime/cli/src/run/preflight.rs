@@ -29,11 +29,7 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
     let mut running = Vec::new();
     let mut problems = Vec::new();
     for (index, plan) in super::plan(lf).into_iter().enumerate() {
-        if !plan
-            .spec
-            .check
-            .unwrap_or_else(|| is_caravan_program(&plan.program))
-        {
+        if !is_checked(&plan) {
             continue;
         }
         let name = plan.spec.name.clone();
@@ -85,6 +81,14 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
         }
     }
     problems
+}
+
+/// Whether the launcher checks this process before the start (and, in realtime, expects a
+/// status from it): its `check` key, else whether it is one of Caravan's own programs.
+pub fn is_checked(plan: &super::supervisor::Planned) -> bool {
+    plan.spec
+        .check
+        .unwrap_or_else(|| is_caravan_program(&plan.program))
 }
 
 /// Caravan's own programs understand `CARAVAN_CHECK`: those built in this workspace (beside

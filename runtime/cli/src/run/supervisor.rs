@@ -31,6 +31,11 @@ pub enum Event {
         now_ns: u64,
         timeout: Duration,
     },
+    /// Realtime Caravan nodes that have not published a status within `timeout` of the start.
+    Silent {
+        names: Vec<String>,
+        timeout: Duration,
+    },
     /// The lockstep schedule or the realtime recorder finished (or failed).
     DriverDone(Result<(), String>),
 }
@@ -315,6 +320,13 @@ impl Supervisor {
         self.procs
             .iter()
             .all(|p| p.pid.is_none() && p.restart_at.is_none())
+    }
+
+    /// Whether the process named `name` runs now.
+    pub fn is_running(&self, name: &str) -> bool {
+        self.procs
+            .iter()
+            .any(|p| p.plan.spec.name == name && p.pid.is_some())
     }
 
     /// Sends SIGKILL to the process named `name`, if it runs.
