@@ -276,6 +276,7 @@ class Node:
         s.messages_missed = self._missed
         s.sim_time_ns = self._now_ns
         s.running = int(running)
+        s.rss_kib = _resident_kib()
         self._status.publish(s)
 
     def _open_pubsub(self, msg_type: Type[T], topic: str, depth: int, lossless: bool) -> Any:
@@ -410,6 +411,15 @@ class _LockstepClient:
         self.node._published.clear()
         self.last_done = done
         self._send(self.done_port, done, self.done_notifier)
+
+
+def _resident_kib() -> int:
+    """Resident memory of this process, KiB (``caravan::stats::resident_kib``)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") // 1024
+    except (OSError, ValueError, IndexError):
+        return 0
 
 
 def _end_of_check() -> None:

@@ -384,7 +384,7 @@ class Goal(ctypes.Structure):
 
 
 class NodeStatus(ctypes.Structure):
-    """``caravan::NodeStatus``: 200 bytes, aligned to 8."""
+    """``caravan::NodeStatus``: 208 bytes, aligned to 8."""
 
     _fields_ = [
         ("node_len", ctypes.c_uint32),
@@ -404,8 +404,9 @@ class NodeStatus(ctypes.Structure):
         ("sim_time_ns", ctypes.c_uint64),
         ("running", ctypes.c_uint32),
         ("_reserved", ctypes.c_uint32),
+        ("_pad0", ctypes.c_uint8 * 8),
     ]
-    SIZE = 200
+    SIZE = 208
     ALIGN = 8
     OFFSETS = {
         "node_len": 0,

@@ -72,6 +72,7 @@ impl Executor<'_> {
             messages_missed: self.shared.missed.get(),
             sim_time_ns: self.shared.now_ns.get(),
             running: running as u32,
+            rss_kib: crate::stats::resident_kib(),
             ..stats.summary()
         })
     }

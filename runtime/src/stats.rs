@@ -71,6 +71,17 @@ impl StepStats {
     }
 }
 
+/// The resident memory of this process, KiB, from /proc/self/statm (0 where it cannot be read).
+pub fn resident_kib() -> u64 {
+    let pages = std::fs::read_to_string("/proc/self/statm")
+        .ok()
+        .and_then(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
+        .unwrap_or(0);
+    // SAFETY: sysconf only reads a system constant.
+    let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) }.max(0) as u64;
+    pages * page / 1024
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -29,4 +29,6 @@ pub struct NodeStatus {
     /// 1 while running, 0 in the final report sent on exit.
     pub running: u32,
     pub _reserved: u32,
+    /// Resident memory of the node's process, KiB (Linux's /proc/self/statm; 0 elsewhere).
+    pub rss_kib: u64,
 }

@@ -3,7 +3,10 @@
 //! - `pong`: on each `demo/ping`, publishes the value times `gain` on `demo/pong`;
 //! - `sum`: at its rate, adds the latest `demo/pong` to a running total on `demo/sum`;
 //! - `noise`: at its rate, publishes seeded random numbers on `demo/noise`;
-//! - `crash`: steps `steps` times, then exits with status 3 (for restart tests).
+//! - `crash`: steps `steps` times, then exits with status 3 (for restart tests);
+//! - `source`: at its rate, publishes a count on the lossless topic `topic`;
+//! - `sink`: at its rate, receives every message of the lossless topic `topic` (its status
+//!   counts sequence gaps). Sources and sinks make the reliability soak.
 
 use caravan::{Error, Node, Topic, Trigger};
 use caravan_schemas::Pose2D;
@@ -15,6 +18,8 @@ use serde::Deserialize;
 struct Params {
     gain: f64,
     steps: u64,
+    /// `source`, `sink`: the topic.
+    topic: String,
 }
 
 impl Default for Params {
@@ -22,6 +27,7 @@ impl Default for Params {
         Self {
             gain: 2.0,
             steps: 5,
+            topic: "demo/stream".into(),
         }
     }
 }
@@ -30,7 +36,7 @@ fn topic(name: &str) -> Topic<Pose2D> {
     Topic::new(name)
 }
 
-const ROLES: [&str; 5] = ["ping", "pong", "sum", "noise", "crash"];
+const ROLES: [&str; 7] = ["ping", "pong", "sum", "noise", "crash", "source", "sink"];
 
 fn main() -> std::process::ExitCode {
     let role = std::env::args().nth(1).unwrap_or_default();
@@ -41,7 +47,7 @@ fn main() -> std::process::ExitCode {
                 Ok(p)
             } else {
                 Err(format!(
-                    "unknown role '{role}'; expected ping, pong, sum, noise or crash"
+                    "unknown role '{role}'; expected ping, pong, sum, noise, crash, source or sink"
                 ))
             }
         },
@@ -98,6 +104,23 @@ fn run(role: &str, mut node: Node, p: Params) -> Result<(), Error> {
                     y: rng.random(),
                     theta: 0.0,
                 })
+            })?;
+        }
+        "source" => {
+            let out = node.publisher(&Topic::<Pose2D>::lossless(&p.topic))?;
+            node.run(Trigger::every_hz(100.0), |step| {
+                out.publish(&Pose2D {
+                    x: step.index() as f64,
+                    y: 0.0,
+                    theta: 0.0,
+                })
+            })?;
+        }
+        "sink" => {
+            let input = node.subscriber(&Topic::<Pose2D>::lossless(&p.topic))?;
+            node.run(Trigger::every_hz(100.0), |_| {
+                while input.receive()?.is_some() {}
+                Ok(())
             })?;
         }
         "crash" => {

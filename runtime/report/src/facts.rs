@@ -59,6 +59,40 @@ pub struct ReportEntry {
     pub launch_dir: String,
 }
 
+/// How a node's resource use evolved during the run, from its running statuses (1 Hz).
+/// "After warm-up" is from the first status after the first fifth of them.
+#[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
+pub struct Trend {
+    /// Statuses received.
+    pub samples: usize,
+    /// Resident memory after warm-up and at the last status, MiB.
+    pub rss_mib_after_warmup: f64,
+    pub rss_mib_end: f64,
+    /// (end − after warm-up) / after warm-up, %.
+    pub rss_growth_pct: f64,
+    /// Deadline misses between warm-up and the last status.
+    pub deadline_misses_after_warmup: u64,
+}
+
+impl Trend {
+    /// The trend of statuses `(resident KiB, deadline misses so far)` in order; `None` for none.
+    pub fn of(series: &[(u64, u64)]) -> Option<Self> {
+        let (first, last) = (series.get(series.len() / 5)?, series.last()?);
+        let mib = |kib: u64| kib as f64 / 1024.0;
+        Some(Self {
+            samples: series.len(),
+            rss_mib_after_warmup: mib(first.0),
+            rss_mib_end: mib(last.0),
+            rss_growth_pct: if first.0 > 0 {
+                (last.0 as f64 - first.0 as f64) / first.0 as f64 * 100.0
+            } else {
+                0.0
+            },
+            deadline_misses_after_warmup: last.1.saturating_sub(first.1),
+        })
+    }
+}
+
 /// The launcher's record of a run: who ran, how it ended, what the recorder measured.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RunFacts {
@@ -83,6 +117,9 @@ pub struct RunFacts {
     /// The report plugins, in launch-file order.
     #[serde(default)]
     pub reports: Vec<ReportEntry>,
+    /// How each node's memory and deadline misses evolved over its once-a-second statuses.
+    #[serde(default)]
+    pub trends: BTreeMap<String, Trend>,
     /// Suspicious but legal things the launcher noticed (a process stepped by a topic on which
     /// nothing arrived), one sentence each.
     #[serde(default)]
@@ -116,5 +153,24 @@ impl RunFacts {
         } else {
             0.0
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trend_starts_after_the_first_fifth() {
+        // 10 statuses: memory settles at 2048 KiB from the third, then grows to 2150.
+        let mut series: Vec<(u64, u64)> = (0..10).map(|i| (2048, i / 3)).collect();
+        series[0].0 = 1024;
+        series[9].0 = 2150;
+        let t = Trend::of(&series).unwrap();
+        assert_eq!(t.samples, 10);
+        assert_eq!(t.rss_mib_after_warmup, 2.0);
+        assert!((t.rss_growth_pct - 4.98).abs() < 0.01, "{t:?}");
+        assert_eq!(t.deadline_misses_after_warmup, 3);
+        assert_eq!(Trend::of(&[]), None);
     }
 }

@@ -32,6 +32,8 @@ pub struct Recording {
     pub topics: BTreeMap<String, TopicStats>,
     /// Last status of each node, as JSON, by node name.
     pub node_status: BTreeMap<String, Value>,
+    /// Each node's running statuses in order, as (resident KiB, deadline misses so far).
+    pub status_series: BTreeMap<String, Vec<(u64, u64)>>,
 }
 
 pub struct Recorder {
@@ -50,6 +52,7 @@ pub struct Recorder {
     sequences: BTreeMap<u16, u32>,
     stats: BTreeMap<String, TopicStats>,
     node_status: BTreeMap<String, Value>,
+    status_series: BTreeMap<String, Vec<(u64, u64)>>,
     /// When each running node's status last arrived (wall clock).
     status_heard: BTreeMap<String, std::time::Instant>,
     buffer: Vec<(usize, Tapped)>,
@@ -97,6 +100,7 @@ impl Recorder {
             sequences: BTreeMap::new(),
             stats: BTreeMap::new(),
             node_status: BTreeMap::new(),
+            status_series: BTreeMap::new(),
             status_heard: BTreeMap::new(),
             buffer: Vec::new(),
         })
@@ -175,6 +179,11 @@ impl Recorder {
                 if m.json["running"] == 1 {
                     self.status_heard
                         .insert(node.clone(), std::time::Instant::now());
+                    let field = |k: &str| m.json[k].as_u64().unwrap_or(0);
+                    self.status_series
+                        .entry(node.clone())
+                        .or_default()
+                        .push((field("rss_kib"), field("deadline_misses")));
                 } else {
                     self.status_heard.remove(&node);
                 }
@@ -269,6 +278,7 @@ impl Recorder {
         Ok(Recording {
             topics: self.stats,
             node_status: self.node_status,
+            status_series: self.status_series,
         })
     }
 }

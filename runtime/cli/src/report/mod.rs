@@ -164,6 +164,7 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
                 "messages_missed": s["messages_missed"],
                 "cpu_s": p.cpu_s,
                 "max_rss_mib": p.max_rss_mib,
+                "trend": facts.trends.get(&p.name),
             })
         })
         .collect()

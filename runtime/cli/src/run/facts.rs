@@ -69,6 +69,11 @@ pub fn collect(
             .collect(),
         reports: Vec::new(),
         warnings,
+        trends: recording
+            .status_series
+            .iter()
+            .filter_map(|(n, s)| Some((n.clone(), caravan_report::Trend::of(s)?)))
+            .collect(),
     }
 }
 
