@@ -75,6 +75,23 @@ pub fn write_config(group: &str, path: &StdPath) -> Result<(), Error> {
         .map_err(|e| Error::Config(format!("cannot write {}: {e}", path.display())))
 }
 
+/// Makes the group's config file iceoryx2's global config of this process. iceoryx2 falls back
+/// to its global config in places (its clean-up of dead nodes), which it would otherwise read
+/// from `config/iceoryx2.toml` in the working directory, the user's or the system's config:
+/// a stray file there could point that clean-up at another namespace. Call it before the
+/// process first uses iceoryx2; later calls keep the first config.
+pub fn use_as_global(path: &StdPath) -> Result<(), Error> {
+    let file = iceoryx2::prelude::FilePath::new(path.as_os_str().as_encoded_bytes())
+        .map_err(|e| Error::Config(format!("iceoryx2 config path {}: {e:?}", path.display())))?;
+    Config::setup_global_config_from_file(&file).map_err(|e| {
+        Error::Config(format!(
+            "cannot load iceoryx2 config {}: {e:?}",
+            path.display()
+        ))
+    })?;
+    Ok(())
+}
+
 /// Reads a config written by [`write_config`].
 pub fn load_config(path: &StdPath) -> Result<Config, Error> {
     let text = std::fs::read_to_string(path).map_err(|e| {

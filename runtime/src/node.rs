@@ -62,7 +62,10 @@ impl Node {
         iceoryx2::prelude::set_log_level_from_env_or(LogLevel::Warn);
         crate::group::validate_name(&identity.group).map_err(Error::Config)?;
         let config = match &identity.iceoryx_config {
-            Some(path) => crate::group::load_config(path)?,
+            Some(path) => {
+                crate::group::use_as_global(path)?;
+                crate::group::load_config(path)?
+            }
             None => crate::group::config(&identity.group)?,
         };
         let node_name = NodeName::new(&identity.name).map_err(|e| {

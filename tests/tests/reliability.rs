@@ -395,3 +395,57 @@ fn a_realtime_node_that_never_reports_fails_the_group_at_its_join_timeout() {
     assert_eq!(s.report()["run"]["outcome"], "failed");
     assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
 }
+
+#[test]
+fn a_stray_iceoryx2_config_in_the_working_directory_is_not_used() {
+    // iceoryx2 reads config/iceoryx2.toml of the working directory as its fallback config;
+    // one with another prefix must not take the launcher's or a node's dead-node clean-up
+    // out of the group's namespace.
+    let s = Scenario::new(
+        "stray",
+        &format!(
+            "clock = \"realtime\"\nduration = \"10min\"\n{}",
+            &ping_pong()["clock = \"lockstep\"\nduration = \"10s\"\n".len()..]
+        ),
+    );
+    let stray = format!("stray-{}_", std::process::id());
+    let config = s.dir.join("config");
+    std::fs::create_dir_all(&config).unwrap();
+    caravan::group::write_config(&s.group.name, &config.join("iceoryx2.toml")).unwrap();
+    let text = std::fs::read_to_string(config.join("iceoryx2.toml")).unwrap();
+    let text = text.replace(&caravan::group::prefix(&s.group.name), &stray);
+    std::fs::write(config.join("iceoryx2.toml"), text).unwrap();
+    let child = s
+        .command(&[])
+        .current_dir(&s.dir)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut pong = None;
+    wait_until("pong runs", || {
+        let out = caravan(&["node", "list", "--group", &s.group.name]);
+        pong = String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .find(|l| l.starts_with("pong"))
+            .and_then(|l| l.split_whitespace().last()?.parse::<i32>().ok());
+        pong.is_some()
+    });
+    // A dead node: the launcher cleans up after it and stops the group (pong is required).
+    // SAFETY: killing a process of the group under test.
+    unsafe { libc::kill(pong.unwrap(), libc::SIGKILL) };
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        !stderr(&out).contains("No config file was loaded"),
+        "{}",
+        stderr(&out)
+    );
+    let strays: Vec<String> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n.starts_with(&stray))
+        .collect();
+    assert!(strays.is_empty(), "{strays:?}");
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}

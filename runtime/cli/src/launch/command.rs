@@ -98,6 +98,11 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     let Some(_lock) = crate::clean::lock_group(&group)? else {
         return already();
     };
+    // Before this process first touches iceoryx2: its fallback config is the group's.
+    let global = std::env::temp_dir().join(format!("caravan-group-{group}.iceoryx2.toml"));
+    caravan::group::write_config(&group, &global)
+        .with_context(|| format!("cannot write {}", global.display()))?;
+    caravan::group::use_as_global(&global)?;
     if crate::clean::group_is_running(&group)? {
         return already();
     }
