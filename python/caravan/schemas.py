@@ -404,7 +404,7 @@ class NodeStatus(ctypes.Structure):
         ("sim_time_ns", ctypes.c_uint64),
         ("running", ctypes.c_uint32),
         ("_reserved", ctypes.c_uint32),
-        ("_pad0", ctypes.c_uint8 * 8),
+        ("rss_kib", ctypes.c_uint64),
     ]
     SIZE = 208
     ALIGN = 8
@@ -426,6 +426,7 @@ class NodeStatus(ctypes.Structure):
         "sim_time_ns": 184,
         "running": 192,
         "_reserved": 196,
+        "rss_kib": 200,
     }
 
     @classmethod

@@ -271,7 +271,7 @@ describe! {
     NodeStatus {
         node, host, period_ns, steps, deadline_misses, jitter_p50_ns, jitter_p99_ns,
         jitter_max_ns, compute_mean_ns, compute_p99_ns, compute_max_ns, messages_missed,
-        sim_time_ns, running, _reserved,
+        sim_time_ns, running, _reserved, rss_kib,
     }
     Collision { robot, other_robot, started, _reserved }
     JointValue { name, position, velocity, effort }

@@ -449,3 +449,53 @@ fn a_stray_iceoryx2_config_in_the_working_directory_is_not_used() {
     assert!(strays.is_empty(), "{strays:?}");
     assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
 }
+
+/// Starts a realtime ping-pong group and kills its launcher with SIGKILL: its processes end
+/// (parent-death signal) and its shared memory stays behind, stale.
+fn stale_group(tag: &str) -> Scenario {
+    let s = Scenario::new(
+        tag,
+        &format!(
+            "clock = \"realtime\"\nduration = \"10min\"\n{}",
+            &ping_pong()["clock = \"lockstep\"\nduration = \"10s\"\n".len()..]
+        ),
+    );
+    let mut child = s.command(&[]).stderr(Stdio::piped()).spawn().unwrap();
+    wait_until("ping and pong run", || {
+        let out = caravan(&["node", "list", "--group", &s.group.name]);
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        text.contains("ping") && text.contains("pong")
+    });
+    child.kill().unwrap();
+    child.wait().unwrap();
+    wait_until("the group's processes are gone", || {
+        !caravan(&["node", "list", "--group", &s.group.name])
+            .status
+            .success()
+    });
+    assert!(!s.shm_entries().is_empty());
+    s
+}
+
+#[test]
+fn clean_takes_the_group_named_and_needs_all_for_several() {
+    let (a, b) = (stale_group("stale-a"), stale_group("stale-b"));
+    let out = caravan(&["clean"]);
+    assert_ne!(out.status.code(), Some(0));
+    let err = stderr(&out);
+    assert!(
+        err.contains(&a.group.name) && err.contains(&b.group.name) && err.contains("--all"),
+        "{err}"
+    );
+    assert!(!a.shm_entries().is_empty() && !b.shm_entries().is_empty());
+    let out = caravan(&["clean", "--group", &a.group.name]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(a.shm_entries().is_empty(), "{:?}", a.shm_entries());
+    assert!(
+        !b.shm_entries().is_empty(),
+        "the other group was cleaned too"
+    );
+    let out = caravan(&["clean", "--group", &b.group.name]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(b.shm_entries().is_empty(), "{:?}", b.shm_entries());
+}
