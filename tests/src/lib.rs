@@ -368,3 +368,31 @@ pub fn ping_pong() -> &'static str {
         .expect("PINGPONG has a sum process");
     &PINGPONG[..end + 1]
 }
+
+/// [`ping_pong`] under the realtime clock, for `duration` of wall time.
+pub fn realtime_ping_pong(duration: &str) -> String {
+    let body = ping_pong()
+        .strip_prefix("clock = \"lockstep\"\nduration = \"10s\"\n")
+        .expect("PINGPONG starts with its clock and duration");
+    format!("clock = \"realtime\"\nduration = \"{duration}\"\n{body}")
+}
+
+/// Polls `cond` every 100 ms until it holds; panics naming `what` after 30 s. Polling with
+/// sleeps is fine in a test helper: nothing asserts how long it takes.
+pub fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
+    for _ in 0..300 {
+        if cond() {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    panic!("timed out waiting until {what}");
+}
+
+/// Runs the `caravan` command with `args`.
+pub fn caravan(args: &[&str]) -> std::process::Output {
+    Command::new(workspace_bin("caravan"))
+        .args(args)
+        .output()
+        .expect("run caravan")
+}

@@ -1,9 +1,8 @@
 //! `caravan launch` and the inspection commands, with real process groups.
 
-use caravan_tests::{PINGPONG, Scenario, ping_pong, workspace_bin};
+use caravan_tests::{PINGPONG, Scenario, caravan, ping_pong, wait_until};
 use std::path::Path;
-use std::process::{Child, Command, Output, Stdio};
-use std::time::Duration;
+use std::process::{Child, Output, Stdio};
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).to_string()
@@ -167,24 +166,6 @@ fn failed_required_process_fails_the_group() {
     // Its peer was stopped cleanly, not killed.
     assert_eq!(node(&report, "ping")["exit_status"], "exited 0");
     assert!(s.shm_entries().is_empty());
-}
-
-fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
-    // Polling with sleeps is fine in a test helper; nothing asserts how long it takes.
-    for _ in 0..300 {
-        if cond() {
-            return;
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    panic!("timed out waiting until {what}");
-}
-
-fn caravan(args: &[&str]) -> Output {
-    Command::new(workspace_bin("caravan"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 fn start_realtime_group(s: &Scenario) -> Child {

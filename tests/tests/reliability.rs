@@ -2,20 +2,15 @@
 //! bad input (exit 2, named, nothing started) or a clear run-time failure, and none hangs,
 //! panics, leaks shared memory or leaves a process behind.
 
-use caravan_tests::{PINGPONG, Scenario, ping_pong, workspace_bin, workspace_root};
+use caravan_tests::{
+    PINGPONG, Scenario, caravan, ping_pong, realtime_ping_pong, wait_until, workspace_bin,
+    workspace_root,
+};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
-use std::time::Duration;
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).to_string()
-}
-
-fn caravan(args: &[&str]) -> Output {
-    Command::new(workspace_bin("caravan"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 /// Checks `out` is bad input: exit 2, every `expected` text in its message, no panic, and no
@@ -29,17 +24,6 @@ fn assert_refused(s: &Scenario, out: &Output, expected: &[&str]) {
     }
     assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
     assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
-}
-
-fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
-    // Polling with sleeps is fine in a test helper; nothing asserts how long it takes.
-    for _ in 0..300 {
-        if cond() {
-            return;
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    panic!("gave up waiting: {what}");
 }
 
 #[test]
@@ -197,13 +181,7 @@ fn a_process_that_forks_leaves_no_orphan() {
 
 #[test]
 fn two_launches_of_one_group_at_once_one_is_refused() {
-    let s = Scenario::new(
-        "twice",
-        &format!(
-            "clock = \"realtime\"\nduration = \"3s\"\n{}",
-            &ping_pong()["clock = \"lockstep\"\nduration = \"10s\"\n".len()..]
-        ),
-    );
+    let s = Scenario::new("twice", &realtime_ping_pong("3s"));
     let start = || {
         s.command(&[])
             .stdout(Stdio::piped())
@@ -262,13 +240,7 @@ fn inspecting_a_missing_group_fails_and_creates_nothing() {
 #[test]
 fn no_file_of_a_running_group_is_open_to_other_users() {
     use std::os::unix::fs::PermissionsExt;
-    let s = Scenario::new(
-        "private",
-        &format!(
-            "clock = \"realtime\"\nduration = \"20s\"\n{}",
-            &ping_pong()["clock = \"lockstep\"\nduration = \"10s\"\n".len()..]
-        ),
-    );
+    let s = Scenario::new("private", &realtime_ping_pong("20s"));
     let child = s.command(&[]).spawn().unwrap();
     wait_until("both nodes run", || {
         let out = caravan(&["node", "list", "--group", &s.group.name]);
@@ -401,13 +373,7 @@ fn a_stray_iceoryx2_config_in_the_working_directory_is_not_used() {
     // iceoryx2 reads config/iceoryx2.toml of the working directory as its fallback config;
     // one with another prefix must not take the launcher's or a node's dead-node clean-up
     // out of the group's namespace.
-    let s = Scenario::new(
-        "stray",
-        &format!(
-            "clock = \"realtime\"\nduration = \"10min\"\n{}",
-            &ping_pong()["clock = \"lockstep\"\nduration = \"10s\"\n".len()..]
-        ),
-    );
+    let s = Scenario::new("stray", &realtime_ping_pong("10min"));
     let stray = format!("stray-{}_", std::process::id());
     let config = s.dir.join("config");
     std::fs::create_dir_all(&config).unwrap();
@@ -453,13 +419,7 @@ fn a_stray_iceoryx2_config_in_the_working_directory_is_not_used() {
 /// Starts a realtime ping-pong group and kills its launcher with SIGKILL: its processes end
 /// (parent-death signal) and its shared memory stays behind, stale.
 fn stale_group(tag: &str) -> Scenario {
-    let s = Scenario::new(
-        tag,
-        &format!(
-            "clock = \"realtime\"\nduration = \"10min\"\n{}",
-            &ping_pong()["clock = \"lockstep\"\nduration = \"10s\"\n".len()..]
-        ),
-    );
+    let s = Scenario::new(tag, &realtime_ping_pong("10min"));
     let mut child = s.command(&[]).stderr(Stdio::piped()).spawn().unwrap();
     wait_until("ping and pong run", || {
         let out = caravan(&["node", "list", "--group", &s.group.name]);

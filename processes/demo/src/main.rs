@@ -57,16 +57,7 @@ fn main() -> std::process::ExitCode {
 
 fn run(role: &str, mut node: Node, p: Params) -> Result<(), Error> {
     match role {
-        "ping" => {
-            let out = node.publisher(&topic("demo/ping"))?;
-            node.run(Trigger::every_hz(10.0), |step| {
-                out.publish(&Pose2D {
-                    x: step.index() as f64,
-                    y: 0.0,
-                    theta: 0.0,
-                })
-            })?;
-        }
+        "ping" => count_up(&mut node, &topic("demo/ping"), 10.0)?,
         "pong" => {
             let input = node.subscriber(&topic("demo/ping"))?;
             let out = node.publisher(&topic("demo/pong"))?;
@@ -106,16 +97,7 @@ fn run(role: &str, mut node: Node, p: Params) -> Result<(), Error> {
                 })
             })?;
         }
-        "source" => {
-            let out = node.publisher(&Topic::<Pose2D>::lossless(&p.topic))?;
-            node.run(Trigger::every_hz(100.0), |step| {
-                out.publish(&Pose2D {
-                    x: step.index() as f64,
-                    y: 0.0,
-                    theta: 0.0,
-                })
-            })?;
-        }
+        "source" => count_up(&mut node, &Topic::lossless(&p.topic), 100.0)?,
         "sink" => {
             let input = node.subscriber(&Topic::<Pose2D>::lossless(&p.topic))?;
             node.run(Trigger::every_hz(100.0), |_| {
@@ -136,5 +118,18 @@ fn run(role: &str, mut node: Node, p: Params) -> Result<(), Error> {
         }
         _ => {}
     }
+    Ok(())
+}
+
+/// Publishes the step count on `topic`, `hz` times a second (the launch file's rate wins).
+fn count_up(node: &mut Node, topic: &Topic<Pose2D>, hz: f64) -> Result<(), Error> {
+    let out = node.publisher(topic)?;
+    node.run(Trigger::every_hz(hz), |step| {
+        out.publish(&Pose2D {
+            x: step.index() as f64,
+            y: 0.0,
+            theta: 0.0,
+        })
+    })?;
     Ok(())
 }
