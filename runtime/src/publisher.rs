@@ -101,7 +101,7 @@ impl<T: Message> Publisher<T> {
             (Some(factor), Some(started)) if self.shared.lockstep => {
                 let compute = (started.elapsed().as_nanos() as f64 * factor) as u64;
                 let tick = self.shared.tick_ns.get().max(1);
-                now + compute.div_ceil(tick) * tick
+                now.saturating_add(compute.div_ceil(tick).saturating_mul(tick))
             }
             _ => now,
         }

@@ -1,5 +1,8 @@
 //! Helpers for Caravan's multi-process integration tests.
 
+pub mod node;
+pub mod recording;
+
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -395,4 +398,29 @@ pub fn caravan(args: &[&str]) -> std::process::Output {
         .args(args)
         .output()
         .expect("run caravan")
+}
+
+/// Checks `out` is bad input: exit 2, every `expected` text in its message, no panic, and no
+/// run directory or shared memory of the group made.
+pub fn assert_refused(s: &Scenario, out: &std::process::Output, expected: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for e in expected {
+        assert!(err.contains(e), "expected '{e}' in: {err}");
+    }
+    assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}
+
+/// Whether process `pid` is alive (a zombie has exited; only its parent's wait is missing).
+pub fn alive(pid: i32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+        !stat
+            .rsplit(')')
+            .next()
+            .unwrap_or("")
+            .trim_start()
+            .starts_with('Z')
+    })
 }

@@ -2,7 +2,7 @@
 //! goals; followers localise by wheel odometry. Real processes in lockstep, checked from the
 //! run report.
 
-use caravan_tests::{ConvoyRun, assert_convoy_succeeded, run_convoy, run_convoy_with};
+use caravan_tests::{ConvoyRun, assert_convoy_succeeded, recording, run_convoy, run_convoy_with};
 use serde_json::Value;
 
 /// Every survey of the world was measured on the map, each within `limit_pct`.
@@ -44,6 +44,65 @@ fn autonomous_convoy_maps_the_lab_and_reaches_every_goal() {
         "{slam}"
     );
     assert_map_files(&run);
+    assert_foxglove_scene(&run);
+}
+
+/// The recording shows the scene in Foxglove: well-known channels beside the raw ones, every
+/// robot in `tf`, and a channel for every recorded topic, even one with no message.
+fn assert_foxglove_scene(run: &ConvoyRun) {
+    use foxglove::messages::{FrameTransforms, Grid, LaserScan};
+    use prost::Message;
+    let bytes = recording::read(&run.dir.join("record.mcap"));
+    let channels = recording::channels(&bytes);
+    for (topic, schema) in [
+        ("tf", "foxglove.FrameTransforms"),
+        ("foxglove/robot/0/scan", "foxglove.LaserScan"),
+        ("foxglove/robot/0/path", "foxglove.PosesInFrame"),
+        ("foxglove/robot/3/pose_true", "foxglove.PoseInFrame"),
+        ("foxglove/goal", "foxglove.PoseInFrame"),
+        ("foxglove/map", "foxglove.Grid"),
+    ] {
+        let c = &channels[topic];
+        assert_eq!(
+            (c.schema.as_str(), c.encoding.as_str()),
+            (schema, "protobuf")
+        );
+        assert!(c.messages > 0, "{topic}: no messages");
+    }
+    let collisions = &channels["collisions"];
+    assert_eq!(
+        (collisions.encoding.as_str(), collisions.messages),
+        ("json", 0)
+    );
+
+    let mut frames = std::collections::BTreeSet::new();
+    for m in recording::messages(&bytes, "tf") {
+        for t in FrameTransforms::decode(m.as_slice()).unwrap().transforms {
+            assert_eq!(t.parent_frame_id, "map");
+            frames.insert(t.child_frame_id);
+        }
+    }
+    for i in 0..5 {
+        assert!(
+            frames.contains(&format!("robot_{i}/base_link")),
+            "{frames:?}"
+        );
+        assert!(
+            frames.contains(&format!("robot_{i}/base_link_true")),
+            "{frames:?}"
+        );
+    }
+    let scans = recording::messages(&bytes, "foxglove/robot/0/scan");
+    let scan = LaserScan::decode(scans[0].as_slice()).unwrap();
+    assert_eq!(scan.frame_id, "robot_0/base_link");
+    assert!(scan.ranges.len() > 600, "{}", scan.ranges.len());
+    let maps = recording::messages(&bytes, "foxglove/map");
+    let map = Grid::decode(maps.last().unwrap().as_slice()).unwrap();
+    assert_eq!(map.data.len() as u32 % map.column_count, 0);
+    assert!(
+        map.data.iter().any(|&c| c as i8 > 50),
+        "the map shows obstacles"
+    );
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! `caravan launch` and the inspection commands, with real process groups.
 
-use caravan_tests::{PINGPONG, Scenario, caravan, ping_pong, wait_until};
+use caravan_tests::{PINGPONG, Scenario, caravan, ping_pong, recording, wait_until};
 use std::path::Path;
 use std::process::{Child, Output, Stdio};
 
@@ -42,6 +42,9 @@ fn lockstep_group_runs_records_and_reports() {
     let mut pong = Vec::new();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
+        if m.channel.message_encoding != "json" {
+            continue; // a Foxglove view (protobuf), checked in foxglove.rs
+        }
         let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
         assert_eq!(m.log_time, v["header"]["stamp_ns"].as_u64().unwrap());
         assert!(
@@ -66,6 +69,26 @@ fn lockstep_group_runs_records_and_reports() {
             (i as u64 * 100_000_000 + 1_000_000, 2.0 * i as f64)
         );
     }
+
+    // An indexed reader finds every channel in the summary, with its schema and count.
+    let channels = recording::channels(&bytes);
+    let ping = &channels["demo/ping"];
+    assert_eq!((ping.encoding.as_str(), ping.messages), ("json", 101));
+    assert_eq!(channels["demo/pong"].messages, 100);
+    // The run's seed, command line and version, and the launch file it ran.
+    let meta = recording::run_metadata(&bytes);
+    assert_eq!(meta["seed"], "3");
+    assert_eq!(meta["caravan_version"], env!("CARGO_PKG_VERSION"));
+    assert!(meta["arguments"].starts_with("launch "), "{meta:?}");
+    assert!(
+        !meta.contains_key("wall_clock_start_ns"),
+        "no wall clock in a lockstep recording"
+    );
+    let launch = recording::attachment(&bytes, "launch.toml");
+    assert_eq!(
+        launch,
+        std::fs::read(s.run_dirs()[0].join("launch.toml")).unwrap()
+    );
 }
 
 /// Loads both cores for as long as it lives: determinism must not depend on timing.
@@ -119,6 +142,9 @@ fn lockstep_reruns_are_byte_identical_under_cpu_load() {
     let b = std::fs::read(dirs[1].join("record.mcap")).unwrap();
     assert!(a.len() > 1000);
     assert!(a == b, "recordings differ");
+    // Identical with their summary index, which Foxglove uses to open a file without reading
+    // all of it.
+    assert!(recording::channels(&a).contains_key("demo/pong"));
 }
 
 /// A realtime group of a healthy node and one that exits with status 3 after two steps;
@@ -186,6 +212,33 @@ fn start_realtime_group(s: &Scenario) -> Child {
 }
 
 #[test]
+fn topic_echo_without_a_count_exits_when_its_group_ends() {
+    let s = Scenario::new("echo-end", PINGPONG);
+    let group = start_realtime_group(&s);
+    let echo = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
+        .args(["topic", "echo", "demo/ping", "--group", &s.group.name])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = format!("pid {}", echo.id());
+    wait_until("topic echo joins the group", || {
+        let out = caravan(&["node", "list", "--group", &s.group.name]);
+        String::from_utf8_lossy(&out.stdout).contains(&pid)
+    });
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(group.id() as i32, libc::SIGTERM) };
+    assert!(group.wait_with_output().unwrap().status.success());
+    let mut echo = echo;
+    wait_until("topic echo exits after its group ended", || {
+        echo.try_wait().unwrap().is_some()
+    });
+    let out = echo.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("has ended"), "{}", stderr(&out));
+}
+
+#[test]
 fn sigterm_stops_the_group_cleanly() {
     let s = Scenario::new("sigterm", PINGPONG);
     let child = start_realtime_group(&s);
@@ -213,6 +266,21 @@ fn inspection_commands_see_a_running_group() {
         list.contains("demo/ping") && list.contains("caravan::Pose2D"),
         "{list}"
     );
+    let json: serde_json::Value =
+        serde_json::from_slice(&caravan(&["topic", "list", "--json", "--group", g]).stdout)
+            .unwrap();
+    let ping = json
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["name"] == "demo/ping");
+    assert_eq!(ping.unwrap()["type"], "caravan::Pose2D", "{json}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&caravan(&["node", "list", "--json", "--group", g]).stdout).unwrap();
+    assert!(
+        json.as_array().unwrap().iter().any(|n| n["name"] == "pong"),
+        "{json}"
+    );
     let echo = caravan(&["topic", "echo", "demo/pong", "-n", "3", "--group", g]);
     let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&echo.stdout)
         .lines()
@@ -222,7 +290,7 @@ fn inspection_commands_see_a_running_group() {
     assert!(
         lines
             .iter()
-            .all(|l| l["data"]["x"].as_f64().unwrap() % 2.0 == 0.0)
+            .all(|l| l["x"].as_f64().unwrap() % 2.0 == 0.0 && l["header"]["source_id"].is_string())
     );
     let hz = String::from_utf8_lossy(
         &caravan(&["topic", "hz", "demo/ping", "--seconds", "2", "--group", g]).stdout,
@@ -246,7 +314,29 @@ fn inspection_commands_see_a_running_group() {
         .unwrap()
         .map(|m| m.unwrap().channel.topic.clone())
         .collect();
-    assert!(!topics.is_empty() && topics.iter().all(|t| t == "demo/sum"));
+    assert!(topics.iter().any(|t| t == "demo/sum"), "{topics:?}");
+    assert!(
+        topics.iter().all(|t| t.ends_with("demo/sum")),
+        "the raw topic and its Foxglove view only: {topics:?}"
+    );
+    // `caravan info` reads it back from its summary.
+    let info = caravan(&["info", "--json", mcap.to_str().unwrap()]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    assert_eq!(info["indexed"], true);
+    let sum = info["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["topic"] == "demo/sum");
+    assert_eq!(
+        sum.unwrap()["messages"].as_u64(),
+        Some(topics.iter().filter(|t| *t == "demo/sum").count() as u64)
+    );
+    assert!(
+        info["metadata"]["run"]["wall_clock_start_ns"].is_string(),
+        "{info}"
+    );
     // SAFETY: signalling our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     assert!(child.wait_with_output().unwrap().status.success());

@@ -3,27 +3,14 @@
 //! panics, leaks shared memory or leaves a process behind.
 
 use caravan_tests::{
-    PINGPONG, Scenario, caravan, ping_pong, realtime_ping_pong, wait_until, workspace_bin,
-    workspace_root,
+    PINGPONG, Scenario, alive, assert_refused, caravan, ping_pong, realtime_ping_pong, wait_until,
+    workspace_bin, workspace_root,
 };
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).to_string()
-}
-
-/// Checks `out` is bad input: exit 2, every `expected` text in its message, no panic, and no
-/// run directory or shared memory of the group made.
-fn assert_refused(s: &Scenario, out: &Output, expected: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for e in expected {
-        assert!(err.contains(e), "expected '{e}' in: {err}");
-    }
-    assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
-    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
 }
 
 #[test]
@@ -130,18 +117,6 @@ fn a_lockstep_process_that_never_joins_fails_the_group_at_its_join_timeout() {
     );
     assert_eq!(s.report()["run"]["outcome"], "failed");
     assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
-}
-
-fn alive(pid: i32) -> bool {
-    // A zombie has exited; only its parent's wait is missing.
-    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
-        !stat
-            .rsplit(')')
-            .next()
-            .unwrap_or("")
-            .trim_start()
-            .starts_with('Z')
-    })
 }
 
 #[test]

@@ -70,6 +70,19 @@ impl Params {
         if !self.initial_pose.iter().flatten().all(|v| v.is_finite()) {
             return Err("key 'initial_pose': must be three finite numbers [x, y, theta]".into());
         }
+        // The map is written into the run directory, never beside or above it.
+        let plain = self.save_map.is_empty()
+            || (self.save_map != ".."
+                && self.save_map != "."
+                && !self.save_map.contains('/')
+                && !self.save_map.contains('\0'));
+        if !plain {
+            return Err(format!(
+                "key 'save_map': '{}' must be a plain file name (the map goes into the run \
+                 directory) or \"\" for none",
+                self.save_map
+            ));
+        }
         if !(self.map_rate_hz > 0.0 && self.map_rate_hz.is_finite()) {
             return Err(format!(
                 "key 'map_rate_hz': must be positive, got {}",

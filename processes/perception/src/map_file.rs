@@ -76,7 +76,7 @@ pub fn save_map(grid: &OccupancyGrid, base: &Path) -> Result<PathBuf, String> {
 /// Reads the map described by `yaml` (as written by [`save_map`]) into `out`.
 pub fn load_map(yaml: &Path, out: &mut OccupancyGrid) -> Result<(), String> {
     let err = |what: &str| format!("{}: {what}", yaml.display());
-    let text = std::fs::read_to_string(yaml).map_err(|e| err(&e.to_string()))?;
+    let text = caravan::input::read_to_string(yaml).map_err(|e| err(&e.to_string()))?;
     let mut image = None;
     let mut resolution = None;
     let mut origin = None;
@@ -136,7 +136,7 @@ pub fn load_map(yaml: &Path, out: &mut OccupancyGrid) -> Result<(), String> {
     let origin = origin.ok_or_else(|| err("missing `origin`"))?;
 
     let pgm = yaml.parent().unwrap_or(Path::new("")).join(&image);
-    let bytes = std::fs::read(&pgm).map_err(|e| format!("{}: {e}", pgm.display()))?;
+    let bytes = caravan::input::read(&pgm).map_err(|e| format!("{}: {e}", pgm.display()))?;
     let (w, h, pixels) = parse_pgm(&bytes).map_err(|e| format!("{}: {e}", pgm.display()))?;
     if w > MAP_MAX_SIDE || h > MAP_MAX_SIDE {
         return Err(format!(

@@ -109,10 +109,18 @@ impl SlamParams {
                 .then_some(())
                 .ok_or(format!("{name} must be positive, got {v}"))
         };
-        positive(self.resolution, "resolution")?;
+        let within = |v: f64, name: &str, low: f64, high: f64| {
+            (low..=high)
+                .contains(&v)
+                .then_some(())
+                .ok_or(format!("{name} must be in [{low}, {high}], got {v}"))
+        };
+        // A cell from 1 mm to 10 m, ranges up to 10 km: past these the map's arithmetic
+        // (cell indices, world extents) overflows.
+        within(self.resolution, "resolution (m)", 0.001, 10.0)?;
         positive(self.map_update_distance_m, "map_update_distance_m")?;
         positive(self.map_update_angle_rad, "map_update_angle_rad")?;
-        positive(self.max_range_m, "max_range_m")?;
+        within(self.max_range_m, "max_range_m", f64::MIN_POSITIVE, 10_000.0)?;
         if !(1..=5).contains(&self.levels) {
             return Err(format!("levels must be 1..=5, got {}", self.levels));
         }

@@ -104,9 +104,10 @@ impl Params {
 
     /// Checks values serde cannot; the message names the key.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.gravity.is_finite() && self.gravity >= 0.0) {
+        // Up to 100 g: beyond it no body stays on any floor and rapier's contacts blow up.
+        if !(0.0..=1000.0).contains(&self.gravity) {
             return Err(format!(
-                "key 'gravity': must be zero or positive (m/s², pointing down), got {}",
+                "key 'gravity': must be 0 to 1000 (m/s², pointing down), got {}",
                 self.gravity
             ));
         }
@@ -153,20 +154,11 @@ impl Params {
                 self.count
             ));
         }
-        if let Some(i) = self
-            .poses
-            .iter()
-            .position(|p| p.iter().any(|v| !v.is_finite()))
-        {
-            return Err(format!("key 'poses[{i}]': values must be finite numbers"));
+        for (i, p) in self.poses.iter().enumerate() {
+            crate::spec::check_pose_values(i, p).map_err(|e| format!("key {e}"))?;
         }
         self.validate_step()?;
-        if !(self.wheel_friction.is_finite() && self.wheel_friction > 0.0) {
-            return Err(format!(
-                "key 'wheel_friction': must be positive, got {}",
-                self.wheel_friction
-            ));
-        }
+        crate::spec::check_wheel_friction(self.wheel_friction).map_err(|e| format!("key {e}"))?;
         self.motor.validate().map_err(|e| format!("key {e}"))?;
         self.pid.validate().map_err(|e| format!("key {e}"))?;
         Ok(())

@@ -261,7 +261,8 @@ impl RobotSpec {
         }
     }
 
-    /// Checks values serde cannot; messages name the key relative to this spec.
+    /// Checks values serde cannot; messages name the key relative to this spec (see also
+    /// [`check_pose_values`] and [`check_wheel_friction`], shared with the convoy's keys).
     pub fn validate(&self) -> Result<(), String> {
         if self.count == 0 {
             return Err("'count' must be at least 1".into());
@@ -282,16 +283,9 @@ impl RobotSpec {
                     p.len()
                 ));
             }
-            if p.iter().any(|v| !v.is_finite()) {
-                return Err(format!("'poses[{i}]': values must be finite numbers"));
-            }
+            check_pose_values(i, p)?;
         }
-        if !(self.wheel_friction.is_finite() && self.wheel_friction > 0.0) {
-            return Err(format!(
-                "'wheel_friction': must be positive, got {}",
-                self.wheel_friction
-            ));
-        }
+        check_wheel_friction(self.wheel_friction)?;
         if self.lifted && self.base != Base::Floating {
             return Err(
                 "'lifted' holds a floating base in the air; this base is not floating".into(),
@@ -436,4 +430,25 @@ impl RobotSpec {
             contacts: false,
         }
     }
+}
+
+/// A start pose's numbers: finite and within a world (at most 10 km across, caravan-world's
+/// limit).
+pub fn check_pose_values(i: usize, pose: &[f64]) -> Result<(), String> {
+    if pose.iter().any(|v| !v.is_finite() || v.abs() > 10_000.0) {
+        return Err(format!(
+            "'poses[{i}]': values must be finite numbers within ±10000 (m, rad)"
+        ));
+    }
+    Ok(())
+}
+
+/// The wheels' friction coefficient: positive and at most 100.
+pub fn check_wheel_friction(v: f64) -> Result<(), String> {
+    if !(v > 0.0 && v <= 100.0) {
+        return Err(format!(
+            "'wheel_friction': must be positive and at most 100, got {v}"
+        ));
+    }
+    Ok(())
 }

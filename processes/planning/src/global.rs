@@ -72,6 +72,16 @@ impl GlobalParams {
                 self.path_spacing
             ));
         }
+        // Lengths in metres beyond any map (10 km) would overflow cell arithmetic.
+        for (name, v) in [
+            ("start_escape_radius", self.start_escape_radius),
+            ("search_margin", self.search_margin),
+            ("path_spacing", self.path_spacing),
+        ] {
+            if v > 10_000.0 {
+                return Err(format!("{name} must be at most 10000 m, got {v}"));
+            }
+        }
         Ok(())
     }
 }

@@ -145,8 +145,12 @@ impl LocalParams {
                 self.sim_step, self.sim_time
             ));
         }
-        if self.v_samples == 0 || self.omega_samples == 0 {
-            return Err("v_samples and omega_samples must be at least 1".into());
+        // Every step scores v_samples × omega_samples trajectories.
+        if !(1..=1000).contains(&self.v_samples) || !(1..=1000).contains(&self.omega_samples) {
+            return Err(format!(
+                "v_samples and omega_samples must be 1 to 1000, got {} and {}",
+                self.v_samples, self.omega_samples
+            ));
         }
         let weights = [
             ("path_distance_bias", self.path_distance_bias),

@@ -86,10 +86,11 @@ impl ImuErrors {
         self.accel.validate("accel")?;
         self.gyro.validate("gyro")?;
         let [lo, hi] = self.bias_correlation_s;
-        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi >= lo) {
+        // Two processes per decade: 1 ms to 10⁶ s spans 18 of them.
+        if !(lo >= 1e-3 && hi <= 1e6 && hi >= lo) {
             return Err(format!(
                 "'bias_correlation_s': give [shortest, longest] in s, \
-                 0 < shortest ≤ longest, got [{lo}, {hi}]"
+                 0.001 ≤ shortest ≤ longest ≤ 1e6, got [{lo}, {hi}]"
             ));
         }
         Ok(())

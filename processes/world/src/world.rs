@@ -196,7 +196,8 @@ pub fn load_world(path: &Path) -> Result<World, WorldError> {
         file: file.clone(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let text =
+        caravan::input::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
     parse_world(&text).map_err(err)
 }
 

@@ -32,9 +32,25 @@ pub fn live_nodes(group: &str) -> Result<Vec<LiveNode>> {
 
 /// The lock a launcher holds on its group's name for as long as it runs: taking it is atomic,
 /// so of two launches of one group started at the same instant exactly one gets it. The lock
-/// is released when the file is closed, including when the launcher dies.
+/// is released when the file is closed, including when the launcher dies. Dropping it removes
+/// the group's files in the temporary directory (the lock and the launcher's iceoryx2 config).
 pub struct GroupLock {
     _file: std::fs::File,
+    path: std::path::PathBuf,
+    group: String,
+}
+
+impl Drop for GroupLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(global_config_path(&self.group));
+        // Unlinked while still held, so no other launcher holds a lock on this file.
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Where the launcher of `group` writes the iceoryx2 config it uses as its global one.
+pub fn global_config_path(group: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("caravan-group-{group}.iceoryx2.toml"))
 }
 
 /// Takes `group`'s lock, or `None` when another launcher holds it.
@@ -57,7 +73,11 @@ pub fn lock_group(group: &str) -> Result<Option<GroupLock>> {
         }
         return Err(anyhow!("cannot lock {}: {e}", path.display()));
     }
-    Ok(Some(GroupLock { _file: file }))
+    Ok(Some(GroupLock {
+        _file: file,
+        path,
+        group: group.to_string(),
+    }))
 }
 
 pub fn group_is_running(group: &str) -> Result<bool> {
@@ -111,10 +131,16 @@ pub fn choose_group(named: Option<&str>) -> Result<String> {
     }
 }
 
+/// A `--group` value: a usable group name (so it cannot reach outside Caravan's files).
+pub fn group_arg(text: &str) -> Result<String, String> {
+    caravan::group::validate_name(text)?;
+    Ok(text.to_string())
+}
+
 #[derive(clap::Args)]
 pub struct CleanArgs {
     /// The group to clean
-    #[arg(long, short, conflicts_with = "all")]
+    #[arg(long, short, conflicts_with = "all", value_parser = group_arg)]
     pub group: Option<String>,
     /// Clean every group none of whose processes is alive
     #[arg(long)]
@@ -154,6 +180,8 @@ pub fn clean(args: &CleanArgs) -> Result<()> {
     };
     for group in chosen {
         let n = caravan::group::remove_resources(&group)?;
+        // A dead launcher's lock and config go too (taking the lock proves none holds it).
+        drop(lock_group(&group)?);
         println!("removed {n} stale entries of group '{group}'");
     }
     Ok(())

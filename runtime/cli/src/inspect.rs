@@ -7,33 +7,46 @@ use clap::{Args, Subcommand};
 use iceoryx2::prelude::*;
 use std::time::{Duration, Instant};
 
-/// A `--seconds` value: finite, not negative, at most ten years.
+/// A `--seconds` value: finite, more than 0, at most ten years.
 pub fn seconds_arg(text: &str) -> Result<Duration, String> {
     let value: f64 = text
         .trim()
         .parse()
         .map_err(|_| format!("'{text}' is not a number of seconds"))?;
+    if value <= 0.0 {
+        return Err(format!("'{text}': must be more than 0 seconds"));
+    }
     caravan::seconds(value)
 }
 
 #[derive(Args)]
 pub struct GroupArg {
     /// The group; defaults to the only running one
-    #[arg(long, short)]
+    #[arg(long, short, value_parser = crate::clean::group_arg)]
     pub group: Option<String>,
+}
+
+/// A list command's arguments.
+#[derive(Args)]
+pub struct ListArgs {
+    #[command(flatten)]
+    pub group: GroupArg,
+    /// Print a JSON array instead of a table
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Subcommand)]
 pub enum TopicCommand {
     /// List the group's topics with their message types
-    List(GroupArg),
+    List(ListArgs),
     /// Print messages of a topic as JSON lines
     Echo {
         topic: String,
         #[command(flatten)]
         group: GroupArg,
-        /// Stop after this many messages
-        #[arg(long, short = 'n')]
+        /// Stop after this many messages (at least 1)
+        #[arg(long, short = 'n', value_parser = clap::value_parser!(u64).range(1..))]
         count: Option<u64>,
     },
     /// Measure a topic's publishing rate
@@ -50,7 +63,7 @@ pub enum TopicCommand {
 #[derive(Subcommand)]
 pub enum NodeCommand {
     /// List the group's live nodes
-    List(GroupArg),
+    List(ListArgs),
 }
 
 fn iox(group: &str) -> Result<(iceoryx2::config::Config, iceoryx2::node::Node<ipc::Service>)> {
@@ -65,9 +78,21 @@ fn iox(group: &str) -> Result<(iceoryx2::config::Config, iceoryx2::node::Node<ip
 
 pub fn topic(cmd: TopicCommand) -> Result<()> {
     match cmd {
-        TopicCommand::List(g) => {
-            let group = choose_group(g.group.as_deref())?;
-            for t in list_topics(&caravan::group::config(&group)?, false)? {
+        TopicCommand::List(args) => {
+            let group = choose_group(args.group.group.as_deref())?;
+            let topics = list_topics(&caravan::group::config(&group)?, false)?;
+            if args.json {
+                let rows: Vec<serde_json::Value> = topics
+                    .iter()
+                    .map(|t| {
+                        serde_json::json!({"name": t.name, "type": t.type_name,
+                            "payload_bytes": t.payload_size, "nodes": t.nodes})
+                    })
+                    .collect();
+                println!("{}", serde_json::Value::from(rows));
+                return Ok(());
+            }
+            for t in topics {
                 println!(
                     "{:<32} {:<28} {:>9} B  {} nodes",
                     t.name, t.type_name, t.payload_size, t.nodes
@@ -83,10 +108,13 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
             let group = choose_group(group.group.as_deref())?;
             let mut printed = 0;
             follow(&group, &topic, None, |header, json| {
-                println!(
-                    "{}",
-                    serde_json::json!({"header": {"seq": header.seq, "stamp_ns": header.stamp_ns, "source_id": header.source_id}, "data": json})
-                );
+                // The recording's shape: the message's fields and its header.
+                let mut json = json.clone();
+                if let serde_json::Value::Object(fields) = &mut json {
+                    let header = crate::record::schema::header_json(header, true);
+                    fields.insert("header".into(), header);
+                }
+                println!("{json}");
                 printed += 1;
                 count.is_some_and(|c| printed >= c)
             })
@@ -113,7 +141,14 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
     }
 }
 
-/// Calls `each` for every message on `topic` until it returns true, `limit` passes or Ctrl-C.
+/// Whether any process of `group` other than this one is alive.
+pub fn others_alive(group: &str) -> Result<bool> {
+    let me = std::process::id() as i32;
+    Ok(live_nodes(group)?.iter().any(|n| n.pid != me))
+}
+
+/// Calls `each` for every message on `topic` until it returns true, `limit` passes, the group
+/// ends (looked at once a second) or Ctrl-C.
 fn follow(
     group: &str,
     topic: &str,
@@ -136,9 +171,11 @@ fn follow(
         .map_err(|e| anyhow!("{e:?}"))?;
     let end = limit.map(|l| Instant::now() + l);
     let mut batch = Vec::new();
+    let mut last_look = Instant::now();
     loop {
-        let wait = end.map_or(Duration::from_secs(3600), |e| {
+        let wait = end.map_or(Duration::from_secs(1), |e| {
             e.saturating_duration_since(Instant::now())
+                .min(Duration::from_secs(1))
         });
         let result = waitset
             .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, wait)
@@ -150,6 +187,13 @@ fn follow(
             return Ok(());
         }
         let _ = listener.try_wait(|_| {});
+        // Looked at before draining, so that what was published before the end is printed.
+        let ended = if last_look.elapsed() >= Duration::from_secs(1) {
+            last_look = Instant::now();
+            !others_alive(group)?
+        } else {
+            false
+        };
         tap.drain(&mut batch)?;
         for m in batch.drain(..) {
             if each(&m.header, &m.json) {
@@ -159,14 +203,27 @@ fn follow(
         if end.is_some_and(|e| Instant::now() >= e) {
             return Ok(());
         }
+        if ended {
+            eprintln!("caravan: group '{group}' has ended");
+            return Ok(());
+        }
     }
 }
 
 pub fn node(cmd: NodeCommand) -> Result<()> {
     match cmd {
-        NodeCommand::List(g) => {
-            let group = choose_group(g.group.as_deref())?;
-            for n in live_nodes(&group)? {
+        NodeCommand::List(args) => {
+            let group = choose_group(args.group.group.as_deref())?;
+            let nodes = live_nodes(&group)?;
+            if args.json {
+                let rows: Vec<serde_json::Value> = nodes
+                    .iter()
+                    .map(|n| serde_json::json!({"name": n.name, "pid": n.pid}))
+                    .collect();
+                println!("{}", serde_json::Value::from(rows));
+                return Ok(());
+            }
+            for n in nodes {
                 println!(
                     "{:<24} pid {}",
                     if n.name.is_empty() {

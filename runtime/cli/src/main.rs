@@ -38,6 +38,8 @@ enum Command {
     Node(inspect::NodeCommand),
     /// Record a running group's topics to an MCAP file
     Record(record::command::RecordArgs),
+    /// What a recording holds: time span, channels with schema and count, metadata
+    Info(record::info::InfoArgs),
     /// Recompute report.json and report.md of a run directory
     Report {
         /// The run directory (runs/<group>-<time>)
@@ -55,12 +57,20 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::Launch(_) | Command::Sweep(_)) {
+        // A command that only prints ends quietly when its reader goes (`caravan info … |
+        // head`), as Unix tools do. A launcher or a sweep keeps the default Rust handling: it
+        // must stop its group in order whatever happens to its terminal.
+        // SAFETY: setting a signal's disposition before any thread is started.
+        unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
+    }
     let result = match cli.command {
         Command::Launch(args) => launch::command::launch(&args).map(ExitCode::from),
         Command::Sweep(args) => sweep::run(&args).map(ExitCode::from),
         Command::Topic(cmd) => inspect::topic(cmd).map(|_| ExitCode::SUCCESS),
         Command::Node(cmd) => inspect::node(cmd).map(|_| ExitCode::SUCCESS),
         Command::Record(args) => record::command::record(args).map(|_| ExitCode::SUCCESS),
+        Command::Info(args) => record::info::info(&args).map(|_| ExitCode::SUCCESS),
         Command::Report { run_dir } => report::write(&run_dir).map(|w| {
             println!("{}", report_summary(&w.report));
             for failure in &w.failures {

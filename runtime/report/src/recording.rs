@@ -10,10 +10,22 @@ pub struct RecordedMessage {
     pub json: serde_json::Value,
 }
 
+/// A `u64` as the recorder writes it: an integer, or a decimal string where JavaScript readers
+/// would round the integer (`source_id`, `send_wall_ns`).
+pub fn as_u64(v: &serde_json::Value) -> Option<u64> {
+    v.as_u64().or_else(|| v.as_str()?.parse().ok())
+}
+
 impl RecordedMessage {
     /// The message's simulated stamp, ns (0 if it has none).
     pub fn stamp_ns(&self) -> u64 {
-        self.json["header"]["stamp_ns"].as_u64().unwrap_or(0)
+        self.header_u64("stamp_ns").unwrap_or(0)
+    }
+
+    /// A header field (`seq`, `stamp_ns`, `source_id`, `send_wall_ns`), whether written as an
+    /// integer or as a decimal string.
+    pub fn header_u64(&self, key: &str) -> Option<u64> {
+        as_u64(&self.json["header"][key])
     }
 
     /// A numeric field of the message (0 when missing).
@@ -22,12 +34,16 @@ impl RecordedMessage {
     }
 }
 
-/// All messages of `path`, in file order.
+/// All messages of `path` on Caravan's own (JSON) channels, in file order; the Foxglove scene
+/// channels beside them are views of the same messages.
 pub fn read_all(path: &Path) -> Result<Vec<RecordedMessage>> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     let mut out = Vec::new();
     for message in mcap::MessageStream::new(&bytes)? {
         let message = message?;
+        if message.channel.message_encoding != "json" {
+            continue;
+        }
         out.push(RecordedMessage {
             topic: message.channel.topic.clone(),
             json: serde_json::from_slice(&message.data)

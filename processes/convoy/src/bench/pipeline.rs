@@ -108,7 +108,7 @@ fn sends(messages: &[RecordedMessage], topic: &str) -> Vec<u64> {
     let mut out: Vec<u64> = messages
         .iter()
         .filter(|m| m.topic == topic)
-        .filter_map(|m| m.json["header"]["send_wall_ns"].as_u64())
+        .filter_map(|m| m.header_u64("send_wall_ns"))
         .collect();
     out.sort_unstable();
     out

@@ -60,7 +60,7 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
     let mut goals: Vec<(u64, u64, u64, [f64; 2])> = Vec::new(); // (stamp, index, total, pose)
     let mut collisions = 0;
     for m in messages {
-        let stamp = m.json["header"]["stamp_ns"].as_u64().unwrap_or(0);
+        let stamp = m.stamp_ns();
         let f = |k: &str| m.json[k].as_f64().unwrap_or(0.0);
         if let Some(i) = robot_index(&m.topic) {
             robots

@@ -87,7 +87,7 @@ fn pose_error(messages: &[RecordedMessage]) -> Option<Value> {
         topics::pose_true(LEADER),
         topics::scan(LEADER),
     );
-    let stamp = |m: &RecordedMessage| m.json["header"]["stamp_ns"].as_u64().unwrap_or(0);
+    let stamp = |m: &RecordedMessage| m.stamp_ns();
     let xy = |m: &RecordedMessage| {
         [
             m.json["x"].as_f64().unwrap_or(0.0),

@@ -79,7 +79,7 @@ fn resolve(filename: &str, dir: &Path) -> Result<PathBuf, String> {
 }
 
 fn read_stl(path: &Path) -> Result<TriMesh, String> {
-    let mut file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+    let mut file = caravan::input::open_regular(path).map_err(|e| format!("cannot read: {e}"))?;
     let stl = stl_io::read_stl(&mut file).map_err(|e| format!("not a valid STL file: {e}"))?;
     Ok(TriMesh {
         vertices: stl
@@ -101,6 +101,8 @@ fn read_obj(path: &Path) -> Result<TriMesh, String> {
         single_index: true,
         ..Default::default()
     };
+    // tobj opens the file itself; it must be a regular file of bounded size first.
+    caravan::input::open_regular(path).map_err(|e| format!("cannot read: {e}"))?;
     let (models, _) =
         tobj::load_obj(path, &options).map_err(|e| format!("not a valid OBJ file: {e}"))?;
     let mut mesh = TriMesh {

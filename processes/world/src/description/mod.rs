@@ -216,7 +216,7 @@ impl RobotDescription {
 /// Reads a URDF file and the meshes it names, and checks the robot it describes.
 pub fn load_description(path: &Path) -> Result<RobotDescription, DescriptionError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| DescriptionError {
+    let text = caravan::input::read_to_string(path).map_err(|e| DescriptionError {
         file: file.clone(),
         line: None,
         message: format!("cannot read: {e}"),

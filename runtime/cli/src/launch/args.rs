@@ -220,6 +220,10 @@ fn walk_value(v: &mut Value, args: &mut Lookup, path: &mut Vec<Seg>, unknown: &m
 }
 
 /// The string with its references replaced: typed when it is one whole reference.
+/// The longest string an expansion may make: arguments that double each other would
+/// otherwise fill the memory from a few lines.
+const MAX_EXPANDED: usize = 1 << 20;
+
 fn expand(text: &str, args: &mut Lookup) -> Result<Value, Miss> {
     let mut lookup = |name: &str| -> Result<Value, Miss> {
         let mut v = args(name)?;
@@ -242,6 +246,11 @@ fn expand(text: &str, args: &mut Lookup) -> Result<Value, Miss> {
             Value::String(s) => out.push_str(s.value()),
             other => out.push_str(&other.to_string()),
         }
+        if out.len() > MAX_EXPANDED {
+            return Err(Miss::Message(format!(
+                "expanding \"{text}\" makes more than {MAX_EXPANDED} bytes"
+            )));
+        }
         rest = &after[end + 1..];
     }
     out.push_str(rest);
@@ -261,6 +270,23 @@ mod tests {
         let mut doc: DocumentMut = text.parse().unwrap();
         let unknown = substitute(&mut doc);
         (doc.to_string(), unknown)
+    }
+
+    #[test]
+    fn arguments_that_double_each_other_are_an_error_not_an_exhausted_memory() {
+        let mut text = String::from("[args]\na0 = \"xxxxxxxxxxxxxxxx\"\n");
+        for i in 1..64 {
+            text.push_str(&format!("a{i} = \"$(arg a{})$(arg a{})\"\n", i - 1, i - 1));
+        }
+        text.push_str("[group]\nname = \"$(arg a63)\"\n");
+        let (_, unknown) = run(&text);
+        let messages: Vec<&str> = unknown.iter().map(|u| u.message.as_str()).collect();
+        assert!(
+            messages
+                .iter()
+                .any(|m| m.contains("more than 1048576 bytes")),
+            "{messages:?}"
+        );
     }
 
     #[test]

@@ -99,7 +99,7 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
         return already();
     };
     // Before this process first touches iceoryx2: its fallback config is the group's.
-    let global = std::env::temp_dir().join(format!("caravan-group-{group}.iceoryx2.toml"));
+    let global = crate::clean::global_config_path(&group);
     caravan::group::write_config(&group, &global)
         .with_context(|| format!("cannot write {}", global.display()))?;
     caravan::group::use_as_global(&global)?;

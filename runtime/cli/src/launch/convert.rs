@@ -209,8 +209,13 @@ pub fn parse_bandwidth(text: &str) -> Result<u64, String> {
     }
 }
 
+/// The longest process name: it names the node, its status and its lockstep services, which
+/// iceoryx2 bounds.
+pub const MAX_PROCESS_NAME: usize = 64;
+
 pub fn is_process_name(name: &str) -> bool {
     !name.is_empty()
+        && name.len() <= MAX_PROCESS_NAME
         && name
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')

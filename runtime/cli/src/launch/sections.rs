@@ -120,11 +120,12 @@ impl Checker<'_> {
             }
             let cpu_slowdown = self.get(&h, "cpu_slowdown", |i| {
                 let f = number(i)?;
-                if f.is_finite() && f >= 1.0 {
+                // A step's emulated compute time is its real one times this, in ns.
+                if (1.0..=1e6).contains(&f) {
                     Ok(f)
                 } else {
                     Err(format!(
-                        "must be at least 1.0 (1.0 = as fast as this machine), found {f}"
+                        "must be 1.0 to 1e6 (1.0 = as fast as this machine), found {f}"
                     ))
                 }
             });
@@ -243,7 +244,9 @@ impl Checker<'_> {
                 self.key_problem(
                     &s,
                     "name",
-                    format!("'{name}' must be made of letters, digits, '_' and '-'"),
+                    format!(
+                        "'{name}' must be 1 to {MAX_PROCESS_NAME} letters, digits, '_' and '-'"
+                    ),
                 );
             }
             let mut process = self.process(&s, name, hosts, &source.dir);

@@ -31,7 +31,8 @@ pub enum ReadFailure {
 
 impl Source {
     pub fn read(path: &Path, rank: usize) -> Result<Source, ReadFailure> {
-        let text = std::fs::read_to_string(path).map_err(|e| ReadFailure::Io(e.to_string()))?;
+        let text =
+            caravan::input::read_to_string(path).map_err(|e| ReadFailure::Io(e.to_string()))?;
         let original = Document::parse(text.clone()).map_err(|e| syntax_error(path, &text, &e))?;
         let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
         let base = if dir.as_os_str().is_empty() {

@@ -10,6 +10,7 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct RecordArgs {
     /// Topic patterns (`*` one segment, `**` any); default all topics
+    #[arg(value_parser = clap::builder::NonEmptyStringValueParser::new())]
     pub patterns: Vec<String>,
     /// Output MCAP file
     #[arg(short, long)]
@@ -34,15 +35,31 @@ pub fn record(args: RecordArgs) -> Result<()> {
         &args.output,
         &patterns,
         false,
+        &crate::record::recorder::RecordingMeta {
+            metadata: crate::record::recorder::run_metadata(None, Some(caravan::wall_clock_ns())),
+            launch_file: None,
+        },
     )?;
     let end = args.seconds.map(|s| Instant::now() + s);
     let config = caravan::group::config(&group)?;
+    let mut last_look = Instant::now();
+    let mut ended = false;
     crate::run::driver::record_until(
         &config,
         &mut recorder,
         SignalHandlingMode::HandleTerminationRequests,
-        |_| end.is_some_and(|e| Instant::now() >= e),
+        |_| {
+            // The group's end stops the recording too, looked at once a second.
+            if last_look.elapsed() >= std::time::Duration::from_secs(1) {
+                last_look = Instant::now();
+                ended = !crate::inspect::others_alive(&group).unwrap_or(false);
+            }
+            ended || end.is_some_and(|e| Instant::now() >= e)
+        },
     )?;
+    if ended {
+        eprintln!("caravan: group '{group}' has ended");
+    }
     let recording = recorder.finish()?;
     let total: u64 = recording.topics.values().map(|t| t.messages).sum();
     println!(

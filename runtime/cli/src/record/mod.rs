@@ -1,7 +1,9 @@
 //! Recording topics to MCAP (`caravan-report` reads recordings back).
 
 pub mod command;
+pub mod info;
 pub mod recorder;
+pub mod scene;
 pub mod schema;
 
-pub use recorder::{Recorder, Recording};
+pub use recorder::{Recorder, Recording, RecordingMeta};

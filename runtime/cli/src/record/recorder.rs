@@ -5,8 +5,14 @@
 //! fields, so reruns give byte-identical files. Wall-clock latency (send → tap) goes to the
 //! topic statistics instead. Node statuses are tapped too but kept out of the MCAP: their
 //! compute-time fields are wall-clock measurements.
+//!
+//! Every recorded topic gets its channel when it is discovered, before its first message, so
+//! "nothing happened" (a channel without messages) differs from "not recorded" (no channel).
+//! Beside each raw channel the recorder writes Foxglove's well-known views of it ([`scene`]).
+//! The file has a summary (schemas, channels, statistics, chunk indexes) in both clock modes:
+//! the writer lists them in id order and ids follow the deterministic order of discovery.
 
-use super::schema;
+use super::{scene, schema};
 use crate::launch::model::glob_match;
 use anyhow::{Context, Result};
 use caravan::tap::{DynTap, Tapped, list_topics, open_tap};
@@ -36,6 +42,67 @@ pub struct Recording {
     pub status_series: BTreeMap<String, Vec<(u64, u64)>>,
 }
 
+/// What a recording says about its run: a `run` metadata record (seed, arguments, Caravan's
+/// version; the wall-clock start only in realtime, where reruns differ anyway) and the resolved
+/// launch file as the `launch.toml` attachment.
+#[derive(Default)]
+pub struct RecordingMeta {
+    pub metadata: BTreeMap<String, String>,
+    pub launch_file: Option<Vec<u8>>,
+}
+
+/// The `run` metadata: Caravan's version, the command line, the seed and (realtime only) the
+/// wall-clock start in Unix ns.
+pub fn run_metadata(seed: Option<u64>, wall_start_ns: Option<u64>) -> BTreeMap<String, String> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut m = BTreeMap::from([
+        (
+            "caravan_version".to_string(),
+            env!("CARGO_PKG_VERSION").to_string(),
+        ),
+        (
+            "arguments".to_string(),
+            shlex::try_join(args.iter().map(String::as_str)).unwrap_or_else(|_| args.join(" ")),
+        ),
+    ]);
+    if let Some(seed) = seed {
+        m.insert("seed".into(), seed.to_string());
+    }
+    if let Some(ns) = wall_start_ns {
+        m.insert("wall_clock_start_ns".into(), ns.to_string());
+    }
+    m
+}
+
+type McapWriter = mcap::Writer<BufWriter<File>>;
+
+/// Gives up a writer after a failed write. The mcap crate's writer cannot finish then (its
+/// `finish`, which its `drop` calls, panics on the broken state), so it is never dropped: its
+/// file closes when the process exits.
+fn abandon(writer: McapWriter) {
+    std::mem::forget(writer);
+}
+
+/// Applies `op` to the writer; on failure abandons it and says which file could not be written.
+fn with_writer<T>(
+    writer: &mut Option<McapWriter>,
+    path: &Path,
+    op: impl FnOnce(&mut McapWriter) -> mcap::McapResult<T>,
+) -> Result<T> {
+    let cannot = || format!("cannot write the recording {}", path.display());
+    let w = writer
+        .as_mut()
+        .ok_or_else(|| anyhow::anyhow!("an earlier write failed"))
+        .with_context(cannot)?;
+    op(w)
+        .inspect_err(|_| {
+            if let Some(w) = writer.take() {
+                abandon(w);
+            }
+        })
+        .with_context(cannot)
+}
+
 pub struct Recorder {
     iox: iceoryx2::node::Node<ipc::Service>,
     config: iceoryx2::config::Config,
@@ -45,10 +112,13 @@ pub struct Recorder {
     status_tap: Option<Box<dyn DynTap>>,
     /// Topic hashes discovery already looked at, recorded or not.
     seen: BTreeSet<u64>,
-    writer: mcap::Writer<BufWriter<File>>,
+    /// `None` once a write failed (a full disk): see [`abandon`].
+    writer: Option<McapWriter>,
     /// The MCAP file, for messages about it (a full disk).
     path: std::path::PathBuf,
     channels: BTreeMap<String, u16>,
+    /// Schema ids by name.
+    schemas: BTreeMap<String, u16>,
     sequences: BTreeMap<u16, u32>,
     stats: BTreeMap<String, TopicStats>,
     node_status: BTreeMap<String, Value>,
@@ -64,6 +134,7 @@ impl Recorder {
         path: &Path,
         patterns: &[String],
         lockstep: bool,
+        meta: &RecordingMeta,
     ) -> Result<Self> {
         let iox = NodeBuilder::new()
             .config(config)
@@ -74,18 +145,29 @@ impl Recorder {
             File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
         let mut options = mcap::WriteOptions::new().library("caravan");
         if lockstep {
-            // The crate writes summary channels and schemas in hash order. Leave them out so
-            // that reruns are byte-identical (they stay in the data section), and the chunk
-            // indexes with them: readers that find indexes expect summary channels, and
-            // without indexes they read the file linearly.
-            options = options
-                .repeat_channels(false)
-                .repeat_schemas(false)
-                .emit_chunk_indexes(false);
+            // Multi-threaded compression need not give the same bytes on another machine.
+            options = options.compression_threads(0);
         }
-        let writer = options
-            .create(BufWriter::new(file))
-            .context("cannot start the MCAP file")?;
+        let writer = options.create(BufWriter::new(file));
+        let cannot = || format!("cannot write the recording {}", path.display());
+        let mut writer = Some(writer.with_context(cannot)?);
+        if !meta.metadata.is_empty() {
+            let record = mcap::records::Metadata {
+                name: "run".into(),
+                metadata: meta.metadata.clone(),
+            };
+            with_writer(&mut writer, path, |w| w.write_metadata(&record))?;
+        }
+        if let Some(launch) = &meta.launch_file {
+            let attachment = mcap::Attachment {
+                log_time: 0,
+                create_time: 0,
+                name: caravan_report::RESOLVED_LAUNCH_FILE.into(),
+                media_type: "application/toml".into(),
+                data: std::borrow::Cow::Borrowed(launch),
+            };
+            with_writer(&mut writer, path, |w| w.attach(&attachment))?;
+        }
         Ok(Self {
             iox,
             config: config.clone(),
@@ -97,6 +179,7 @@ impl Recorder {
             writer,
             path: path.to_path_buf(),
             channels: BTreeMap::new(),
+            schemas: BTreeMap::new(),
             sequences: BTreeMap::new(),
             stats: BTreeMap::new(),
             node_status: BTreeMap::new(),
@@ -104,10 +187,6 @@ impl Recorder {
             status_heard: BTreeMap::new(),
             buffer: Vec::new(),
         })
-    }
-
-    fn cannot_write(&self) -> String {
-        format!("cannot write the recording {}", self.path.display())
     }
 
     /// Whether any of `published` (topic hashes) was never looked at by discovery.
@@ -118,6 +197,7 @@ impl Recorder {
     /// Opens taps on new topics that match the patterns, and on `status`.
     pub fn discover(&mut self) -> Result<()> {
         let status = caravan_schemas::topics::status();
+        let mut opened = Vec::new();
         for info in list_topics(&self.config, false)? {
             let hash = caravan_schemas::lockstep::name_hash(&info.name);
             if !self.seen.insert(hash) {
@@ -138,7 +218,10 @@ impl Recorder {
             }
             match open_tap(&self.iox, &info.name, &info.type_name) {
                 Ok(tap) if info.name == status.name() => self.status_tap = Some(tap),
-                Ok(tap) => self.taps.push(tap),
+                Ok(tap) => {
+                    opened.push((tap.topic().to_string(), tap.type_name()));
+                    self.taps.push(tap);
+                }
                 // The service went away between listing and opening (its last node exited);
                 // look again next time.
                 Err(_) => {
@@ -147,7 +230,68 @@ impl Recorder {
             }
         }
         self.taps.sort_by(|a, b| a.topic().cmp(b.topic()));
+        // Listing order is the file system's; channel ids follow the topics' names.
+        opened.sort();
+        for (topic, type_name) in opened {
+            self.channel(&topic, type_name)?;
+            for (view, schema) in scene::topics_of(&topic, type_name) {
+                self.scene_channel(&view, schema)?;
+            }
+        }
         Ok(())
+    }
+
+    fn schema_id(&mut self, name: &str, encoding: &str, data: &[u8]) -> Result<u16> {
+        if let Some(&id) = self.schemas.get(name) {
+            return Ok(id);
+        }
+        let id = with_writer(&mut self.writer, &self.path, |w| {
+            w.add_schema(name, encoding, data)
+        })?;
+        self.schemas.insert(name.to_string(), id);
+        Ok(id)
+    }
+
+    /// The raw channel of `topic`, added on first use.
+    fn channel(&mut self, topic: &str, type_name: &str) -> Result<u16> {
+        if let Some(&id) = self.channels.get(topic) {
+            return Ok(id);
+        }
+        let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
+        let schema_id = self.schema_id(type_name, "jsonschema", schema.to_string().as_bytes())?;
+        self.add_channel(topic, schema_id, "json")
+    }
+
+    /// A Foxglove view's channel, added on first use.
+    fn scene_channel(&mut self, topic: &str, schema: fn() -> scene::SceneSchema) -> Result<u16> {
+        if let Some(&id) = self.channels.get(topic) {
+            return Ok(id);
+        }
+        let s = schema();
+        let schema_id = self.schema_id(&s.name, &s.encoding, &s.data)?;
+        self.add_channel(topic, schema_id, &s.encoding)
+    }
+
+    fn add_channel(&mut self, topic: &str, schema_id: u16, encoding: &str) -> Result<u16> {
+        let id = with_writer(&mut self.writer, &self.path, |w| {
+            w.add_channel(schema_id, topic, encoding, &BTreeMap::new())
+        })?;
+        self.channels.insert(topic.to_string(), id);
+        Ok(id)
+    }
+
+    fn write_message(&mut self, channel: u16, stamp_ns: u64, data: &[u8]) -> Result<()> {
+        let sequence = self.sequences.entry(channel).or_insert(0);
+        *sequence += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: *sequence,
+            log_time: stamp_ns,
+            publish_time: stamp_ns,
+        };
+        with_writer(&mut self.writer, &self.path, |w| {
+            w.write_to_known_channel(&header, data)
+        })
     }
 
     pub fn taps(&self) -> impl Iterator<Item = &dyn DynTap> {
@@ -203,42 +347,19 @@ impl Recorder {
         let tap = &self.taps[tap_index];
         let topic = tap.topic().to_string();
         let type_name = tap.type_name();
-        let channel = match self.channels.get(&topic) {
-            Some(&id) => id,
-            None => {
-                let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
-                let schema_id =
-                    self.writer
-                        .add_schema(type_name, "jsonschema", schema.to_string().as_bytes());
-                let schema_id = schema_id.with_context(|| self.cannot_write())?;
-                let id = self
-                    .writer
-                    .add_channel(schema_id, &topic, "json", &BTreeMap::new());
-                let id = id.with_context(|| self.cannot_write())?;
-                self.channels.insert(topic.clone(), id);
-                id
-            }
-        };
-        let mut header = json!({"seq": msg.header.seq, "stamp_ns": msg.header.stamp_ns, "source_id": msg.header.source_id});
-        if !self.lockstep {
-            header["send_wall_ns"] = json!(msg.header.send_wall_ns);
-        }
+        let channel = self.channel(&topic, type_name)?;
+        let stamp_ns = msg.header.stamp_ns;
+        let views = scene::views(&topic, type_name, &msg.json, stamp_ns);
         let mut record = msg.json;
         if let Value::Object(fields) = &mut record {
+            let header = schema::header_json(&msg.header, !self.lockstep);
             fields.insert("header".into(), header);
         }
-        let sequence = self.sequences.entry(channel).or_insert(0);
-        *sequence += 1;
-        let written = self.writer.write_to_known_channel(
-            &mcap::records::MessageHeader {
-                channel_id: channel,
-                sequence: *sequence,
-                log_time: msg.header.stamp_ns,
-                publish_time: msg.header.stamp_ns,
-            },
-            &serde_json::to_vec(&record)?,
-        );
-        written.with_context(|| self.cannot_write())?;
+        self.write_message(channel, stamp_ns, &serde_json::to_vec(&record)?)?;
+        for view in views {
+            let channel = self.scene_channel(&view.topic, view.schema)?;
+            self.write_message(channel, stamp_ns, &view.bytes)?;
+        }
         let stats = self.stats.entry(topic).or_insert_with(|| TopicStats {
             type_name: type_name.to_string(),
             messages: 0,
@@ -252,13 +373,13 @@ impl Recorder {
         Ok(())
     }
 
-    /// Running nodes whose once-a-second status has not arrived for `timeout`: in realtime a
-    /// node whose step never returns stops publishing it.
     /// Whether node `name` has published a status.
     pub fn has_reported(&self, name: &str) -> bool {
         self.status_heard.contains_key(name)
     }
 
+    /// Running nodes whose once-a-second status has not arrived for `timeout`: in realtime a
+    /// node whose step never returns stops publishing it.
     pub fn silent_nodes(&self, timeout: std::time::Duration) -> Vec<String> {
         self.status_heard
             .iter()
@@ -274,7 +395,13 @@ impl Recorder {
                 s.missed = tap.missed();
             }
         }
-        self.writer.finish().with_context(|| self.cannot_write())?;
+        with_writer(&mut self.writer, &self.path, |w| w.finish().map(|_| ()))?;
+        if let Some(w) = self.writer.take() {
+            // The last bytes leave the buffer here; a full disk must not pass unseen.
+            use std::io::Write;
+            let cannot = || format!("cannot write the recording {}", self.path.display());
+            w.into_inner().flush().with_context(cannot)?;
+        }
         Ok(Recording {
             topics: self.stats,
             node_status: self.node_status,

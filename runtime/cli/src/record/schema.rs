@@ -1,29 +1,86 @@
 //! JSON schemas for recorded channels, generated from the message types themselves: a default
-//! value of the type is serialised and its structure described, so the schema always matches
-//! what the recorder writes.
+//! value of the type gives the fields the recorder writes, and the type's layout
+//! ([`caravan_schemas::describe`]) gives every field's type, so an array is described with its
+//! `items` even when the default value's array is empty (Foxglove's JSON-schema reader needs
+//! them).
+//!
+//! Integers that can pass 2⁵³, which JavaScript readers would round, are written as decimal
+//! strings: the header's `source_id` (a hash) and `send_wall_ns` (Unix time in ns). Counts and
+//! stamps (simulated or since the group's start) stay integers; they are exact up to 2⁵³
+//! (104 days in ns).
 
+use caravan_schemas::describe::{Element, Kind, Scalar, TypeLayout, layouts};
 use serde_json::{Value, json};
 
-/// The JSON schema of values shaped like `sample`.
-pub fn describe(sample: &Value) -> Value {
+fn scalar(s: Scalar) -> Value {
+    match s {
+        Scalar::F64 | Scalar::F32 => json!({"type": "number"}),
+        _ => json!({"type": "integer"}),
+    }
+}
+
+fn element(e: Element, known: &[TypeLayout]) -> Value {
+    match e {
+        Element::Scalar(s) => scalar(s),
+        Element::Struct(name) => match known.iter().find(|l| l.name == name) {
+            Some(layout) => from_layout(layout, known),
+            None => json!({}),
+        },
+    }
+}
+
+/// A struct described from its layout alone (array items have no sample value): a
+/// `FixedString` (`x_len` + `x: [u8; N]`) is a string, a `FixedVec` (`x_len` + `x: [T; N]`)
+/// an array, reserved padding is left out.
+fn from_layout(layout: &TypeLayout, known: &[TypeLayout]) -> Value {
+    let names: Vec<&str> = layout.fields.iter().map(|f| f.name.as_str()).collect();
+    let mut props = serde_json::Map::new();
+    for f in &layout.fields {
+        let counted = |base: &str| names.contains(&base);
+        if f.name.starts_with('_') || f.name.strip_suffix("_len").is_some_and(counted) {
+            continue;
+        }
+        let has_len = names.contains(&format!("{}_len", f.name).as_str());
+        let schema = match f.kind {
+            Kind::Array(Element::Scalar(Scalar::U8), _) if has_len => json!({"type": "string"}),
+            Kind::Array(e, _) => json!({"type": "array", "items": element(e, known)}),
+            Kind::Scalar(s) => scalar(s),
+            Kind::Struct(_) => element(f.kind.element(), known),
+        };
+        props.insert(f.name.clone(), schema);
+    }
+    json!({"type": "object", "properties": props})
+}
+
+/// The schema of values shaped like `sample`, typed by `layout` where it names the field.
+fn describe(sample: &Value, layout: Option<&TypeLayout>, known: &[TypeLayout]) -> Value {
+    let field = |name: &str| layout.and_then(|l| l.fields.iter().find(|f| f.name == name));
     match sample {
         Value::Null => json!({}),
         Value::Bool(_) => json!({"type": "boolean"}),
         Value::Number(n) if n.is_f64() => json!({"type": "number"}),
         Value::Number(_) => json!({"type": "integer"}),
         Value::String(_) => json!({"type": "string"}),
-        // Fixed-capacity containers serialise only their valid part, so a default value's
-        // arrays are empty; numbers are the common case and Foxglove accepts any item type.
         Value::Array(items) => match items.first() {
-            Some(first) => json!({"type": "array", "items": describe(first)}),
-            None => json!({"type": "array"}),
+            Some(first) => json!({"type": "array", "items": describe(first, None, known)}),
+            None => json!({"type": "array", "items": {}}),
         },
         Value::Object(fields) => {
-            let properties: serde_json::Map<String, Value> = fields
-                .iter()
-                .map(|(k, v)| (k.clone(), describe(v)))
-                .collect();
-            json!({"type": "object", "properties": properties})
+            let mut props = serde_json::Map::new();
+            for (k, v) in fields {
+                let schema = match (field(k).map(|f| f.kind), v) {
+                    (Some(Kind::Array(e, _)), Value::Array(_)) => {
+                        json!({"type": "array", "items": element(e, known)})
+                    }
+                    (Some(Kind::Struct(name)), _) => {
+                        describe(v, known.iter().find(|l| l.name == name), known)
+                    }
+                    (Some(Kind::Scalar(s)), Value::Number(_)) => scalar(s),
+                    _ => describe(v, None, known),
+                };
+                props.insert(k.clone(), schema);
+            }
+            json!({"type": "object", "properties": props})
         }
     }
 }
@@ -34,7 +91,9 @@ pub fn for_type(type_name: &str, with_wall_clock: bool) -> Option<Value> {
         serde_json::to_value(caravan_schemas::boxed_placement_new::<T>().as_ref())
             .unwrap_or(Value::Null)
     })?;
-    let mut schema = describe(&payload);
+    let known = layouts();
+    let layout = known.iter().find(|l| l.type_name == type_name);
+    let mut schema = describe(&payload, layout, &known);
     schema["title"] = json!(type_name);
     schema["properties"]["header"] = header_schema(with_wall_clock);
     Some(schema)
@@ -44,28 +103,81 @@ fn header_schema(with_wall_clock: bool) -> Value {
     let mut props = json!({
         "seq": {"type": "integer"},
         "stamp_ns": {"type": "integer"},
-        "source_id": {"type": "integer"},
+        "source_id": {"type": "string", "description": "u64 in decimal"},
     });
     if with_wall_clock {
-        props["send_wall_ns"] = json!({"type": "integer"});
+        props["send_wall_ns"] = json!({"type": "string", "description": "u64 in decimal"});
     }
     json!({"type": "object", "properties": props})
 }
 
+/// The header as the recorder writes it (see the module doc for the strings).
+pub fn header_json(h: &caravan_schemas::Header, with_wall_clock: bool) -> Value {
+    let mut header = json!({
+        "seq": h.seq,
+        "stamp_ns": h.stamp_ns,
+        "source_id": h.source_id.to_string(),
+    });
+    if with_wall_clock {
+        header["send_wall_ns"] = json!(h.send_wall_ns.to_string());
+    }
+    header
+}
+
 #[cfg(test)]
 mod tests {
+    use serde_json::Value;
+
+    /// Every array in `schema` has `items`; returns the paths of those that do not.
+    fn arrays_without_items(schema: &Value, path: &str, out: &mut Vec<String>) {
+        if schema["type"] == "array" && schema.get("items").is_none() {
+            out.push(path.to_string());
+        }
+        if let Some(props) = schema["properties"].as_object() {
+            for (k, v) in props {
+                arrays_without_items(v, &format!("{path}.{k}"), out);
+            }
+        }
+        if let Some(items) = schema.get("items") {
+            arrays_without_items(items, &format!("{path}[]"), out);
+        }
+    }
+
     #[test]
     fn pose_schema_lists_fields_and_header() {
         let s = super::for_type("caravan::Pose2D", false).unwrap();
         assert_eq!(s["properties"]["theta"]["type"], "number");
-        assert_eq!(
-            s["properties"]["header"]["properties"]["seq"]["type"],
-            "integer"
-        );
-        assert!(
-            s["properties"]["header"]["properties"]
-                .get("send_wall_ns")
-                .is_none()
-        );
+        let header = &s["properties"]["header"]["properties"];
+        assert_eq!(header["seq"]["type"], "integer");
+        assert_eq!(header["source_id"]["type"], "string");
+        assert!(header.get("send_wall_ns").is_none());
+    }
+
+    #[test]
+    fn every_array_of_every_message_type_has_items() {
+        for layout in caravan_schemas::describe::layouts() {
+            let Some(s) = super::for_type(layout.type_name, true) else {
+                continue; // not a message type (a field struct or the lockstep protocol)
+            };
+            let mut missing = Vec::new();
+            arrays_without_items(&s, layout.type_name, &mut missing);
+            assert!(missing.is_empty(), "arrays without items: {missing:?}");
+        }
+    }
+
+    #[test]
+    fn arrays_are_typed_by_their_elements() {
+        let scan = super::for_type("caravan::LaserScan", false).unwrap();
+        assert_eq!(scan["properties"]["ranges"]["items"]["type"], "number");
+        let path = super::for_type("caravan::Path2D", false).unwrap();
+        let pose = &path["properties"]["poses"]["items"]["properties"];
+        assert_eq!(pose["theta"]["type"], "number");
+        let map = super::for_type("caravan::OccupancyGrid", false).unwrap();
+        assert_eq!(map["properties"]["data"]["items"]["type"], "integer");
+        let joints = super::for_type("caravan::JointState", false).unwrap();
+        let joint = &joints["properties"]["joints"]["items"]["properties"];
+        assert_eq!(joint["name"]["type"], "string");
+        assert_eq!(joint["effort"]["type"], "number");
+        assert!(joint.get("name_len").is_none());
     }
 }

@@ -176,8 +176,7 @@ fn topics(facts: &RunFacts, messages: &[RecordedMessage]) -> Vec<Value> {
     for m in messages {
         let entry = per_topic.entry(&m.topic).or_default();
         entry.0 += 1;
-        let header = &m.json["header"];
-        if let (Some(src), Some(seq)) = (header["source_id"].as_u64(), header["seq"].as_u64())
+        if let (Some(src), Some(seq)) = (m.header_u64("source_id"), m.header_u64("seq"))
             && let Some(last) = entry.2.insert(src, seq)
         {
             entry.1 += seq.saturating_sub(last + 1);

@@ -2,7 +2,7 @@
 //! the recorder after every advance; in realtime it records as messages arrive.
 
 use super::supervisor::Event;
-use crate::record::{Recorder, Recording};
+use crate::record::{Recorder, Recording, RecordingMeta};
 use anyhow::{Result, anyhow};
 use caravan::lockstep::Scheduler;
 use crossbeam::channel::{Receiver, Sender};
@@ -38,6 +38,8 @@ pub struct DriverConfig {
     pub join_timeout: Duration,
     /// Realtime: the processes that are Caravan nodes, which publish a status once a second.
     pub reporting: Vec<String>,
+    /// The recording's metadata and attachment.
+    pub meta: RecordingMeta,
 }
 
 /// What the driver reports when it ends.
@@ -57,8 +59,13 @@ pub fn spawn(
     finish: Receiver<()>,
 ) -> std::thread::JoinHandle<Result<DriverOutcome>> {
     std::thread::spawn(move || {
-        let mut recorder =
-            Recorder::create(&cfg.iceoryx, &cfg.record_path, &cfg.patterns, lockstep)?;
+        let mut recorder = Recorder::create(
+            &cfg.iceoryx,
+            &cfg.record_path,
+            &cfg.patterns,
+            lockstep,
+            &cfg.meta,
+        )?;
         // The recorder's node made the group's global files; keep them to this user.
         caravan::group::make_private(&cfg.group);
         let sim_time_ns = if lockstep {

@@ -12,6 +12,7 @@ pub mod preflight;
 pub mod supervisor;
 
 use crate::launch::model::{Exec, LaunchFile};
+use crate::record::RecordingMeta;
 use anyhow::Result;
 use caravan::ClockMode;
 use caravan_report::RunFacts;
@@ -98,6 +99,13 @@ pub fn run_group(
                 .filter(|p| preflight::is_checked(p))
                 .map(|p| p.spec.name.clone())
                 .collect(),
+            meta: RecordingMeta {
+                metadata: crate::record::recorder::run_metadata(
+                    Some(lf.group.seed),
+                    (!lockstep).then(caravan::wall_clock_ns),
+                ),
+                launch_file: Some(lf.resolved_toml.clone().into_bytes()),
+            },
         },
         lockstep,
         control.clone(),

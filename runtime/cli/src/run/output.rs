@@ -72,9 +72,18 @@ impl Console {
                 if let Ok(mut f) = log.lock() {
                     let _ = writeln!(f, "{line}");
                 }
+                // A panic says why in its line and the next; Rust's backtrace hint follows.
                 if !line.trim().is_empty()
                     && let Ok(mut t) = tail.lock()
                 {
+                    // After a panic, its message stays the reason (a backtrace may follow).
+                    if t.contains("panicked at") {
+                        if t.ends_with(':') && !line.starts_with("note: ") {
+                            t.push(' ');
+                            t.push_str(line.trim());
+                        }
+                        continue;
+                    }
                     *t = line;
                 }
             }

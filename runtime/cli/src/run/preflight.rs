@@ -33,11 +33,11 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
             continue;
         }
         let name = plan.spec.name.clone();
-        let child = plan
-            .command(&env)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn();
+        let mut command = plan.command(&env);
+        // A check holds no shared memory, and one blocked in a read (a FIFO for a world
+        // file) would sit out a SIGTERM: it is killed outright if the launcher dies.
+        super::supervisor::die_with_parent(&mut command, libc::SIGKILL);
+        let child = command.stdout(Stdio::null()).stderr(Stdio::piped()).spawn();
         match child {
             Ok(child) => {
                 let (tx, rx) = bounded(1);

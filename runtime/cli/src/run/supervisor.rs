@@ -97,17 +97,9 @@ impl Planned {
             // order instead of every process racing to exit; and stopping the group signals
             // whatever the process started too.
             .process_group(0);
-        // SAFETY: prctl is async-signal-safe; it only sets this child's parent-death signal.
-        unsafe {
-            // If the launcher is killed (even with SIGKILL) its processes get SIGTERM and exit
-            // cleanly instead of living on as orphans holding the group's shared memory.
-            cmd.pre_exec(|| {
-                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                Ok(())
-            });
-        }
+        // If the launcher is killed (even with SIGKILL) its processes get SIGTERM and exit
+        // cleanly instead of living on as orphans holding the group's shared memory.
+        die_with_parent(&mut cmd, libc::SIGTERM);
         if let Some(rate) = &spec.rate {
             cmd.env(caravan::env_vars::RATE, rate);
         }
@@ -115,6 +107,20 @@ impl Planned {
             cmd.env(caravan::env_vars::ON, on);
         }
         cmd
+    }
+}
+
+/// Has `cmd`'s process receive `signal` when the thread that started it (the launcher's)
+/// dies, however it dies. A later call on the same command overrides an earlier one.
+pub fn die_with_parent(cmd: &mut Command, signal: libc::c_int) {
+    // SAFETY: prctl is async-signal-safe; it only sets this child's parent-death signal.
+    unsafe {
+        cmd.pre_exec(move || {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, signal) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
     }
 }
 

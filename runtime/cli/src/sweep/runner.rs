@@ -201,6 +201,8 @@ fn start(
         // Its own process group: a Ctrl-C in the terminal reaches only the sweep, which
         // forwards one SIGTERM, rather than every launcher at once.
         .process_group(0);
+    // A sweep killed outright still stops its launchers, which stop their groups cleanly.
+    crate::run::supervisor::die_with_parent(&mut cmd, libc::SIGTERM);
     let mut r = running.lock().unwrap();
     if r.stopping {
         return Ok(None);

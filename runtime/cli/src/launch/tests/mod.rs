@@ -500,7 +500,7 @@ fn launch_range_checks() {
     );
     assert_error(
         &lines,
-        "FILE:7: host 'rpi-0', key 'cpu_slowdown': must be at least 1.0 (1.0 = as fast as this machine), found 0.5",
+        "FILE:7: host 'rpi-0', key 'cpu_slowdown': must be 1.0 to 1e6 (1.0 = as fast as this machine), found 0.5",
     );
     assert_error(
         &lines,

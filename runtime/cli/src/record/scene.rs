@@ -1,0 +1,363 @@
+//! Foxglove scene channels: Foxglove's well-known messages (`foxglove.*`, protobuf, the
+//! Foxglove SDK's types) derived from recorded Caravan messages, so that Foxglove's 3D panel
+//! shows the robots, scans, map, paths and goals of any scenario without a converter.
+//!
+//! Frames: `map` is the world; `robot_<i>/base_link` is robot i where its own estimate puts it
+//! (`robot/<i>/pose`), `robot_<i>/base_link_true` where it is (`robot/<i>/pose_true`), and
+//! `robot_<i>/<link>` each link of an articulated robot (`robot/<i>/link_states`). Transforms
+//! go to one `tf` channel, as in ROS; every other view is on `foxglove/<raw topic>`. A scan is
+//! drawn in its robot's `base_link`.
+//!
+//! Views depend only on the raw message, so a lockstep recording stays byte-identical.
+
+use foxglove::Encode;
+use foxglove::messages::{
+    FrameTransform, FrameTransforms, Grid, LaserScan, PackedElementField, Pose, PoseInFrame,
+    PosesInFrame, Quaternion, Timestamp, Vector2, Vector3, packed_element_field::NumericType,
+};
+use serde_json::Value;
+
+/// The channel every transform goes to.
+pub const TF_TOPIC: &str = "tf";
+/// The world frame.
+pub const MAP_FRAME: &str = "map";
+
+/// A channel's schema: name, encoding and the serialised descriptor set.
+pub struct SceneSchema {
+    pub name: String,
+    pub encoding: String,
+    pub data: Vec<u8>,
+}
+
+/// One Foxglove message derived from a recorded one.
+pub struct View {
+    pub topic: String,
+    pub schema: fn() -> SceneSchema,
+    pub bytes: Vec<u8>,
+}
+
+fn schema_of<T: Encode>() -> SceneSchema {
+    let s = T::get_schema().expect("Foxglove's well-known messages have schemas");
+    SceneSchema {
+        name: s.name,
+        encoding: s.encoding,
+        data: s.data.into_owned(),
+    }
+}
+
+fn view<T: Encode>(topic: String, message: &T) -> View {
+    let mut bytes = Vec::new();
+    // Encoding into a growable Vec cannot run out of room.
+    let _ = message.encode(&mut bytes);
+    View {
+        topic,
+        schema: schema_of::<T>,
+        bytes,
+    }
+}
+
+fn timestamp(ns: u64) -> Timestamp {
+    let sec = u32::try_from(ns / 1_000_000_000).unwrap_or(u32::MAX);
+    Timestamp::new(sec, (ns % 1_000_000_000) as u32)
+}
+
+fn num(v: &Value, key: &str) -> f64 {
+    v[key].as_f64().unwrap_or(0.0)
+}
+
+/// A `Pose2D` JSON value as a pose in the plane.
+fn pose_2d(v: &Value) -> Pose {
+    let half = num(v, "theta") / 2.0;
+    Pose {
+        position: Some(Vector3 {
+            x: num(v, "x"),
+            y: num(v, "y"),
+            z: 0.0,
+        }),
+        orientation: Some(Quaternion {
+            x: 0.0,
+            y: 0.0,
+            z: half.sin(),
+            w: half.cos(),
+        }),
+    }
+}
+
+/// A `Pose3D` JSON value.
+fn pose_3d(v: &Value) -> Pose {
+    let p = &v["position"];
+    let q = &v["orientation"];
+    Pose {
+        position: Some(Vector3 {
+            x: num(p, "x"),
+            y: num(p, "y"),
+            z: num(p, "z"),
+        }),
+        orientation: Some(Quaternion {
+            x: num(q, "x"),
+            y: num(q, "y"),
+            z: num(q, "z"),
+            w: num(q, "w"),
+        }),
+    }
+}
+
+fn transform(stamp: Timestamp, child: String, pose: Pose) -> FrameTransform {
+    FrameTransform {
+        timestamp: Some(stamp),
+        parent_frame_id: MAP_FRAME.into(),
+        child_frame_id: child,
+        translation: pose.position,
+        rotation: pose.orientation,
+    }
+}
+
+/// `robot/<i>/<leaf>` as (i, leaf).
+fn robot_topic(topic: &str) -> Option<(usize, &str)> {
+    let rest = topic.strip_prefix("robot/")?;
+    let (index, leaf) = rest.split_once('/')?;
+    Some((index.parse().ok()?, leaf))
+}
+
+fn f64s(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
+        .unwrap_or_default()
+}
+
+/// The Foxglove views of one recorded message (none for types without a view).
+pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<View> {
+    let stamp = timestamp(stamp_ns);
+    let own = format!("foxglove/{topic}");
+    let robot = robot_topic(topic);
+    let in_map = |pose: Pose| PoseInFrame {
+        timestamp: Some(stamp),
+        frame_id: MAP_FRAME.into(),
+        pose: Some(pose),
+    };
+    match type_name {
+        "caravan::Pose2D" => {
+            let pose = pose_2d(json);
+            let mut out = vec![view(own, &in_map(pose))];
+            let frame = match robot {
+                Some((i, "pose")) => Some(format!("robot_{i}/base_link")),
+                Some((i, "pose_true")) => Some(format!("robot_{i}/base_link_true")),
+                _ => None,
+            };
+            if let Some(child) = frame {
+                let tf = FrameTransforms {
+                    transforms: vec![transform(stamp, child, pose)],
+                };
+                out.push(view(TF_TOPIC.into(), &tf));
+            }
+            out
+        }
+        "caravan::Odometry" => vec![view(own, &in_map(pose_3d(&json["pose"])))],
+        "caravan::Goal" => vec![view(own, &in_map(pose_2d(&json["pose"])))],
+        "caravan::Path2D" => {
+            let poses = json["poses"].as_array().map(Vec::as_slice).unwrap_or(&[]);
+            let path = PosesInFrame {
+                timestamp: Some(stamp),
+                frame_id: MAP_FRAME.into(),
+                poses: poses.iter().map(pose_2d).collect(),
+            };
+            vec![view(own, &path)]
+        }
+        "caravan::LaserScan" => {
+            let frame = match robot {
+                Some((i, _)) => format!("robot_{i}/base_link"),
+                None => MAP_FRAME.into(),
+            };
+            let scan = LaserScan {
+                timestamp: Some(stamp),
+                frame_id: frame,
+                pose: Some(Pose {
+                    position: Some(Vector3::default()),
+                    orientation: Some(Quaternion {
+                        w: 1.0,
+                        ..Default::default()
+                    }),
+                }),
+                start_angle: num(json, "angle_min"),
+                end_angle: num(json, "angle_max"),
+                ranges: f64s(&json["ranges"]),
+                intensities: f64s(&json["intensities"]),
+            };
+            vec![view(own, &scan)]
+        }
+        "caravan::OccupancyGrid" => {
+            let width = json["width"].as_u64().unwrap_or(0) as u32;
+            let resolution = num(json, "resolution");
+            // Cells are i8 (−1 unknown, 0–100 occupancy), one byte each, row-major from the
+            // origin, as ROS's OccupancyGrid and Foxglove's Grid both lay them out.
+            let data: Vec<u8> = json["data"]
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .map(|c| c.as_i64().unwrap_or(-1) as i8 as u8)
+                        .collect()
+                })
+                .unwrap_or_default();
+            let grid = Grid {
+                timestamp: Some(stamp),
+                frame_id: MAP_FRAME.into(),
+                pose: Some(pose_2d(&json["origin"])),
+                column_count: width,
+                cell_size: Some(Vector2 {
+                    x: resolution,
+                    y: resolution,
+                }),
+                row_stride: width,
+                cell_stride: 1,
+                fields: vec![PackedElementField {
+                    name: "occupancy".into(),
+                    offset: 0,
+                    r#type: NumericType::Int8 as i32,
+                }],
+                data: data.into(),
+            };
+            vec![view(own, &grid)]
+        }
+        "caravan::LinkStates" => {
+            let Some((i, _)) = robot else {
+                return Vec::new();
+            };
+            let links = json["links"].as_array().map(Vec::as_slice).unwrap_or(&[]);
+            let transforms = links
+                .iter()
+                .map(|l| {
+                    let name = l["name"].as_str().unwrap_or("link");
+                    transform(stamp, format!("robot_{i}/{name}"), pose_3d(&l["pose"]))
+                })
+                .collect();
+            vec![view(TF_TOPIC.into(), &FrameTransforms { transforms })]
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// The Foxglove topics a raw topic of `type_name` gives, known before its first message so that
+/// the channels exist from the start.
+pub fn topics_of(topic: &str, type_name: &str) -> Vec<(String, fn() -> SceneSchema)> {
+    let own = format!("foxglove/{topic}");
+    let tf = (
+        TF_TOPIC.to_string(),
+        schema_of::<FrameTransforms> as fn() -> SceneSchema,
+    );
+    let robot = robot_topic(topic);
+    match type_name {
+        "caravan::Pose2D" => {
+            let mut out = vec![(own, schema_of::<PoseInFrame> as fn() -> SceneSchema)];
+            if matches!(robot, Some((_, "pose" | "pose_true"))) {
+                out.push(tf);
+            }
+            out
+        }
+        "caravan::Odometry" | "caravan::Goal" => vec![(own, schema_of::<PoseInFrame>)],
+        "caravan::Path2D" => vec![(own, schema_of::<PosesInFrame>)],
+        "caravan::LaserScan" => vec![(own, schema_of::<LaserScan>)],
+        "caravan::OccupancyGrid" => vec![(own, schema_of::<Grid>)],
+        "caravan::LinkStates" if robot.is_some() => vec![tf],
+        _ => Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use prost::Message;
+    use serde_json::json;
+
+    #[test]
+    fn a_robot_pose_is_a_transform_and_a_pose_in_the_map() {
+        let v = views(
+            "robot/2/pose_true",
+            "caravan::Pose2D",
+            &json!({"x": 1.0, "y": -2.0, "theta": std::f64::consts::FRAC_PI_2}),
+            1_500_000_000,
+        );
+        let topics: Vec<&str> = v.iter().map(|v| v.topic.as_str()).collect();
+        assert_eq!(topics, ["foxglove/robot/2/pose_true", "tf"]);
+        let tf = FrameTransforms::decode(v[1].bytes.as_slice()).unwrap();
+        let t = &tf.transforms[0];
+        assert_eq!(t.parent_frame_id, "map");
+        assert_eq!(t.child_frame_id, "robot_2/base_link_true");
+        assert_eq!(t.timestamp, Some(Timestamp::new(1, 500_000_000)));
+        let q = t.rotation.unwrap();
+        assert!((q.z - (0.5f64).sqrt()).abs() < 1e-12 && (q.w - (0.5f64).sqrt()).abs() < 1e-12);
+        assert_eq!(t.translation.unwrap().y, -2.0);
+        assert_eq!((v[1].schema)().name, "foxglove.FrameTransforms");
+    }
+
+    #[test]
+    fn a_map_is_a_grid_with_unknown_cells_kept() {
+        let v = views(
+            "map",
+            "caravan::OccupancyGrid",
+            &json!({"resolution": 0.05, "width": 2, "height": 2,
+                    "origin": {"x": -1.0, "y": 0.0, "theta": 0.0}, "data": [-1, 0, 100, 50]}),
+            0,
+        );
+        let grid = Grid::decode(v[0].bytes.as_slice()).unwrap();
+        assert_eq!(grid.column_count, 2);
+        assert_eq!(grid.row_stride, 2);
+        assert_eq!(&grid.data[..], &[255, 0, 100, 50]);
+        assert_eq!(grid.fields[0].r#type, NumericType::Int8 as i32);
+    }
+
+    #[test]
+    fn a_scan_is_drawn_in_its_robot_and_a_path_in_the_map() {
+        let scan = views(
+            "robot/0/scan",
+            "caravan::LaserScan",
+            &json!({"angle_min": -1.0, "angle_max": 1.0, "ranges": [1.0, 2.0], "intensities": [0.0, 0.0]}),
+            0,
+        );
+        let s = LaserScan::decode(scan[0].bytes.as_slice()).unwrap();
+        assert_eq!(
+            (s.frame_id.as_str(), s.ranges.as_slice()),
+            ("robot_0/base_link", &[1.0, 2.0][..])
+        );
+        let path = views(
+            "robot/0/path",
+            "caravan::Path2D",
+            &json!({"poses": [{"x": 0.0, "y": 0.0, "theta": 0.0}, {"x": 1.0, "y": 0.0, "theta": 0.0}]}),
+            0,
+        );
+        assert_eq!(
+            PosesInFrame::decode(path[0].bytes.as_slice())
+                .unwrap()
+                .poses
+                .len(),
+            2
+        );
+    }
+
+    #[test]
+    fn views_and_their_announced_topics_agree() {
+        for (topic, type_name, sample) in [
+            ("robot/1/pose", "caravan::Pose2D", json!({})),
+            ("goal", "caravan::Goal", json!({"pose": {}})),
+            (
+                "robot/0/link_states",
+                "caravan::LinkStates",
+                json!({"links": [{"name": "a", "pose": {}}]}),
+            ),
+            (
+                "robot/0/wheel_setpoint",
+                "caravan::WheelSetpoint",
+                json!({}),
+            ),
+        ] {
+            let made: Vec<String> = views(topic, type_name, &sample, 0)
+                .into_iter()
+                .map(|v| v.topic)
+                .collect();
+            let announced: Vec<String> = topics_of(topic, type_name)
+                .into_iter()
+                .map(|t| t.0)
+                .collect();
+            assert_eq!(made, announced, "{topic}");
+        }
+    }
+}

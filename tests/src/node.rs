@@ -1,0 +1,53 @@
+//! Foxglove's own readers, run with Node (`tests/node/`): the MCAP reader and protobuf parser
+//! the Foxglove app uses and the official JSON schemas of its messages. The packages are
+//! installed into `tests/node/node_modules` on first use, pinned by `package-lock.json`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn node_dir() -> PathBuf {
+    crate::workspace_root().join("tests/node")
+}
+
+/// Installs the pinned packages once, whichever test asks first (a file lock keeps parallel
+/// tests from installing twice).
+fn ensure_installed() {
+    let dir = node_dir();
+    let lock = std::fs::File::create(dir.join(".install.lock")).expect("create the install lock");
+    // SAFETY: flock on a file descriptor this function owns; released when `lock` drops.
+    let locked = unsafe { libc::flock(std::os::fd::AsRawFd::as_raw_fd(&lock), libc::LOCK_EX) };
+    assert_eq!(locked, 0, "cannot lock {}", dir.display());
+    if dir.join("node_modules/.package-lock.json").is_file() {
+        return;
+    }
+    let out = Command::new("npm")
+        .args(["ci", "--no-audit", "--no-fund"])
+        .current_dir(&dir)
+        .output()
+        .expect("npm is needed for the Foxglove reader tests (Node 20 with npm)");
+    assert!(
+        out.status.success(),
+        "npm ci in {} failed: {}",
+        dir.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Reads `mcap` as Foxglove does (`check-recording.mjs`): returns its JSON verdict
+/// `{channels: {topic: {schema, encoding, messages}}, errors: [...]}`; panics if Node cannot
+/// read the file at all.
+pub fn check_recording(mcap: &Path) -> serde_json::Value {
+    ensure_installed();
+    let out = Command::new("node")
+        .arg(node_dir().join("check-recording.mjs"))
+        .arg(mcap)
+        .output()
+        .expect("run node");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(stdout.trim()).unwrap_or_else(|_| {
+        panic!(
+            "check-recording.mjs gave no verdict: {stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}

@@ -1,0 +1,214 @@
+//! The reliability issue's second round: inputs of the same classes as its first list, tried
+//! by an adversarial pass (absurd values that overflowed, special files, names past iceoryx2's
+//! limits, escapes from the run directory, parents killed outright). Each is bad input (exit
+//! 2, named, nothing started) or a clear failure, never a panic, a hang or an orphan.
+
+use caravan_tests::{
+    PINGPONG, Scenario, alive, assert_refused, caravan, launch_with_set, realtime_ping_pong,
+    wait_until, workspace_bin, workspace_root,
+};
+use std::process::{Command, Stdio};
+
+fn stderr(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+#[test]
+fn absurd_process_params_that_overflowed_are_refused_before_the_start() {
+    for (set, expected) in [
+        ("process.physics.params.gravity=1e308", "'gravity'"),
+        ("process.slam.params.slam.resolution=1e308", "resolution"),
+        ("process.slam.params.save_map=../../escape", "'save_map'"),
+        (
+            "process.planner.params.global.search_margin=1e308",
+            "search_margin",
+        ),
+        (
+            "process.planner.params.local.v_samples=4000000000",
+            "v_samples",
+        ),
+        (
+            "process.physics.params.world=/dev/zero",
+            "not a regular file",
+        ),
+    ] {
+        let (code, err) = launch_with_set("convoy/convoy.toml", "1s", set);
+        assert_eq!(code, 2, "{set}: {err}");
+        assert!(!err.contains("panicked"), "{set}: {err}");
+        assert!(
+            err.contains(expected),
+            "{set}: expected '{expected}' in {err}"
+        );
+    }
+}
+
+#[test]
+fn an_emulated_cpu_slowdown_past_its_limit_is_refused() {
+    let (code, err) = launch_with_set(
+        "convoy/convoy-wlan.toml",
+        "1s",
+        "hosts.rpi-0.cpu_slowdown=1e13",
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cpu_slowdown") && err.contains("1e6"), "{err}");
+}
+
+#[test]
+fn a_process_name_longer_than_iceoryx2_takes_is_refused_at_its_line() {
+    let long = "p".repeat(65);
+    let s = Scenario::new(
+        "longname",
+        &PINGPONG.replace("name = \"noise\"", &format!("name = \"{long}\"")),
+    );
+    let out = s.run(&[]);
+    assert_refused(&s, &out, &["key 'name'", "1 to 64"]);
+}
+
+#[test]
+fn a_fifo_given_as_a_world_is_refused_at_once() {
+    let s = Scenario::new("fifo", "");
+    let fifo = s.dir.join("world.toml");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo with a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let set = format!("process.physics.params.world={}", fifo.display());
+    let (code, err) = launch_with_set("convoy/convoy.toml", "1s", &set);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("not a regular file"), "{err}");
+}
+
+#[test]
+fn sweeps_of_more_seeds_than_a_sweep_takes_are_refused_at_once() {
+    let pingpong = workspace_root().join("launch/pingpong.toml");
+    let out = caravan(&[
+        "sweep",
+        pingpong.to_str().unwrap(),
+        "--seeds",
+        "0..9223372036854775807",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("more than the 100000"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn inspection_arguments_that_mean_nothing_are_refused() {
+    for args in [
+        vec!["clean", "--group", "../../etc"],
+        vec!["clean", "--group", ""],
+        vec!["topic", "echo", "demo/ping", "-n", "0"],
+        vec!["topic", "hz", "demo/ping", "--seconds", "0"],
+        vec!["record", "", "-o", "x.mcap"],
+    ] {
+        let out = caravan(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(!stderr(&out).contains("panicked"), "{}", stderr(&out));
+    }
+}
+
+#[test]
+fn a_recording_that_cannot_be_written_fails_naming_it_without_a_panic() {
+    let s = Scenario::new("full", &realtime_ping_pong("30s"));
+    let mut group = s.command(&[]).stderr(Stdio::piped()).spawn().unwrap();
+    wait_until("the group runs", || {
+        caravan(&["topic", "list", "--group", &s.group.name])
+            .stdout
+            .windows(9)
+            .any(|w| w == b"demo/ping")
+    });
+    // /dev/full answers every write with "No space left on device".
+    let out = caravan(&[
+        "record",
+        "-o",
+        "/dev/full",
+        "--seconds",
+        "2",
+        "--group",
+        &s.group.name,
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("/dev/full"), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("panicked"), "{}", stderr(&out));
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(group.id() as i32, libc::SIGTERM) };
+    assert!(group.wait().unwrap().success());
+}
+
+#[test]
+fn a_launch_leaves_no_lock_or_config_in_the_temporary_directory() {
+    let s = Scenario::new("tmpfiles", PINGPONG);
+    let out = s.run(&["--duration", "1s"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let tmp = std::env::temp_dir();
+    for suffix in ["lock", "iceoryx2.toml"] {
+        let file = tmp.join(format!("caravan-group-{}.{suffix}", s.group.name));
+        assert!(!file.exists(), "{} left behind", file.display());
+    }
+}
+
+/// The children of `pid`, whichever of its threads started them (from /proc).
+fn children(pid: u32) -> Vec<i32> {
+    let tasks = std::fs::read_dir(format!("/proc/{pid}/task"))
+        .into_iter()
+        .flatten();
+    tasks
+        .flatten()
+        .flat_map(|t| {
+            let list = std::fs::read_to_string(t.path().join("children")).unwrap_or_default();
+            list.split_whitespace()
+                .filter_map(|p| p.parse().ok())
+                .collect::<Vec<i32>>()
+        })
+        .collect()
+}
+
+#[test]
+fn a_check_outlives_no_launcher_killed_outright() {
+    // A program that does not understand CARAVAN_CHECK but is checked: its check blocks.
+    let s = Scenario::new(
+        "check-orphan",
+        "clock = \"realtime\"\nduration = \"2s\"\n\n[[process]]\nname = \"sleeper\"\nexec = \"sleep\"\nargs = [\"300\"]\ncheck = true\n",
+    );
+    let mut launcher = s.command(&[]).stderr(Stdio::null()).spawn().unwrap();
+    let mut check = 0;
+    wait_until("the check runs", || {
+        check = children(launcher.id()).first().copied().unwrap_or(0);
+        check != 0
+    });
+    launcher.kill().unwrap(); // SIGKILL
+    launcher.wait().unwrap();
+    wait_until(&format!("the check {check} is gone"), || !alive(check));
+}
+
+#[test]
+fn a_sweep_killed_outright_stops_its_launchers() {
+    let s = Scenario::new("sweep-orphan", &realtime_ping_pong("60s"));
+    let mut sweep = Command::new(workspace_bin("caravan"))
+        .args([
+            "sweep",
+            s.file.to_str().unwrap(),
+            "--seeds",
+            "1",
+            "--jobs",
+            "1",
+            "--out",
+        ])
+        .arg(s.dir.join("sweep"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut launcher = 0;
+    wait_until("the sweep's launcher runs", || {
+        launcher = children(sweep.id()).first().copied().unwrap_or(0);
+        launcher != 0
+    });
+    sweep.kill().unwrap(); // SIGKILL
+    sweep.wait().unwrap();
+    wait_until(&format!("the launcher {launcher} stops"), || {
+        !alive(launcher)
+    });
+}
