@@ -212,3 +212,52 @@ fn a_sweep_killed_outright_stops_its_launchers() {
         !alive(launcher)
     });
 }
+
+#[test]
+fn a_trigger_that_is_not_one_topic_name_is_refused() {
+    let s = Scenario::new("on-pattern", PINGPONG);
+    for on in ["demo/*", "a//b", "/"] {
+        let out = s.run(&["--set", &format!("process.pong.on={on}")]);
+        assert_refused(&s, &out, &["key 'on'", "is not a topic name"]);
+    }
+}
+
+#[test]
+fn a_sweep_whose_output_is_a_file_is_refused_before_it_runs() {
+    let s = Scenario::new("sweep-out", PINGPONG);
+    let file = s.dir.join("taken.txt");
+    std::fs::write(&file, "x").unwrap();
+    let out = caravan(&[
+        "sweep",
+        s.file.to_str().unwrap(),
+        "--seeds",
+        "1",
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("is not a directory"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(s.run_dirs().is_empty());
+}
+
+#[test]
+fn a_report_of_a_truncated_recording_names_the_file() {
+    let s = Scenario::new("truncated", PINGPONG);
+    assert!(s.run(&["--duration", "2s"]).status.success());
+    let dir = s.run_dirs().pop().unwrap();
+    let mcap = dir.join("record.mcap");
+    let bytes = std::fs::read(&mcap).unwrap();
+    std::fs::write(&mcap, &bytes[..bytes.len() / 2]).unwrap();
+    let out = caravan(&["report", dir.to_str().unwrap()]);
+    assert_ne!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("panicked"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(mcap.to_str().unwrap()),
+        "{}",
+        stderr(&out)
+    );
+}

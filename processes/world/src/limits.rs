@@ -22,9 +22,38 @@ pub fn length(what: &str, v: f64, max: f64) -> Result<f64, String> {
     }
 }
 
+/// `v` when it is a coordinate within ±`max` m (or an angle within ±`max` rad); else a
+/// message naming `what`. Checked before anything is placed, so that a NaN centre is blamed
+/// on its key, not on the goal or robot it seems to overlap.
+pub fn coordinate(what: &str, v: f64, max: f64) -> Result<f64, String> {
+    if v.is_finite() && v.abs() <= max {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{what} must be a finite number within ±{max}, got {v}"
+        ))
+    }
+}
+
+/// The largest angle read, rad: a thousand turns; past it the trigonometry loses the angle.
+pub const MAX_ANGLE_RAD: f64 = 6283.0;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn coordinates_are_finite_and_bounded() {
+        assert_eq!(coordinate("x", -3.0, 10.0), Ok(-3.0));
+        for bad in [f64::NAN, f64::NEG_INFINITY, 11.0, -1e308] {
+            assert!(
+                coordinate("x", bad, 10.0)
+                    .unwrap_err()
+                    .contains("x must be"),
+                "{bad}"
+            );
+        }
+    }
 
     #[test]
     fn lengths_are_positive_finite_and_bounded() {

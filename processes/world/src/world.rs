@@ -216,6 +216,36 @@ pub fn parse_world(text: &str) -> Result<World, String> {
     {
         return Err(format!("world.friction must be zero or positive, got {mu}"));
     }
+    use crate::limits::{MAX_ANGLE_RAD, MAX_WORLD_EXTENT_M, coordinate};
+    let point = |what: String, p: [f64; 2]| {
+        coordinate(&format!("{what}[0]"), p[0], MAX_WORLD_EXTENT_M)?;
+        coordinate(&format!("{what}[1]"), p[1], MAX_WORLD_EXTENT_M).map(|_| ())
+    };
+    for (i, w) in f.wall.iter().enumerate() {
+        point(format!("wall[{i}].from"), w.from)?;
+        point(format!("wall[{i}].to"), w.to)?;
+    }
+    for (i, b) in f.boxes.iter().enumerate() {
+        point(format!("box[{i}].center"), b.center)?;
+        coordinate(&format!("box[{i}].yaw"), b.yaw, MAX_ANGLE_RAD)?;
+        if let Some(height) = b.height {
+            positive(format!("box[{i}].height"), height)?;
+        }
+    }
+    for (i, c) in f.cylinder.iter().enumerate() {
+        point(format!("cylinder[{i}].center"), c.center)?;
+        if let Some(height) = c.height {
+            positive(format!("cylinder[{i}].height"), height)?;
+        }
+    }
+    for (i, s) in f.start.iter().enumerate() {
+        point(format!("start[{i}].pose"), [s.pose[0], s.pose[1]])?;
+        coordinate(
+            &format!("start[{i}].pose[2] (yaw)"),
+            s.pose[2],
+            MAX_ANGLE_RAD,
+        )?;
+    }
     let mut obstacles = Vec::new();
     for (i, w) in f.wall.iter().enumerate() {
         let (dx, dy) = (w.to[0] - w.from[0], w.to[1] - w.from[1]);
@@ -452,5 +482,35 @@ radius = 0.1
     fn absurd_sizes_are_rejected() {
         let e = parse_world("[world]\nname = \"x\"\nsize = [1e308, 1e308]\n").unwrap_err();
         assert!(e.contains("world.size[0]") && e.contains("10000 m"), "{e}");
+    }
+
+    #[test]
+    fn non_finite_placements_are_blamed_on_their_own_key() {
+        let base = "[world]\nname = \"x\"\nsize = [4.0, 4.0]\n";
+        for (extra, key) in [
+            (
+                "[[box]]\ncenter = [nan, 2.0]\nsize = [0.5, 0.5]\n",
+                "box[0].center[0]",
+            ),
+            (
+                "[[box]]\ncenter = [1.0, 2.0]\nyaw = nan\nsize = [0.5, 0.5]\n",
+                "box[0].yaw",
+            ),
+            (
+                "[[box]]\ncenter = [1.0, 2.0]\nheight = 1e308\nsize = [0.5, 0.5]\n",
+                "box[0].height",
+            ),
+            (
+                "[[cylinder]]\ncenter = [1.0, inf]\nradius = 0.2\n",
+                "cylinder[0].center[1]",
+            ),
+            (
+                "[[start]]\npose = [1.0, 1.0, 1e308]\n",
+                "start[0].pose[2] (yaw)",
+            ),
+        ] {
+            let e = parse_world(&format!("{base}{extra}")).unwrap_err();
+            assert!(e.contains(key), "{extra}: {e}");
+        }
     }
 }

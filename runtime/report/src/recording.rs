@@ -39,8 +39,9 @@ impl RecordedMessage {
 pub fn read_all(path: &Path) -> Result<Vec<RecordedMessage>> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     let mut out = Vec::new();
-    for message in mcap::MessageStream::new(&bytes)? {
-        let message = message?;
+    let at = || path.display().to_string();
+    for message in mcap::MessageStream::new(&bytes).with_context(at)? {
+        let message = message.with_context(at)?;
         if message.channel.message_encoding != "json" {
             continue;
         }

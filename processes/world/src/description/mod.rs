@@ -343,6 +343,7 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<RobotDescription, Des
                  or positive"
             )));
         }
+        check_origin(&j.origin).map_err(jerr)?;
         joints.push(Joint {
             name: j.name.clone(),
             kind,
@@ -418,6 +419,19 @@ fn check_reachable(d: &RobotDescription) -> Result<(), DescriptionError> {
     }
 }
 
+/// An `<origin>` within a robot: offsets within ±100 m (one part's largest size), angles
+/// within a thousand turns.
+fn check_origin(p: &urdf_rs::Pose) -> Result<(), String> {
+    use crate::limits::{MAX_ANGLE_RAD, MAX_PART_SIZE_M, coordinate};
+    for (k, v) in p.xyz.0.iter().enumerate() {
+        coordinate(&format!("<origin xyz>[{k}]"), *v, MAX_PART_SIZE_M)?;
+    }
+    for (k, v) in p.rpy.0.iter().enumerate() {
+        coordinate(&format!("<origin rpy>[{k}]"), *v, MAX_ANGLE_RAD)?;
+    }
+    Ok(())
+}
+
 fn isometry(p: &urdf_rs::Pose) -> Isometry3<f64> {
     let [x, y, z] = p.xyz.0;
     let [r, pi, ya] = p.rpy.0;
@@ -430,9 +444,10 @@ fn isometry(p: &urdf_rs::Pose) -> Isometry3<f64> {
 fn inertial(l: &urdf_rs::Link) -> Result<Option<Inertial>, String> {
     let i = &l.inertial;
     let mass = i.mass.value;
-    if !mass.is_finite() || mass < 0.0 {
+    // A million kilograms is past any robot; beyond it the solver's numbers lose meaning.
+    if !(0.0..=1e6).contains(&mass) {
         return Err(format!(
-            "<mass value=\"{mass}\">: a mass must be zero or positive"
+            "<mass value=\"{mass}\">: a mass must be 0 to 1e6 kg"
         ));
     }
     if mass == 0.0 {

@@ -233,3 +233,25 @@ fn absurd_shape_sizes_name_the_link() {
         );
     }
 }
+
+#[test]
+fn absurd_origins_and_masses_name_the_joint_or_link() {
+    let far = ELBOW.replace(r#"<origin xyz="0 0 0.5"/>"#, r#"<origin xyz="1e5 0 0.5"/>"#);
+    let e = parse_str(&arm(&far)).unwrap_err().to_string();
+    assert!(
+        e.contains("'elbow'") && e.contains("<origin xyz>[0]"),
+        "{e}"
+    );
+    let spun = ELBOW.replace(
+        r#"<origin xyz="0 0 0.5"/>"#,
+        r#"<origin xyz="0 0 0.5" rpy="0 1e308 0"/>"#,
+    );
+    let e = parse_str(&arm(&spun)).unwrap_err().to_string();
+    assert!(
+        e.contains("'elbow'") && e.contains("<origin rpy>[1]"),
+        "{e}"
+    );
+    let heavy = arm(ELBOW).replacen(r#"<mass value="1"/>"#, r#"<mass value="1e308"/>"#, 1);
+    let e = parse_str(&heavy).unwrap_err().to_string();
+    assert!(e.contains("'base'") && e.contains("0 to 1e6 kg"), "{e}");
+}

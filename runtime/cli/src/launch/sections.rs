@@ -294,8 +294,19 @@ impl Checker<'_> {
         });
         let on = self.get(s, "on", |i| {
             let topic = string(i)?;
-            if topic.is_empty() || topic.contains(char::is_whitespace) {
-                return Err(format!("'{topic}' is not a topic name"));
+            // One topic, by its name: segments of letters, digits, '_', '-' and '.' between
+            // single slashes (a pattern such as `demo/*` steps nothing).
+            let segment_ok = |seg: &str| {
+                !seg.is_empty()
+                    && seg
+                        .chars()
+                        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+            };
+            if !topic.split('/').all(segment_ok) {
+                return Err(format!(
+                    "'{topic}' is not a topic name (segments of letters, digits, '_', '-' and \
+                     '.' between single '/')"
+                ));
             }
             Ok(topic)
         });

@@ -58,7 +58,19 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
     }
     let deadline = Instant::now() + CHECK_TIMEOUT;
     for (index, name, program, pid, rx) in running {
-        let output = match rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+        // A check longer than a few seconds is said once, so a slow one is not taken for a hang.
+        let said = Instant::now() + Duration::from_secs(10);
+        let mut received =
+            rx.recv_timeout(said.min(deadline).saturating_duration_since(Instant::now()));
+        if matches!(received, Err(RecvTimeoutError::Timeout)) && Instant::now() < deadline {
+            eprintln!(
+                "caravan: still checking process '{name}' (up to {} s; a Python agent's first \
+                 check installs its packages)",
+                CHECK_TIMEOUT.as_secs()
+            );
+            received = rx.recv_timeout(deadline.saturating_duration_since(Instant::now()));
+        }
+        let output = match received {
             Ok(output) => output,
             Err(RecvTimeoutError::Timeout) => {
                 // SAFETY: kill(2) on the process group of a child we spawned and not reaped.

@@ -351,6 +351,13 @@ fn plan(args: &SweepArgs) -> Result<Plan, Vec<String>> {
 /// Loads the launch file with every cell's overrides, as `caravan launch` would, without
 /// starting anything. A problem shared by several cells is reported once, naming them.
 fn validate(plan: &Plan) -> Vec<String> {
+    // The output must be a directory (made, or resumed); a file there is bad input.
+    if plan.out.exists() && !plan.out.is_dir() {
+        return vec![format!(
+            "--out {}: exists and is not a directory",
+            plan.out.display()
+        )];
+    }
     let mut problems: Vec<(String, Vec<&str>)> = Vec::new();
     for cell in &plan.cells {
         let args = LaunchArgs {
