@@ -261,3 +261,19 @@ fn a_report_of_a_truncated_recording_names_the_file() {
         stderr(&out)
     );
 }
+
+#[test]
+fn a_sweep_over_the_keys_it_sets_itself_is_refused() {
+    let pingpong = workspace_root().join("launch/pingpong.toml");
+    for args in [["--grid", "group.name=a,b"], ["--set", "group.seed=4"]] {
+        let mut all = vec!["sweep", pingpong.to_str().unwrap()];
+        all.extend(args);
+        let out = caravan(&all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains("sets group.name and group.seed itself"),
+            "{}",
+            stderr(&out)
+        );
+    }
+}

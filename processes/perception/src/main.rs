@@ -67,8 +67,17 @@ fn default_save_map() -> String {
 
 impl Params {
     fn validate(&self) -> Result<(), String> {
-        if !self.initial_pose.iter().flatten().all(|v| v.is_finite()) {
-            return Err("key 'initial_pose': must be three finite numbers [x, y, theta]".into());
+        // Within a world (10 km at most) and a thousand turns.
+        if !self
+            .initial_pose
+            .iter()
+            .flatten()
+            .all(|v| v.abs() <= 10_000.0)
+        {
+            return Err(
+                "key 'initial_pose': must be three finite numbers [x, y, theta] within ±10000"
+                    .into(),
+            );
         }
         // The map is written into the run directory, never beside or above it.
         let plain = self.save_map.is_empty()

@@ -130,10 +130,17 @@ pub fn load_map(yaml: &Path, out: &mut OccupancyGrid) -> Result<(), String> {
         }
     }
     let image = image.ok_or_else(|| err("missing `image`"))?;
+    // The same bounds as SLAM's own resolution: outside them cell arithmetic overflows.
     let resolution = resolution
-        .filter(|r| *r > 0.0)
-        .ok_or_else(|| err("missing or non-positive `resolution`"))?;
+        .filter(|r| (0.001..=10.0).contains(r))
+        .ok_or_else(|| err("missing `resolution`, or not in [0.001, 10] m"))?;
     let origin = origin.ok_or_else(|| err("missing `origin`"))?;
+    if ![origin.x, origin.y, origin.theta]
+        .iter()
+        .all(|v| v.abs() <= 10_000.0)
+    {
+        return Err(err("origin: values must be finite numbers within ±10000"));
+    }
 
     let pgm = yaml.parent().unwrap_or(Path::new("")).join(&image);
     let bytes = caravan::input::read(&pgm).map_err(|e| format!("{}: {e}", pgm.display()))?;
@@ -233,7 +240,7 @@ fn parse_pgm(bytes: &[u8]) -> Result<(usize, usize, &[u8]), String> {
     }
     // Exactly one whitespace byte separates the header from the pixels.
     let data = bytes.get(pos + 1..).unwrap_or(&[]);
-    if data.len() < w * h {
+    if w.checked_mul(h).is_none_or(|n| data.len() < n) {
         return Err(format!("{} pixel bytes for a {w} × {h} image", data.len()));
     }
     Ok((w, h, &data[..w * h]))
@@ -329,6 +336,29 @@ mod tests {
         std::fs::write(&yaml, "image: x.pgm\nresolution: 1\norigin: [0, 0, 0]\n").unwrap();
         let e = load_map(&yaml, &mut out).unwrap_err();
         assert!(e.contains("x.pgm") && e.contains("P5"), "{e}");
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn absurd_resolutions_and_image_sizes_are_errors_not_panics() {
+        let dir = temp_dir("absurd");
+        let mut out = caravan_schemas::boxed_placement_new::<OccupancyGrid>();
+        let yaml = dir.join("map.yaml");
+        std::fs::write(
+            &yaml,
+            "image: map.pgm\nresolution: 1e-300\norigin: [0, 0, 0]\n",
+        )
+        .unwrap();
+        let e = load_map(&yaml, &mut out).unwrap_err();
+        assert!(e.contains("resolution"), "{e}");
+        std::fs::write(
+            &yaml,
+            "image: map.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n",
+        )
+        .unwrap();
+        std::fs::write(dir.join("map.pgm"), b"P5 4294967296 4294967296 255\n\x00").unwrap();
+        let e = load_map(&yaml, &mut out).unwrap_err();
+        assert!(e.contains("map.pgm"), "{e}");
         std::fs::remove_dir_all(dir).unwrap();
     }
 }

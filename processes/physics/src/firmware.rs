@@ -47,8 +47,10 @@ impl FirmwareParams {
 
     pub fn validate(&self) -> Result<(), String> {
         for (key, v) in [("kp", self.kp), ("ki", self.ki), ("kd", self.kd)] {
-            if !v.is_finite() {
-                return Err(format!("pid.{key} must be a finite number, got {v}"));
+            if !v.is_finite() || v.abs() > 1e6 {
+                return Err(format!(
+                    "pid.{key} must be a finite number within ±1e6, got {v}"
+                ));
             }
         }
         if !(self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= 10_000.0) {

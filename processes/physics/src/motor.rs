@@ -80,14 +80,18 @@ impl MotorParams {
             ("viscous", self.viscous),
             ("coulomb", self.coulomb),
         ];
+        // No hobby or industrial motor comes near 1e6 in any of these units; past it the
+        // integration's numbers lose meaning and robots freeze or fly.
         for (key, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("motor.{key} must be positive, got {v}"));
+            if !(v > 0.0 && v <= 1e6) {
+                return Err(format!(
+                    "motor.{key} must be positive and at most 1e6, got {v}"
+                ));
             }
         }
         for (key, v) in non_negative {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("motor.{key} must be zero or positive, got {v}"));
+            if !(0.0..=1e6).contains(&v) {
+                return Err(format!("motor.{key} must be 0 to 1e6, got {v}"));
             }
         }
         Ok(())

@@ -57,6 +57,20 @@ pub fn load(filename: &str, scale: [f64; 3], dir: &Path) -> Result<TriMesh, Stri
             "<mesh filename=\"{filename}\">: the mesh has no triangles"
         ));
     }
+    // A part is at most 100 m across; a NaN or a 1e30 m vertex is named, not left to the
+    // convex hull to fail on.
+    let limit = crate::limits::MAX_PART_SIZE_M;
+    if let Some(i) = mesh
+        .vertices
+        .iter()
+        .position(|v| !v.iter().all(|c| c.abs() <= limit))
+    {
+        return Err(format!(
+            "<mesh filename=\"{filename}\">: vertex {i} {:?} (scaled) is not finite or lies \
+             more than {limit} m from the link frame",
+            mesh.vertices[i]
+        ));
+    }
     Ok(mesh)
 }
 

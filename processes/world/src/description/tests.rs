@@ -204,6 +204,15 @@ fn stl_and_obj_meshes_load_scaled() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("STL and OBJ"), "{e}");
+    std::fs::write(
+        dir.join("far.obj"),
+        "v 0 0 0\nv 1e30 0 0\nv 0 1 0\nv 0 0 nan\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let e = parse(&with_mesh("far.obj", "1 1 1"), "arm.urdf", &dir)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("far.obj") && e.contains("vertex 1"), "{e}");
 }
 
 #[test]

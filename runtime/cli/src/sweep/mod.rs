@@ -311,6 +311,29 @@ fn plan(args: &SweepArgs) -> Result<Plan, Vec<String>> {
         }),
         None => sweep.seeds.clone().unwrap_or_else(|| vec![1]),
     };
+    // The sweep names every group and sets every seed itself; an axis or a set over those
+    // keys would be replaced without a word.
+    let owned = |set: &str| {
+        let key = set.split_once('=').map_or(set, |(k, _)| k).trim();
+        matches!(key, "group.name" | "group.seed")
+    };
+    for axis in &sweep.axes {
+        for set in axis.values.iter().flat_map(|v| &v.sets) {
+            if owned(set) {
+                problems.push(format!(
+                    "axis '{}': '{set}': the sweep sets group.name and group.seed itself (use seeds for seeds)",
+                    axis.label
+                ));
+            }
+        }
+    }
+    for set in sweep.sets.iter().chain(&args.set) {
+        if owned(set) {
+            problems.push(format!(
+                "'{set}': the sweep sets group.name and group.seed itself (use seeds for seeds)"
+            ));
+        }
+    }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let jobs = args.jobs.or(sweep.jobs).unwrap_or(cores);
     if jobs == 0 {
