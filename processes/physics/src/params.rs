@@ -30,6 +30,17 @@ pub enum Precision {
     F64,
 }
 
+/// `robots`, refused when given empty: an empty list would silently mean the default robot.
+fn non_empty_robots<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<RobotSpec>, D::Error> {
+    let robots = Vec::<RobotSpec>::deserialize(d)?;
+    if robots.is_empty() {
+        return Err(serde::de::Error::custom(
+            "an empty list; give at least one robot, or leave 'robots' out for the convoy robot",
+        ));
+    }
+    Ok(robots)
+}
+
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Params {
@@ -54,7 +65,9 @@ pub struct Params {
     pub wheel_friction: f64,
     pub motor: MotorParams,
     pub pid: FirmwareParams,
-    /// Robots of any kind; replaces the top-level robot keys when given.
+    /// Robots of any kind; replaces the top-level robot keys when given (never empty: left
+    /// out, the top-level keys' convoy robot is used).
+    #[serde(deserialize_with = "non_empty_robots")]
     pub robots: Vec<RobotSpec>,
     /// Gravitational acceleration, m/s², along −z.
     pub gravity: f64,
@@ -231,6 +244,12 @@ mod tests {
         assert_eq!(specs[1].count, 2);
         assert_eq!(specs[0].joint_model(), crate::spec::JointModel::Multibody);
         assert_eq!(specs[1].joint_model(), crate::spec::JointModel::Impulse);
+    }
+
+    #[test]
+    fn an_empty_robot_list_is_an_error_not_the_default_robot() {
+        let e = parse(json!({"robots": []})).unwrap_err();
+        assert!(e.contains("robots") && e.contains("an empty list"), "{e}");
     }
 
     #[test]
