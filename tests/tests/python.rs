@@ -176,11 +176,13 @@ fn python_node_warns_that_it_does_not_emulate_links() {
 #[test]
 fn python_agent_with_bad_params_exits_2() {
     let root = workspace_root();
+    // Run outside a launcher, whose clean-up would otherwise remove what the nodes made.
+    let group = caravan_tests::TestGroup::new("py-bad");
     let run = |params: serde_json::Value| {
         Command::new(python_env())
             .arg(root.join("examples/python/follower.py"))
             .env("PYTHONPATH", root.join("python"))
-            .env("CARAVAN_GROUP", caravan_tests::unique_group("py-bad"))
+            .env("CARAVAN_GROUP", &group.name)
             .env("CARAVAN_NODE", "follower-2")
             .env("CARAVAN_PARAMS", params.to_string())
             .env("CARAVAN_LAUNCH_DIR", root.join("launch/convoy"))
