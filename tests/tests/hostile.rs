@@ -165,6 +165,19 @@ fn children(pid: u32) -> Vec<i32> {
         .collect()
 }
 
+/// Waits until `parent` has started a child, kills `parent` with SIGKILL and waits until that
+/// child (`what`) is gone too.
+fn assert_child_dies_with(mut parent: std::process::Child, what: &str) {
+    let mut child = 0;
+    wait_until(&format!("{what} runs"), || {
+        child = children(parent.id()).first().copied().unwrap_or(0);
+        child != 0
+    });
+    parent.kill().unwrap(); // SIGKILL
+    parent.wait().unwrap();
+    wait_until(&format!("{what} {child} is gone"), || !alive(child));
+}
+
 #[test]
 fn a_check_outlives_no_launcher_killed_outright() {
     // A program that does not understand CARAVAN_CHECK but is checked: its check blocks.
@@ -172,21 +185,14 @@ fn a_check_outlives_no_launcher_killed_outright() {
         "check-orphan",
         "clock = \"realtime\"\nduration = \"2s\"\n\n[[process]]\nname = \"sleeper\"\nexec = \"sleep\"\nargs = [\"300\"]\ncheck = true\n",
     );
-    let mut launcher = s.command(&[]).stderr(Stdio::null()).spawn().unwrap();
-    let mut check = 0;
-    wait_until("the check runs", || {
-        check = children(launcher.id()).first().copied().unwrap_or(0);
-        check != 0
-    });
-    launcher.kill().unwrap(); // SIGKILL
-    launcher.wait().unwrap();
-    wait_until(&format!("the check {check} is gone"), || !alive(check));
+    let launcher = s.command(&[]).stderr(Stdio::null()).spawn().unwrap();
+    assert_child_dies_with(launcher, "the check");
 }
 
 #[test]
 fn a_sweep_killed_outright_stops_its_launchers() {
     let s = Scenario::new("sweep-orphan", &realtime_ping_pong("60s"));
-    let mut sweep = Command::new(workspace_bin("caravan"))
+    let sweep = Command::new(workspace_bin("caravan"))
         .args([
             "sweep",
             s.file.to_str().unwrap(),
@@ -201,16 +207,7 @@ fn a_sweep_killed_outright_stops_its_launchers() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    let mut launcher = 0;
-    wait_until("the sweep's launcher runs", || {
-        launcher = children(sweep.id()).first().copied().unwrap_or(0);
-        launcher != 0
-    });
-    sweep.kill().unwrap(); // SIGKILL
-    sweep.wait().unwrap();
-    wait_until(&format!("the launcher {launcher} stops"), || {
-        !alive(launcher)
-    });
+    assert_child_dies_with(sweep, "the sweep's launcher");
 }
 
 #[test]

@@ -67,17 +67,9 @@ fn default_save_map() -> String {
 
 impl Params {
     fn validate(&self) -> Result<(), String> {
-        // Within a world (10 km at most) and a thousand turns.
-        if !self
-            .initial_pose
-            .iter()
-            .flatten()
-            .all(|v| v.abs() <= 10_000.0)
-        {
-            return Err(
-                "key 'initial_pose': must be three finite numbers [x, y, theta] within ±10000"
-                    .into(),
-            );
+        use caravan_world::limits::{MAX_WORLD_EXTENT_M, coordinate};
+        for (k, v) in self.initial_pose.iter().flatten().enumerate() {
+            coordinate(&format!("key 'initial_pose[{k}]'"), *v, MAX_WORLD_EXTENT_M)?;
         }
         // The map is written into the run directory, never beside or above it.
         let plain = self.save_map.is_empty()

@@ -130,16 +130,14 @@ pub fn load_map(yaml: &Path, out: &mut OccupancyGrid) -> Result<(), String> {
         }
     }
     let image = image.ok_or_else(|| err("missing `image`"))?;
-    // The same bounds as SLAM's own resolution: outside them cell arithmetic overflows.
+    let range = crate::slam::RESOLUTION_RANGE_M;
     let resolution = resolution
-        .filter(|r| (0.001..=10.0).contains(r))
-        .ok_or_else(|| err("missing `resolution`, or not in [0.001, 10] m"))?;
+        .filter(|r| range.contains(r))
+        .ok_or_else(|| err(&format!("missing `resolution`, or not in {range:?} m")))?;
     let origin = origin.ok_or_else(|| err("missing `origin`"))?;
-    if ![origin.x, origin.y, origin.theta]
-        .iter()
-        .all(|v| v.abs() <= 10_000.0)
-    {
-        return Err(err("origin: values must be finite numbers within ±10000"));
+    for v in [origin.x, origin.y, origin.theta] {
+        use caravan_world::limits::{MAX_WORLD_EXTENT_M, coordinate};
+        coordinate("origin", v, MAX_WORLD_EXTENT_M).map_err(|e| err(&e))?;
     }
 
     let pgm = yaml.parent().unwrap_or(Path::new("")).join(&image);

@@ -28,6 +28,11 @@ use crate::grid::OccupancyMap;
 use crate::matcher::{MatchField, MatchResult, match_scan, wrap_angle};
 use caravan_schemas::{LaserScan, MAP_MAX_SIDE, OccupancyGrid, Pose2D};
 use serde::Deserialize;
+use std::ops::RangeInclusive;
+
+/// The cell sizes a map may have, m: from 1 mm to 10 m; past these the map's arithmetic (cell
+/// indices, world extents) overflows. The map files read back are held to it too.
+pub const RESOLUTION_RANGE_M: RangeInclusive<f64> = 0.001..=10.0;
 
 /// Fewer valid points than this and the scan is not matched: the pose is the prediction.
 pub const MIN_POINTS: usize = 20;
@@ -115,9 +120,9 @@ impl SlamParams {
                 .then_some(())
                 .ok_or(format!("{name} must be in [{low}, {high}], got {v}"))
         };
-        // A cell from 1 mm to 10 m, ranges up to 10 km: past these the map's arithmetic
-        // (cell indices, world extents) overflows.
-        within(self.resolution, "resolution (m)", 0.001, 10.0)?;
+        // Ranges up to 10 km, cells within RESOLUTION_RANGE_M.
+        let (low, high) = (*RESOLUTION_RANGE_M.start(), *RESOLUTION_RANGE_M.end());
+        within(self.resolution, "resolution (m)", low, high)?;
         positive(self.map_update_distance_m, "map_update_distance_m")?;
         positive(self.map_update_angle_rad, "map_update_angle_rad")?;
         within(self.max_range_m, "max_range_m", f64::MIN_POSITIVE, 10_000.0)?;

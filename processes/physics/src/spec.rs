@@ -432,13 +432,12 @@ impl RobotSpec {
     }
 }
 
-/// A start pose's numbers: finite and within a world (at most 10 km across, caravan-world's
-/// limit).
+/// A start pose's numbers: finite and within a world (caravan-world's limit, which also bounds
+/// the angles well past any turn).
 pub fn check_pose_values(i: usize, pose: &[f64]) -> Result<(), String> {
-    if pose.iter().any(|v| !v.is_finite() || v.abs() > 10_000.0) {
-        return Err(format!(
-            "'poses[{i}]': values must be finite numbers within ±10000 (m, rad)"
-        ));
+    use caravan_world::limits::{MAX_WORLD_EXTENT_M, coordinate};
+    for (k, v) in pose.iter().enumerate() {
+        coordinate(&format!("'poses[{i}][{k}]'"), *v, MAX_WORLD_EXTENT_M)?;
     }
     Ok(())
 }

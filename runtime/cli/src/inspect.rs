@@ -107,9 +107,8 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
         } => {
             let group = choose_group(group.group.as_deref())?;
             let mut printed = 0;
-            follow(&group, &topic, None, |header, json| {
+            follow(&group, &topic, None, |header, mut json| {
                 // The recording's shape: the message's fields and its header.
-                let mut json = json.clone();
                 if let serde_json::Value::Object(fields) = &mut json {
                     let header = crate::record::schema::header_json(header, true);
                     fields.insert("header".into(), header);
@@ -141,10 +140,30 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
     }
 }
 
-/// Whether any process of `group` other than this one is alive.
-pub fn others_alive(group: &str) -> Result<bool> {
-    let me = std::process::id() as i32;
-    Ok(live_nodes(group)?.iter().any(|n| n.pid != me))
+/// Notices that a group has ended (no process of it but this one is alive), looking at most
+/// once a second: listing nodes is too dear for every message.
+pub struct GroupEnd {
+    group: String,
+    last_look: Instant,
+}
+
+impl GroupEnd {
+    pub fn watch(group: &str) -> Self {
+        Self {
+            group: group.to_string(),
+            last_look: Instant::now(),
+        }
+    }
+
+    /// Whether the group has ended, if a second has passed since the last look; else false.
+    pub fn ended(&mut self) -> Result<bool> {
+        if self.last_look.elapsed() < Duration::from_secs(1) {
+            return Ok(false);
+        }
+        self.last_look = Instant::now();
+        let me = std::process::id() as i32;
+        Ok(!live_nodes(&self.group)?.iter().any(|n| n.pid != me))
+    }
 }
 
 /// Calls `each` for every message on `topic` until it returns true, `limit` passes, the group
@@ -153,7 +172,7 @@ fn follow(
     group: &str,
     topic: &str,
     limit: Option<Duration>,
-    mut each: impl FnMut(&caravan::Header, &serde_json::Value) -> bool,
+    mut each: impl FnMut(&caravan::Header, serde_json::Value) -> bool,
 ) -> Result<()> {
     let (config, node) = iox(group)?;
     let info = list_topics(&config, true)?
@@ -171,7 +190,7 @@ fn follow(
         .map_err(|e| anyhow!("{e:?}"))?;
     let end = limit.map(|l| Instant::now() + l);
     let mut batch = Vec::new();
-    let mut last_look = Instant::now();
+    let mut group_end = GroupEnd::watch(group);
     loop {
         let wait = end.map_or(Duration::from_secs(1), |e| {
             e.saturating_duration_since(Instant::now())
@@ -188,15 +207,10 @@ fn follow(
         }
         let _ = listener.try_wait(|_| {});
         // Looked at before draining, so that what was published before the end is printed.
-        let ended = if last_look.elapsed() >= Duration::from_secs(1) {
-            last_look = Instant::now();
-            !others_alive(group)?
-        } else {
-            false
-        };
+        let ended = group_end.ended()?;
         tap.drain(&mut batch)?;
         for m in batch.drain(..) {
-            if each(&m.header, &m.json) {
+            if each(&m.header, m.json) {
                 return Ok(());
             }
         }

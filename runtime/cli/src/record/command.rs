@@ -42,18 +42,15 @@ pub fn record(args: RecordArgs) -> Result<()> {
     )?;
     let end = args.seconds.map(|s| Instant::now() + s);
     let config = caravan::group::config(&group)?;
-    let mut last_look = Instant::now();
+    let mut group_end = crate::inspect::GroupEnd::watch(&group);
     let mut ended = false;
     crate::run::driver::record_until(
         &config,
         &mut recorder,
         SignalHandlingMode::HandleTerminationRequests,
         |_| {
-            // The group's end stops the recording too, looked at once a second.
-            if last_look.elapsed() >= std::time::Duration::from_secs(1) {
-                last_look = Instant::now();
-                ended = !crate::inspect::others_alive(&group).unwrap_or(false);
-            }
+            // The group's end stops the recording too.
+            ended = ended || group_end.ended().unwrap_or(false);
             ended || end.is_some_and(|e| Instant::now() >= e)
         },
     )?;

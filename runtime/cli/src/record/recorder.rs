@@ -83,13 +83,17 @@ fn abandon(writer: McapWriter) {
     std::mem::forget(writer);
 }
 
+fn cannot_write(path: &Path) -> String {
+    format!("cannot write the recording {}", path.display())
+}
+
 /// Applies `op` to the writer; on failure abandons it and says which file could not be written.
 fn with_writer<T>(
     writer: &mut Option<McapWriter>,
     path: &Path,
     op: impl FnOnce(&mut McapWriter) -> mcap::McapResult<T>,
 ) -> Result<T> {
-    let cannot = || format!("cannot write the recording {}", path.display());
+    let cannot = || cannot_write(path);
     let w = writer
         .as_mut()
         .ok_or_else(|| anyhow::anyhow!("an earlier write failed"))
@@ -149,8 +153,7 @@ impl Recorder {
             options = options.compression_threads(0);
         }
         let writer = options.create(BufWriter::new(file));
-        let cannot = || format!("cannot write the recording {}", path.display());
-        let mut writer = Some(writer.with_context(cannot)?);
+        let mut writer = Some(writer.with_context(|| cannot_write(path))?);
         if !meta.metadata.is_empty() {
             let record = mcap::records::Metadata {
                 name: "run".into(),
@@ -399,8 +402,9 @@ impl Recorder {
         if let Some(w) = self.writer.take() {
             // The last bytes leave the buffer here; a full disk must not pass unseen.
             use std::io::Write;
-            let cannot = || format!("cannot write the recording {}", self.path.display());
-            w.into_inner().flush().with_context(cannot)?;
+            w.into_inner()
+                .flush()
+                .with_context(|| cannot_write(&self.path))?;
         }
         Ok(Recording {
             topics: self.stats,

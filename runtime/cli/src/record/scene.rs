@@ -237,29 +237,12 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
 }
 
 /// The Foxglove topics a raw topic of `type_name` gives, known before its first message so that
-/// the channels exist from the start.
+/// the channels exist from the start: the views of an empty message, so the two cannot differ.
 pub fn topics_of(topic: &str, type_name: &str) -> Vec<(String, fn() -> SceneSchema)> {
-    let own = format!("foxglove/{topic}");
-    let tf = (
-        TF_TOPIC.to_string(),
-        schema_of::<FrameTransforms> as fn() -> SceneSchema,
-    );
-    let robot = robot_topic(topic);
-    match type_name {
-        "caravan::Pose2D" => {
-            let mut out = vec![(own, schema_of::<PoseInFrame> as fn() -> SceneSchema)];
-            if matches!(robot, Some((_, "pose" | "pose_true"))) {
-                out.push(tf);
-            }
-            out
-        }
-        "caravan::Odometry" | "caravan::Goal" => vec![(own, schema_of::<PoseInFrame>)],
-        "caravan::Path2D" => vec![(own, schema_of::<PosesInFrame>)],
-        "caravan::LaserScan" => vec![(own, schema_of::<LaserScan>)],
-        "caravan::OccupancyGrid" => vec![(own, schema_of::<Grid>)],
-        "caravan::LinkStates" if robot.is_some() => vec![tf],
-        _ => Vec::new(),
-    }
+    views(topic, type_name, &Value::Null, 0)
+        .into_iter()
+        .map(|v| (v.topic, v.schema))
+        .collect()
 }
 
 #[cfg(test)]

@@ -33,11 +33,13 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
             continue;
         }
         let name = plan.spec.name.clone();
-        let mut command = plan.command(&env);
-        // A check holds no shared memory, and one blocked in a read (a FIFO for a world
-        // file) would sit out a SIGTERM: it is killed outright if the launcher dies.
-        super::supervisor::die_with_parent(&mut command, libc::SIGKILL);
-        let child = command.stdout(Stdio::null()).stderr(Stdio::piped()).spawn();
+        // A check holds no shared memory, and one blocked in a read would sit out a SIGTERM:
+        // it is killed outright if the launcher dies.
+        let child = plan
+            .command(&env, libc::SIGKILL)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn();
         match child {
             Ok(child) => {
                 let (tx, rx) = bounded(1);

@@ -82,8 +82,8 @@ pub struct Planned {
 impl Planned {
     /// The command that starts the process: its program, arguments and environment (`env`,
     /// what every process of the group gets, then its own), stdin closed, in a process group of
-    /// its own that ends with the launcher.
-    pub fn command(&self, env: &BTreeMap<String, String>) -> Command {
+    /// its own that gets `parent_death` when the launcher dies.
+    pub fn command(&self, env: &BTreeMap<String, String>, parent_death: libc::c_int) -> Command {
         let spec = &self.spec;
         let mut cmd = Command::new(&self.program);
         cmd.args(&self.args)
@@ -97,9 +97,9 @@ impl Planned {
             // order instead of every process racing to exit; and stopping the group signals
             // whatever the process started too.
             .process_group(0);
-        // If the launcher is killed (even with SIGKILL) its processes get SIGTERM and exit
-        // cleanly instead of living on as orphans holding the group's shared memory.
-        die_with_parent(&mut cmd, libc::SIGTERM);
+        // If the launcher is killed (even with SIGKILL) its processes get the signal instead
+        // of living on as orphans holding the group's shared memory.
+        die_with_parent(&mut cmd, parent_death);
         if let Some(rate) = &spec.rate {
             cmd.env(caravan::env_vars::RATE, rate);
         }
@@ -110,8 +110,7 @@ impl Planned {
     }
 }
 
-/// Has `cmd`'s process receive `signal` when the thread that started it (the launcher's)
-/// dies, however it dies. A later call on the same command overrides an earlier one.
+/// Has `cmd`'s process receive `signal` when the thread that started it dies, however it dies.
 pub fn die_with_parent(cmd: &mut Command, signal: libc::c_int) {
     // SAFETY: prctl is async-signal-safe; it only sets this child's parent-death signal.
     unsafe {
@@ -213,7 +212,8 @@ impl Supervisor {
         let p = &mut self.procs[index];
         let mut child = p
             .plan
-            .command(&self.env)
+            // SIGTERM: a node stops cleanly, leaving its shared memory to the clean-up.
+            .command(&self.env, libc::SIGTERM)
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()?;
