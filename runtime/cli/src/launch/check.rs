@@ -97,12 +97,38 @@ impl<'a> Checker<'a> {
     }
 
     pub fn key_problem(&mut self, s: &Scope, key: &str, message: impl fmt::Display) {
+        self.problem_below(s, key, &[], message);
+    }
+
+    /// A problem at `below` inside the value of `key` (a param deep in `params`), named by key.
+    pub fn problem_below(
+        &mut self,
+        s: &Scope,
+        key: &str,
+        below: &[Seg],
+        message: impl fmt::Display,
+    ) {
         let what = if s.label.is_empty() {
             format!("key '{key}': {message}")
         } else {
             format!("{}, key '{key}': {message}", s.label)
         };
-        self.problem(&s.at(key), what);
+        let mut at = s.at(key);
+        at.extend_from_slice(below);
+        self.problem(&at, what);
+    }
+
+    /// A process's or report's `params` as JSON (an empty object when absent or wrong, the
+    /// latter reported at the value that cannot be passed).
+    pub fn params(&mut self, s: &Scope) -> serde_json::Value {
+        let empty = || serde_json::Value::Object(Default::default());
+        let Some(item) = s.get("params") else {
+            return empty();
+        };
+        super::convert::params(item).unwrap_or_else(|e| {
+            self.problem_below(s, "params", &e.below, e.message);
+            empty()
+        })
     }
 
     pub fn scope_problem(&mut self, s: &Scope, message: impl fmt::Display) {

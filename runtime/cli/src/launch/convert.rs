@@ -1,6 +1,7 @@
 //! Converters: an item of the document to a typed value, or a message saying what was expected.
 
 use super::model::Restart;
+use super::overrides::Seg;
 use super::suggest;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -130,9 +131,26 @@ pub fn env(item: &Item) -> Result<BTreeMap<String, String>, String> {
 /// which Linux limits to 128 KiB (MAX_ARG_STRLEN).
 pub const MAX_PARAMS_BYTES: usize = 120_000;
 
-pub fn params(item: &Item) -> Result<serde_json::Value, String> {
+/// A params value that cannot be passed, and where it sits below `params` (so that a `--set`
+/// which wrote it takes the blame, not the file's `params` line).
+#[derive(Debug)]
+pub struct ParamsError {
+    pub below: Vec<Seg>,
+    pub message: String,
+}
+
+impl From<String> for ParamsError {
+    fn from(message: String) -> Self {
+        ParamsError {
+            below: Vec::new(),
+            message,
+        }
+    }
+}
+
+pub fn params(item: &Item) -> Result<serde_json::Value, ParamsError> {
     if !item.is_table_like() {
-        return Err(expected("a table", item));
+        return Err(expected("a table", item).into());
     }
     let value = to_json(item, "params")?;
     let size = value.to_string().len();
@@ -146,24 +164,39 @@ pub fn params(item: &Item) -> Result<serde_json::Value, String> {
         return Err(format!(
             "the params take {size} bytes as JSON{}, more than the {MAX_PARAMS_BYTES} a process's environment holds; put large data in a file and name the file in params",
             largest.unwrap_or_default()
-        ));
+        )
+        .into());
     }
     Ok(value)
 }
 
 /// Params are handed to nodes as JSON; TOML datetimes become strings.
-pub fn to_json(item: &Item, at: &str) -> Result<serde_json::Value, String> {
+pub fn to_json(item: &Item, at: &str) -> Result<serde_json::Value, ParamsError> {
     use serde_json::Value as J;
-    let table = |t: &dyn TableLike| -> Result<J, String> {
+    let below = |seg: Seg| {
+        move |mut e: ParamsError| {
+            e.below.insert(0, seg);
+            e
+        }
+    };
+    let table = |t: &dyn TableLike| -> Result<J, ParamsError> {
         t.iter()
-            .map(|(k, v)| Ok((k.to_string(), to_json(v, &format!("{at}.{k}"))?)))
-            .collect::<Result<serde_json::Map<_, _>, String>>()
+            .map(|(k, v)| {
+                let value = to_json(v, &format!("{at}.{k}")).map_err(below(Seg::Key(k.into())))?;
+                Ok((k.to_string(), value))
+            })
+            .collect::<Result<serde_json::Map<_, _>, _>>()
             .map(J::Object)
     };
     Ok(match item {
         Item::None => J::Null,
         Item::Table(t) => table(t)?,
-        Item::ArrayOfTables(a) => J::Array(a.iter().map(|t| table(t)).collect::<Result<_, _>>()?),
+        Item::ArrayOfTables(a) => J::Array(
+            a.iter()
+                .enumerate()
+                .map(|(i, t)| table(t).map_err(below(Seg::Index(i))))
+                .collect::<Result<_, _>>()?,
+        ),
         Item::Value(v) => match v {
             Value::String(s) => J::String(s.value().clone()),
             Value::Integer(i) => J::from(*i.value()),
@@ -174,7 +207,10 @@ pub fn to_json(item: &Item, at: &str) -> Result<serde_json::Value, String> {
             Value::Datetime(d) => J::String(d.value().to_string()),
             Value::Array(a) => J::Array(
                 a.iter()
-                    .map(|v| to_json(&Item::Value(v.clone()), at))
+                    .enumerate()
+                    .map(|(i, v)| {
+                        to_json(&Item::Value(v.clone()), at).map_err(below(Seg::Index(i)))
+                    })
                     .collect::<Result<_, _>>()?,
             ),
             Value::InlineTable(t) => table(t)?,

@@ -326,9 +326,7 @@ impl Checker<'_> {
             host: host.unwrap_or_else(|| ProcessSpec::DEFAULT_HOST.to_string()),
             rate,
             on,
-            params: self
-                .get(s, "params", params)
-                .unwrap_or_else(|| serde_json::Value::Object(Default::default())),
+            params: self.params(s),
             restart: self.get(s, "restart", restart).unwrap_or_default(),
             restart_backoff: self
                 .get(s, "restart_backoff", duration)
@@ -356,9 +354,7 @@ impl Checker<'_> {
             let exec = self.exec(&s, &source.dir);
             reports.push(ReportSpec {
                 exec: exec.unwrap_or(Exec::Command(Vec::new())),
-                params: self
-                    .get(&s, "params", params)
-                    .unwrap_or_else(|| serde_json::Value::Object(Default::default())),
+                params: self.params(&s),
                 launch_dir: source.abs_dir.clone(),
             });
         }

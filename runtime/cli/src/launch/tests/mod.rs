@@ -428,6 +428,38 @@ fn launch_bad_override() {
     );
 }
 
+/// A value that cannot be passed is blamed where it was written: on the `--set` that wrote it,
+/// or on the file's line, with the path inside `params` named.
+#[test]
+fn launch_nan_param_is_blamed_on_its_writer() {
+    let text = BASE.replace(
+        "on = \"robot/0/scan\"",
+        "on = \"robot/0/scan\"\nparams = { k = 1.0 }",
+    );
+    let lines = errors(&text, &["process.planner.params.gain=nan"]);
+    assert_eq!(
+        lines,
+        [
+            "--set process.planner.params.gain=nan: process 'planner', key 'params': params.gain: NaN cannot be passed as a parameter"
+        ]
+    );
+    let lines = errors(&text, &["process.planner.params.deep.list=[1.0, inf]"]);
+    assert_eq!(
+        lines,
+        [
+            "--set process.planner.params.deep.list=[1.0, inf]: process 'planner', key 'params': params.deep.list: inf cannot be passed as a parameter"
+        ]
+    );
+    let lines = errors(
+        &text.replace("k = 1.0", "k = nan"),
+        &["process.planner.params.gain=2"],
+    );
+    assert_eq!(
+        lines,
+        ["FILE:23: process 'planner', key 'params': params.k: NaN cannot be passed as a parameter"]
+    );
+}
+
 #[test]
 fn launch_unknown_host() {
     let lines = errors(&edited("host = \"sim\"", "host = \"sym\""), &[]);
