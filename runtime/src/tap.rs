@@ -153,3 +153,61 @@ pub fn open_tap(
         ))
     })
 }
+
+/// Who is on a topic, as its shared-memory service records it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TopicPorts {
+    /// Lossless (publishers wait for room) or latest (the oldest message is overwritten).
+    pub lossless: bool,
+    /// Messages a subscriber's buffer holds.
+    pub depth: usize,
+    /// The iceoryx2 node of each publisher, one entry per port.
+    pub publishers: Vec<iceoryx2::identifiers::UniqueNodeId>,
+    /// The iceoryx2 node of each subscriber, one entry per port.
+    pub subscribers: Vec<iceoryx2::identifiers::UniqueNodeId>,
+}
+
+/// The ports of `topic`, whose payload type is named `type_name`. Only the service is opened:
+/// no port is made, so looking does not change what the group's publishers wait for.
+pub fn topic_ports(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    type_name: &str,
+) -> Result<TopicPorts, Error> {
+    fn ports<T: Message>(
+        iox: &iceoryx2::node::Node<ipc::Service>,
+        topic: &str,
+    ) -> Result<TopicPorts, Error> {
+        let service = iox
+            .service_builder(&transport::service_name(topic)?)
+            .publish_subscribe::<T>()
+            .user_header::<Header>()
+            .open()
+            .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))?;
+        let config = service.static_config();
+        let mut ports = TopicPorts {
+            lossless: !config.has_safe_overflow(),
+            depth: config.subscriber_max_buffer_size(),
+            publishers: Vec::new(),
+            subscribers: Vec::new(),
+        };
+        let dynamic = service.dynamic_config();
+        dynamic.list_publishers(|p| {
+            ports.publishers.push(p.node_id);
+            CallbackProgression::Continue
+        });
+        dynamic.list_subscribers(|s| {
+            ports.subscribers.push(s.node_id);
+            CallbackProgression::Continue
+        });
+        Ok(ports)
+    }
+    caravan_schemas::with_message_type!(type_name, |T| ports::<T>(iox, topic)).unwrap_or_else(
+        || {
+            Err(Error::topic(
+                topic,
+                format!("unknown message type '{type_name}'"),
+            ))
+        },
+    )
+}

@@ -305,6 +305,25 @@ impl Scenario {
         self.command(extra).output().unwrap()
     }
 
+    /// Starts the group in realtime for ten minutes and returns once `nodes` of its processes
+    /// have joined (the launcher not counted).
+    pub fn start_realtime(&self, nodes: usize) -> Child {
+        let child = self
+            .command(&["--clock", "realtime", "--duration", "10min"])
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        wait_until("the group's nodes run", || {
+            let out = caravan(&["node", "list", "--group", &self.group.name]);
+            String::from_utf8_lossy(&out.stdout)
+                .lines()
+                .filter(|l| !l.starts_with("(launcher)"))
+                .count()
+                >= nodes
+        });
+        child
+    }
+
     pub fn run_dirs(&self) -> Vec<std::path::PathBuf> {
         let mut dirs: Vec<std::path::PathBuf> = std::fs::read_dir(self.dir.join("runs"))
             .map(|rd| rd.flatten().map(|e| e.path()).collect())

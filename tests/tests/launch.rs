@@ -2,7 +2,7 @@
 
 use caravan_tests::{PINGPONG, Scenario, caravan, ping_pong, recording, wait_until};
 use std::path::Path;
-use std::process::{Child, Output, Stdio};
+use std::process::Output;
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).to_string()
@@ -194,54 +194,10 @@ fn failed_required_process_fails_the_group() {
     assert!(s.shm_entries().is_empty());
 }
 
-fn start_realtime_group(s: &Scenario) -> Child {
-    let child = s
-        .command(&["--clock", "realtime", "--duration", "10min"])
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    wait_until("all four nodes run", || {
-        let out = caravan(&["node", "list", "--group", &s.group.name]);
-        String::from_utf8_lossy(&out.stdout)
-            .lines()
-            .filter(|l| !l.starts_with("(launcher)"))
-            .count()
-            >= 4
-    });
-    child
-}
-
-#[test]
-fn topic_echo_without_a_count_exits_when_its_group_ends() {
-    let s = Scenario::new("echo-end", PINGPONG);
-    let group = start_realtime_group(&s);
-    let echo = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
-        .args(["topic", "echo", "demo/ping", "--group", &s.group.name])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let pid = format!("pid {}", echo.id());
-    wait_until("topic echo joins the group", || {
-        let out = caravan(&["node", "list", "--group", &s.group.name]);
-        String::from_utf8_lossy(&out.stdout).contains(&pid)
-    });
-    // SAFETY: signalling our own child.
-    unsafe { libc::kill(group.id() as i32, libc::SIGTERM) };
-    assert!(group.wait_with_output().unwrap().status.success());
-    let mut echo = echo;
-    wait_until("topic echo exits after its group ended", || {
-        echo.try_wait().unwrap().is_some()
-    });
-    let out = echo.wait_with_output().unwrap();
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(stderr(&out).contains("has ended"), "{}", stderr(&out));
-}
-
 #[test]
 fn sigterm_stops_the_group_cleanly() {
     let s = Scenario::new("sigterm", PINGPONG);
-    let child = start_realtime_group(&s);
+    let child = s.start_realtime(4);
     // SAFETY: signalling our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
     let out = child.wait_with_output().unwrap();
@@ -256,97 +212,10 @@ fn sigterm_stops_the_group_cleanly() {
 }
 
 #[test]
-fn inspection_commands_see_a_running_group() {
-    let s = Scenario::new("inspect", PINGPONG);
-    let child = start_realtime_group(&s);
-    let g = s.group.name.as_str();
-    let list =
-        String::from_utf8_lossy(&caravan(&["topic", "list", "--group", g]).stdout).to_string();
-    assert!(
-        list.contains("demo/ping") && list.contains("caravan::Pose2D"),
-        "{list}"
-    );
-    let json: serde_json::Value =
-        serde_json::from_slice(&caravan(&["topic", "list", "--json", "--group", g]).stdout)
-            .unwrap();
-    let ping = json
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|t| t["name"] == "demo/ping");
-    assert_eq!(ping.unwrap()["type"], "caravan::Pose2D", "{json}");
-    let json: serde_json::Value =
-        serde_json::from_slice(&caravan(&["node", "list", "--json", "--group", g]).stdout).unwrap();
-    assert!(
-        json.as_array().unwrap().iter().any(|n| n["name"] == "pong"),
-        "{json}"
-    );
-    let echo = caravan(&["topic", "echo", "demo/pong", "-n", "3", "--group", g]);
-    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&echo.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
-    assert_eq!(lines.len(), 3);
-    assert!(
-        lines
-            .iter()
-            .all(|l| l["x"].as_f64().unwrap() % 2.0 == 0.0 && l["header"]["source_id"].is_string())
-    );
-    let hz = String::from_utf8_lossy(
-        &caravan(&["topic", "hz", "demo/ping", "--seconds", "2", "--group", g]).stdout,
-    )
-    .to_string();
-    assert!(hz.contains("demo/ping:") && hz.contains("Hz"), "{hz}");
-    let mcap = s.dir.join("manual.mcap");
-    let rec = caravan(&[
-        "record",
-        "demo/sum",
-        "-o",
-        mcap.to_str().unwrap(),
-        "--seconds",
-        "2",
-        "--group",
-        g,
-    ]);
-    assert!(rec.status.success(), "{}", stderr(&rec));
-    let bytes = std::fs::read(&mcap).unwrap();
-    let topics: Vec<String> = mcap::MessageStream::new(&bytes)
-        .unwrap()
-        .map(|m| m.unwrap().channel.topic.clone())
-        .collect();
-    assert!(topics.iter().any(|t| t == "demo/sum"), "{topics:?}");
-    assert!(
-        topics.iter().all(|t| t.ends_with("demo/sum")),
-        "the raw topic and its Foxglove view only: {topics:?}"
-    );
-    // `caravan info` reads it back from its summary.
-    let info = caravan(&["info", "--json", mcap.to_str().unwrap()]);
-    assert!(info.status.success(), "{}", stderr(&info));
-    let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
-    assert_eq!(info["indexed"], true);
-    let sum = info["channels"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|c| c["topic"] == "demo/sum");
-    assert_eq!(
-        sum.unwrap()["messages"].as_u64(),
-        Some(topics.iter().filter(|t| *t == "demo/sum").count() as u64)
-    );
-    assert!(
-        info["metadata"]["run"]["wall_clock_start_ns"].is_string(),
-        "{info}"
-    );
-    // SAFETY: signalling our own child.
-    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    assert!(child.wait_with_output().unwrap().status.success());
-}
-
-#[test]
 fn kill_9_of_a_member_or_the_launcher_leaves_no_shared_memory() {
     // A member: the launcher notices, stops the group and cleans up.
     let s = Scenario::new("kill-member", PINGPONG);
-    let child = start_realtime_group(&s);
+    let child = s.start_realtime(4);
     let nodes = caravan(&["node", "list", "--group", &s.group.name]);
     let pong_pid: i32 = String::from_utf8_lossy(&nodes.stdout)
         .lines()
@@ -362,7 +231,7 @@ fn kill_9_of_a_member_or_the_launcher_leaves_no_shared_memory() {
 
     // The launcher: its processes get SIGTERM from the kernel; `caravan clean` sweeps the rest.
     let s = Scenario::new("kill-launcher", PINGPONG);
-    let mut child = start_realtime_group(&s);
+    let mut child = s.start_realtime(4);
     child.kill().unwrap();
     child.wait().unwrap();
     wait_until("the group's processes are gone", || {

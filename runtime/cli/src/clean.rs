@@ -4,10 +4,11 @@ use anyhow::{Result, anyhow};
 use iceoryx2::node::{NodeState, NodeView};
 use iceoryx2::prelude::*;
 
-/// A live node of a group: its name and process id.
+/// A live node of a group: its name, process id and iceoryx2 id.
 pub struct LiveNode {
     pub name: String,
     pub pid: i32,
+    pub id: iceoryx2::identifiers::UniqueNodeId,
 }
 
 /// The nodes of `group` whose processes are alive.
@@ -21,6 +22,7 @@ pub fn live_nodes(group: &str) -> Result<Vec<LiveNode>> {
             nodes.push(LiveNode {
                 name: details.name().to_string(),
                 pid: details.process_id().value(),
+                id: *view.id(),
             });
         }
         CallbackProgression::Continue

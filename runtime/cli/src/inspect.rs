@@ -1,4 +1,4 @@
-//! `caravan topic …` and `caravan node list`: looking into a running group.
+//! `caravan topic …` and `caravan node …`: looking into a running group.
 
 use crate::clean::{choose_group, live_nodes};
 use anyhow::{Result, anyhow};
@@ -49,6 +49,15 @@ pub enum TopicCommand {
         #[arg(long, short = 'n', value_parser = clap::value_parser!(u64).range(1..))]
         count: Option<u64>,
     },
+    /// Show a topic's type, delivery contract, publishers and subscribers
+    Info {
+        topic: String,
+        #[command(flatten)]
+        group: GroupArg,
+        /// Print JSON instead of text
+        #[arg(long)]
+        json: bool,
+    },
     /// Measure a topic's publishing rate
     Hz {
         topic: String,
@@ -64,9 +73,18 @@ pub enum TopicCommand {
 pub enum NodeCommand {
     /// List the group's live nodes
     List(ListArgs),
+    /// Show a node's process, the topics it publishes and subscribes, and its last status
+    Info {
+        name: String,
+        #[command(flatten)]
+        group: GroupArg,
+        /// Print JSON instead of text
+        #[arg(long)]
+        json: bool,
+    },
 }
 
-fn iox(group: &str) -> Result<(iceoryx2::config::Config, iceoryx2::node::Node<ipc::Service>)> {
+pub fn iox(group: &str) -> Result<(iceoryx2::config::Config, iceoryx2::node::Node<ipc::Service>)> {
     let config = caravan::group::config(group)?;
     let node = NodeBuilder::new()
         .config(&config)
@@ -118,6 +136,9 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
                 count.is_some_and(|c| printed >= c)
             })
         }
+        TopicCommand::Info { topic, group, json } => {
+            crate::graph::topic_info(&choose_group(group.group.as_deref())?, &topic, json)
+        }
         TopicCommand::Hz {
             topic,
             group,
@@ -168,7 +189,7 @@ impl GroupEnd {
 
 /// Calls `each` for every message on `topic` until it returns true, `limit` passes, the group
 /// ends (looked at once a second) or Ctrl-C.
-fn follow(
+pub fn follow(
     group: &str,
     topic: &str,
     limit: Option<Duration>,
@@ -249,6 +270,9 @@ pub fn node(cmd: NodeCommand) -> Result<()> {
                 );
             }
             Ok(())
+        }
+        NodeCommand::Info { name, group, json } => {
+            crate::graph::node_info(&choose_group(group.group.as_deref())?, &name, json)
         }
     }
 }

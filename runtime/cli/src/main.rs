@@ -2,6 +2,7 @@
 
 mod bench;
 mod clean;
+mod graph;
 mod inspect;
 mod launch;
 mod record;
@@ -9,6 +10,7 @@ mod report;
 mod run;
 mod schemas_py;
 mod sweep;
+mod top;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -36,6 +38,8 @@ enum Command {
     /// Nodes of a running group
     #[command(subcommand)]
     Node(inspect::NodeCommand),
+    /// A live table of a group's nodes: rate, deadline misses, jitter, compute time, CPU, memory
+    Top(top::TopArgs),
     /// Record a running group's topics to an MCAP file
     Record(record::command::RecordArgs),
     /// What a recording holds: time span, channels with schema and count, metadata
@@ -53,6 +57,8 @@ enum Command {
     Bench(bench::BenchCommand),
     /// Message layouts for other languages: a Python module (--python) or JSON (--layout)
     Schemas(schemas_py::SchemasArgs),
+    /// Print a shell completion script: `source <(caravan completions bash)`
+    Completions { shell: clap_complete::Shell },
 }
 
 fn main() -> ExitCode {
@@ -85,6 +91,17 @@ fn main() -> ExitCode {
         Command::Clean(args) => clean::clean(&args).map(|_| ExitCode::SUCCESS),
         Command::Bench(cmd) => bench::run(cmd).map(|_| ExitCode::SUCCESS),
         Command::Schemas(args) => schemas_py::run(&args).map(|_| ExitCode::SUCCESS),
+        Command::Top(args) => top::top(&args).map(|_| ExitCode::SUCCESS),
+        Command::Completions { shell } => {
+            use clap::CommandFactory;
+            clap_complete::generate(
+                shell,
+                &mut Cli::command(),
+                "caravan",
+                &mut std::io::stdout(),
+            );
+            Ok(ExitCode::SUCCESS)
+        }
     };
     result.unwrap_or_else(|e| {
         eprintln!("caravan: {e:#}");

@@ -1,0 +1,235 @@
+//! The inspection commands (`topic`, `node`, `top`, `record`, `info`, `completions`) against
+//! real running groups.
+
+use caravan_tests::{PINGPONG, Scenario, caravan, wait_until};
+use std::process::{Output, Stdio};
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+fn json_of(out: &Output) -> serde_json::Value {
+    assert!(out.status.success(), "{}", stderr(out));
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!("{e}: {}", String::from_utf8_lossy(&out.stdout));
+    })
+}
+
+#[test]
+fn topic_echo_without_a_count_exits_when_its_group_ends() {
+    let s = Scenario::new("echo-end", PINGPONG);
+    let group = s.start_realtime(4);
+    let echo = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
+        .args(["topic", "echo", "demo/ping", "--group", &s.group.name])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = format!("pid {}", echo.id());
+    wait_until("topic echo joins the group", || {
+        let out = caravan(&["node", "list", "--group", &s.group.name]);
+        String::from_utf8_lossy(&out.stdout).contains(&pid)
+    });
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(group.id() as i32, libc::SIGTERM) };
+    assert!(group.wait_with_output().unwrap().status.success());
+    let mut echo = echo;
+    wait_until("topic echo exits after its group ended", || {
+        echo.try_wait().unwrap().is_some()
+    });
+    let out = echo.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("has ended"), "{}", stderr(&out));
+}
+
+#[test]
+fn inspection_commands_see_a_running_group() {
+    let s = Scenario::new("inspect", PINGPONG);
+    let child = s.start_realtime(4);
+    let g = s.group.name.as_str();
+    let list =
+        String::from_utf8_lossy(&caravan(&["topic", "list", "--group", g]).stdout).to_string();
+    assert!(
+        list.contains("demo/ping") && list.contains("caravan::Pose2D"),
+        "{list}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&caravan(&["topic", "list", "--json", "--group", g]).stdout)
+            .unwrap();
+    let ping = json
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["name"] == "demo/ping");
+    assert_eq!(ping.unwrap()["type"], "caravan::Pose2D", "{json}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&caravan(&["node", "list", "--json", "--group", g]).stdout).unwrap();
+    assert!(
+        json.as_array().unwrap().iter().any(|n| n["name"] == "pong"),
+        "{json}"
+    );
+    let echo = caravan(&["topic", "echo", "demo/pong", "-n", "3", "--group", g]);
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&echo.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3);
+    assert!(
+        lines
+            .iter()
+            .all(|l| l["x"].as_f64().unwrap() % 2.0 == 0.0 && l["header"]["source_id"].is_string())
+    );
+    let hz = String::from_utf8_lossy(
+        &caravan(&["topic", "hz", "demo/ping", "--seconds", "2", "--group", g]).stdout,
+    )
+    .to_string();
+    assert!(hz.contains("demo/ping:") && hz.contains("Hz"), "{hz}");
+    let mcap = s.dir.join("manual.mcap");
+    let rec = caravan(&[
+        "record",
+        "demo/sum",
+        "-o",
+        mcap.to_str().unwrap(),
+        "--seconds",
+        "2",
+        "--group",
+        g,
+    ]);
+    assert!(rec.status.success(), "{}", stderr(&rec));
+    let bytes = std::fs::read(&mcap).unwrap();
+    let topics: Vec<String> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap().channel.topic.clone())
+        .collect();
+    assert!(topics.iter().any(|t| t == "demo/sum"), "{topics:?}");
+    assert!(
+        topics.iter().all(|t| t.ends_with("demo/sum")),
+        "the raw topic and its Foxglove view only: {topics:?}"
+    );
+    // `caravan info` reads it back from its summary.
+    let info = caravan(&["info", "--json", mcap.to_str().unwrap()]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    assert_eq!(info["indexed"], true);
+    let sum = info["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["topic"] == "demo/sum");
+    assert_eq!(
+        sum.unwrap()["messages"].as_u64(),
+        Some(topics.iter().filter(|t| *t == "demo/sum").count() as u64)
+    );
+    assert!(
+        info["metadata"]["run"]["wall_clock_start_ns"].is_string(),
+        "{info}"
+    );
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(child.wait_with_output().unwrap().status.success());
+}
+
+#[test]
+fn topic_info_node_info_and_top_describe_a_running_group() {
+    let s = Scenario::new("graph", PINGPONG);
+    let child = s.start_realtime(4);
+    let g = s.group.name.as_str();
+
+    // demo/ping: ping publishes, pong subscribes (as does the launcher's recorder).
+    let info = json_of(&caravan(&[
+        "topic",
+        "info",
+        "demo/ping",
+        "--json",
+        "--group",
+        g,
+    ]));
+    assert_eq!(info["type"], "caravan::Pose2D", "{info}");
+    let names = |list: &serde_json::Value| -> Vec<String> {
+        list.as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["node"].as_str().unwrap().to_string())
+            .collect()
+    };
+    assert_eq!(names(&info["publishers"]), ["ping"], "{info}");
+    assert!(
+        names(&info["subscribers"]).contains(&"pong".to_string()),
+        "{info}"
+    );
+    let text = caravan(&["topic", "info", "demo/ping", "--group", g]);
+    let text = String::from_utf8_lossy(&text.stdout).to_string();
+    assert!(
+        text.contains("Publishers: 1") && text.contains("ping (pid"),
+        "{text}"
+    );
+
+    // pong subscribes to demo/ping, publishes demo/pong and its status.
+    let pong = json_of(&caravan(&["node", "info", "pong", "--json", "--group", g]));
+    let topics = |key: &str| -> Vec<String> {
+        pong[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t["name"].as_str().unwrap().to_string())
+            .collect()
+    };
+    assert_eq!(topics("subscribes"), ["demo/ping"], "{pong}");
+    assert_eq!(topics("publishes"), ["demo/pong", "status"], "{pong}");
+    assert_eq!(pong["status"]["node"], "pong", "{pong}");
+    assert!(pong["status"]["steps"].as_u64().unwrap() > 0, "{pong}");
+
+    // top: one row per process, each stepping at its own rate.
+    let top = json_of(&caravan(&["top", "--once", "--json", "--group", g]));
+    let rows = top.as_array().unwrap();
+    let mut nodes: Vec<&str> = rows.iter().map(|r| r["node"].as_str().unwrap()).collect();
+    nodes.sort();
+    assert_eq!(nodes, ["noise", "ping", "pong", "sum"], "{top}");
+    for r in rows {
+        assert!(r["pid"].as_i64().unwrap() > 0, "{r}");
+        assert!(r["rss_kib"].as_u64().unwrap() > 0, "{r}");
+    }
+    let sum = rows.iter().find(|r| r["node"] == "sum").unwrap();
+    let ping = rows.iter().find(|r| r["node"] == "ping").unwrap();
+    // sum runs at 20 Hz and ping at 10 Hz: sum's rate is the higher whatever the load.
+    assert!(
+        sum["steps_per_s"].as_f64().unwrap() > ping["steps_per_s"].as_f64().unwrap(),
+        "{top}"
+    );
+
+    // Unknown names are errors that say what exists.
+    let out = caravan(&["node", "info", "pnog", "--group", g]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("did you mean 'pong'?"),
+        "{}",
+        stderr(&out)
+    );
+    let out = caravan(&["topic", "info", "demo/pnig", "--group", g]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("no topic 'demo/pnig'"),
+        "{}",
+        stderr(&out)
+    );
+
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(child.wait_with_output().unwrap().status.success());
+    assert!(s.shm_entries().is_empty());
+}
+
+#[test]
+fn completions_are_printed_for_each_shell_and_an_unknown_shell_is_refused() {
+    for shell in ["bash", "zsh", "fish"] {
+        let out = caravan(&["completions", shell]);
+        assert!(out.status.success(), "{shell}: {}", stderr(&out));
+        let script = String::from_utf8_lossy(&out.stdout);
+        for sub in ["launch", "topic", "top", "info"] {
+            assert!(script.contains(sub), "{shell} completes {sub}");
+        }
+    }
+    let out = caravan(&["completions", "tcsh"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("tcsh"), "{}", stderr(&out));
+}
