@@ -24,6 +24,7 @@ mod error;
 mod executor;
 pub mod group;
 mod identity;
+pub mod inject;
 pub mod input;
 pub mod lockstep;
 pub mod network;

@@ -9,6 +9,7 @@ mod articulated;
 pub mod describe;
 mod episodes;
 mod fixed;
+pub mod from_json;
 mod geometry;
 mod header;
 mod json;

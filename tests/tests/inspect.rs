@@ -233,3 +233,125 @@ fn completions_are_printed_for_each_shell_and_an_unknown_shell_is_refused() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("tcsh"), "{}", stderr(&out));
 }
+
+/// The `x` of every message on `topic` in the latest run's recording of `s`.
+fn recorded_x(s: &Scenario, topic: &str) -> Vec<f64> {
+    let run = s.run_dirs().pop().expect("a run directory");
+    let bytes = caravan_tests::recording::read(&run.join("record.mcap"));
+    caravan_tests::recording::messages(&bytes, topic)
+        .iter()
+        .map(|m| {
+            serde_json::from_slice::<serde_json::Value>(m).unwrap()["x"]
+                .as_f64()
+                .unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn play_and_topic_pub_publish_into_a_running_group() {
+    // A recording of ping and pong in lockstep.
+    let recorded = Scenario::new("play-source", PINGPONG);
+    let out = recorded.run(&["--duration", "3s"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let pings = recorded_x(&recorded, "demo/ping");
+    assert_eq!(pings.len(), 31);
+    let mcap = recorded.run_dirs().pop().unwrap().join("record.mcap");
+
+    // A group with pong alone: its pings come from the recording, then from topic pub.
+    let body = format!("{}\n", caravan_tests::ping_pong()).replace(
+        "[[process]]\nname = \"ping\"\nexec = \"caravan-demo ping\"\nrate = \"10Hz\"\n",
+        "",
+    );
+    assert!(!body.contains("name = \"ping\""), "{body}");
+    let s = Scenario::new("play", &body);
+    let child = s.start_realtime(1);
+    let g = s.group.name.as_str();
+    let play = caravan(&[
+        "play",
+        mcap.to_str().unwrap(),
+        "--topics",
+        "demo/ping",
+        "--speed",
+        "4",
+        "--group",
+        g,
+    ]);
+    assert!(play.status.success(), "{}", stderr(&play));
+    assert!(
+        stderr(&play).contains("played 31 of 31 messages on 1 topics"),
+        "{}",
+        stderr(&play)
+    );
+    let publish = caravan(&[
+        "topic",
+        "pub",
+        "demo/ping",
+        r#"{"x": 1000, "y": 1}"#,
+        "-n",
+        "2",
+        "--rate",
+        "20",
+        "--group",
+        g,
+    ]);
+    assert!(publish.status.success(), "{}", stderr(&publish));
+
+    // Bad input names what is wrong and publishes nothing.
+    for (args, expected) in [
+        (vec!["demo/ping", "{x: 1}"], "the message is not JSON"),
+        (vec!["demo/ping", r#"{"z": 1}"#], "Pose2D has no field 'z'"),
+        (
+            vec!["demo/ping", r#"{"x": 1}"#, "--type", "caravan::Twist"],
+            "carries caravan::Pose2D",
+        ),
+        (
+            vec!["demo/nothing", r#"{"x": 1}"#],
+            "give its type with --type",
+        ),
+    ] {
+        let mut full = vec!["topic", "pub"];
+        full.extend(args);
+        full.extend(["--group", g]);
+        let out = caravan(&full);
+        assert_eq!(out.status.code(), Some(1), "{full:?}");
+        assert!(
+            stderr(&out).contains(expected),
+            "{full:?}: {}",
+            stderr(&out)
+        );
+    }
+    let out = caravan(&["play", "/dev/null", "--group", g]);
+    assert_eq!(out.status.code(), Some(1));
+    let out = caravan(&[
+        "play",
+        mcap.to_str().unwrap(),
+        "--topics",
+        "nothing/*",
+        "--group",
+        g,
+    ]);
+    assert!(
+        stderr(&out).contains("no recorded Caravan messages to play on nothing/*"),
+        "{}",
+        stderr(&out)
+    );
+
+    wait_until("pong answers every ping", || pong_steps(&s) >= 33);
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(child.wait_with_output().unwrap().status.success());
+    let mut expected: Vec<f64> = pings.iter().map(|x| 2.0 * x).collect();
+    expected.extend([2000.0, 2000.0]);
+    assert_eq!(recorded_x(&s, "demo/pong"), expected);
+    assert!(s.shm_entries().is_empty());
+}
+
+/// Steps pong has made so far (one per ping it answered), from its status.
+fn pong_steps(s: &Scenario) -> u64 {
+    let out = caravan(&["node", "info", "pong", "--json", "--group", &s.group.name]);
+    serde_json::from_slice::<serde_json::Value>(&out.stdout)
+        .ok()
+        .and_then(|v| v["status"]["steps"].as_u64())
+        .unwrap_or(0)
+}

@@ -58,6 +58,8 @@ pub enum TopicCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Publish a message (JSON) on a topic, once or at a rate
+    Pub(crate::inject::PubArgs),
     /// Measure a topic's publishing rate
     Hz {
         topic: String,
@@ -136,6 +138,7 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
                 count.is_some_and(|c| printed >= c)
             })
         }
+        TopicCommand::Pub(args) => crate::inject::publish(&args),
         TopicCommand::Info { topic, group, json } => {
             crate::graph::topic_info(&choose_group(group.group.as_deref())?, &topic, json)
         }

@@ -3,6 +3,7 @@
 mod bench;
 mod clean;
 mod graph;
+mod inject;
 mod inspect;
 mod launch;
 mod record;
@@ -42,6 +43,8 @@ enum Command {
     Top(top::TopArgs),
     /// Record a running group's topics to an MCAP file
     Record(record::command::RecordArgs),
+    /// Play a recording's topics into a running group at their recorded times
+    Play(inject::PlayArgs),
     /// What a recording holds: time span, channels with schema and count, metadata
     Info(record::info::InfoArgs),
     /// Recompute report.json and report.md of a run directory
@@ -91,6 +94,7 @@ fn main() -> ExitCode {
         Command::Clean(args) => clean::clean(&args).map(|_| ExitCode::SUCCESS),
         Command::Bench(cmd) => bench::run(cmd).map(|_| ExitCode::SUCCESS),
         Command::Schemas(args) => schemas_py::run(&args).map(|_| ExitCode::SUCCESS),
+        Command::Play(args) => inject::play(&args).map(|_| ExitCode::SUCCESS),
         Command::Top(args) => top::top(&args).map(|_| ExitCode::SUCCESS),
         Command::Completions { shell } => {
             use clap::CommandFactory;

@@ -1,0 +1,107 @@
+//! Injectors: publishers opened by type name at run time, fed JSON. `caravan topic pub` and
+//! `caravan play` use them to publish into a group from outside it, the way taps
+//! ([`crate::tap`]) read from it.
+
+use crate::Error;
+use crate::transport;
+use caravan_schemas::{Header, Message};
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::prelude::*;
+
+/// A publisher of a topic whose type is known only by name.
+pub trait DynInject {
+    fn topic(&self) -> &str;
+    /// Publishes `json` (a message in the recording's shape) with `header` as given, and
+    /// wakes the topic's event-driven subscribers.
+    fn publish_json(&self, header: Header, json: &serde_json::Value) -> Result<(), Error>;
+}
+
+struct Inject<T: Message> {
+    topic: String,
+    port: iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>,
+    notifier: Notifier<ipc::Service>,
+}
+
+impl<T: Message> DynInject for Inject<T> {
+    fn topic(&self) -> &str {
+        &self.topic
+    }
+
+    fn publish_json(&self, header: Header, json: &serde_json::Value) -> Result<(), Error> {
+        let mut uninit = self
+            .port
+            .loan_uninit()
+            .map_err(|e| Error::topic(&self.topic, format!("cannot loan a sample: {e:?}")))?;
+        // SAFETY: placement_default initialises every field of the payload in place.
+        let mut sample = unsafe {
+            T::placement_default(uninit.payload_mut().as_mut_ptr());
+            uninit.assume_init()
+        };
+        // SAFETY: `T` is plain data whose fields are all numbers (the registry's types); the
+        // slice covers exactly the payload, and `write_message` writes valid numbers only.
+        let bytes = unsafe {
+            std::slice::from_raw_parts_mut(
+                (sample.payload_mut() as *mut T).cast::<u8>(),
+                std::mem::size_of::<T>(),
+            )
+        };
+        caravan_schemas::from_json::write_message(caravan_schemas::type_name::<T>(), json, bytes)
+            .map_err(|e| Error::topic(&self.topic, e))?;
+        *sample.user_header_mut() = header;
+        sample
+            .send()
+            .map_err(|e| Error::topic(&self.topic, format!("cannot send: {e:?}")))?;
+        // A failed wake-up only delays an event-driven subscriber; the message is delivered.
+        let _ = self.notifier.notify();
+        Ok(())
+    }
+}
+
+/// Opens a publisher on `topic` of the type named `type_name`. An existing topic keeps its
+/// delivery contract; a new one is made with `delivery`. The publisher waits for room on a
+/// lossless topic, as the group's own publishers do.
+pub fn open_injector(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    type_name: &str,
+    delivery: crate::Delivery,
+) -> Result<Box<dyn DynInject>, Error> {
+    fn open<T: Message>(
+        iox: &iceoryx2::node::Node<ipc::Service>,
+        topic: &str,
+        delivery: crate::Delivery,
+    ) -> Result<Box<dyn DynInject>, Error> {
+        let existing = iox
+            .service_builder(&transport::service_name(topic)?)
+            .publish_subscribe::<T>()
+            .user_header::<Header>()
+            .open();
+        let service = match existing {
+            Ok(service) => service,
+            Err(_) => transport::open_pubsub::<T>(iox, topic, delivery)?,
+        };
+        let backpressure = if service.static_config().has_safe_overflow() {
+            BackpressureStrategy::DiscardData
+        } else {
+            BackpressureStrategy::RetryUntilDelivered
+        };
+        let port = service
+            .publisher_builder()
+            .backpressure_strategy(backpressure)
+            .max_loaned_samples(2)
+            .create()
+            .map_err(|e| Error::topic(topic, format!("cannot create publisher: {e:?}")))?;
+        Ok(Box::new(Inject::<T> {
+            topic: topic.to_string(),
+            port,
+            notifier: transport::notifier(iox, topic)?,
+        }))
+    }
+    caravan_schemas::with_message_type!(type_name, |T| open::<T>(iox, topic, delivery))
+        .unwrap_or_else(|| {
+            Err(Error::topic(
+                topic,
+                format!("unknown message type '{type_name}'"),
+            ))
+        })
+}
