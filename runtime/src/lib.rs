@@ -27,6 +27,7 @@ mod identity;
 pub mod inject;
 pub mod input;
 pub mod lockstep;
+pub mod log;
 pub mod network;
 mod node;
 mod params;

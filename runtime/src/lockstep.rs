@@ -255,7 +255,7 @@ pub struct Scheduler {
 impl Scheduler {
     /// A scheduler on the group of `config`, with minimum message delay `tick`.
     pub fn new(config: &iceoryx2::config::Config, tick: Duration) -> Result<Self, Error> {
-        iceoryx2::prelude::set_log_level_from_env_or(LogLevel::Warn);
+        crate::log::init("caravan");
         let iox = NodeBuilder::new()
             .config(config)
             .signal_handling_mode(SignalHandlingMode::Disabled)

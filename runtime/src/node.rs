@@ -59,7 +59,7 @@ impl Node {
     }
 
     pub fn new(identity: NodeIdentity) -> Result<Self, Error> {
-        iceoryx2::prelude::set_log_level_from_env_or(LogLevel::Warn);
+        crate::log::init(&identity.name);
         crate::group::validate_name(&identity.group).map_err(Error::Config)?;
         let config = match &identity.iceoryx_config {
             Some(path) => {

@@ -197,6 +197,23 @@ fn topic_info_node_info_and_top_describe_a_running_group() {
         "{top}"
     );
 
+    // iceoryx2's own log lines go through Caravan's logging, at the level CARAVAN_LOG sets.
+    let listed = |level: &str| {
+        std::process::Command::new(caravan_tests::workspace_bin("caravan"))
+            .args(["topic", "list", "--group", g])
+            .env("CARAVAN_LOG", level)
+            .output()
+            .unwrap()
+    };
+    let traced = listed("trace");
+    assert!(traced.status.success(), "{}", stderr(&traced));
+    assert!(
+        stderr(&traced).contains("caravan[caravan] TRACE iceoryx2: "),
+        "{}",
+        stderr(&traced)
+    );
+    assert_eq!(stderr(&listed("warn")), "");
+
     // Unknown names are errors that say what exists.
     let out = caravan(&["node", "info", "pnog", "--group", g]);
     assert_eq!(out.status.code(), Some(1));

@@ -66,6 +66,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    caravan::log::init("caravan");
     if !matches!(cli.command, Command::Launch(_) | Command::Sweep(_)) {
         // A command that only prints ends quietly when its reader goes (`caravan info … |
         // head`), as Unix tools do. A launcher or a sweep keeps the default Rust handling: it

@@ -1,0 +1,121 @@
+//! Logging: Caravan's processes log through `tracing`, and iceoryx2's own messages are routed
+//! into it (target `iceoryx2`), so one level setting governs both and every line says which
+//! process and library it came from.
+//!
+//! The level comes from `CARAVAN_LOG` (`error`, `warn`, `info`, `debug`, `trace`, or a
+//! `tracing` filter such as `warn,iceoryx2=error`); the default is `warn`. Lines go to standard
+//! error, which the launcher keeps in the run directory's logs.
+
+use iceoryx2::prelude::LogLevel;
+use std::sync::Once;
+
+/// The environment variable that sets the level.
+pub const LEVEL_VAR: &str = "CARAVAN_LOG";
+
+/// Forwards iceoryx2's log calls to `tracing`.
+struct IceoryxToTracing;
+
+impl iceoryx2_log::Log for IceoryxToTracing {
+    fn log(&self, level: LogLevel, origin: std::fmt::Arguments, message: std::fmt::Arguments) {
+        match level {
+            LogLevel::Trace => tracing::trace!(target: "iceoryx2", "{origin}: {message}"),
+            LogLevel::Debug => tracing::debug!(target: "iceoryx2", "{origin}: {message}"),
+            LogLevel::Info => tracing::info!(target: "iceoryx2", "{origin}: {message}"),
+            LogLevel::Warn => tracing::warn!(target: "iceoryx2", "{origin}: {message}"),
+            LogLevel::Error | LogLevel::Fatal => {
+                tracing::error!(target: "iceoryx2", "{origin}: {message}")
+            }
+        }
+    }
+}
+
+static ICEORYX_TO_TRACING: IceoryxToTracing = IceoryxToTracing;
+static INIT: Once = Once::new();
+
+/// iceoryx2's level for a filter: the most verbose level the filter could let through, so
+/// iceoryx2 does not format what `tracing` would drop anyway.
+fn iceoryx_level(filter: &tracing_subscriber::EnvFilter) -> LogLevel {
+    use tracing_subscriber::filter::LevelFilter;
+    match filter.max_level_hint() {
+        Some(LevelFilter::TRACE) | None => LogLevel::Trace,
+        Some(LevelFilter::DEBUG) => LogLevel::Debug,
+        Some(LevelFilter::INFO) => LogLevel::Info,
+        Some(LevelFilter::WARN) => LogLevel::Warn,
+        Some(LevelFilter::ERROR) => LogLevel::Error,
+        Some(_) => LogLevel::Fatal,
+    }
+}
+
+/// Installs the logger once per process, naming the process in each line (`name`, e.g. the
+/// node's or `caravan`). A bad `CARAVAN_LOG` falls back to `warn` with a warning.
+pub fn init(name: &str) {
+    INIT.call_once(|| {
+        let text = std::env::var(LEVEL_VAR).unwrap_or_default();
+        let parsed = if text.trim().is_empty() {
+            Ok(tracing_subscriber::EnvFilter::new("warn"))
+        } else {
+            tracing_subscriber::EnvFilter::try_new(text.trim())
+        };
+        let (filter, bad) = match parsed {
+            Ok(f) => (f, None),
+            Err(e) => (tracing_subscriber::EnvFilter::new("warn"), Some(e)),
+        };
+        iceoryx2::prelude::set_log_level(iceoryx_level(&filter));
+        iceoryx2::prelude::set_logger(&ICEORYX_TO_TRACING);
+        let name = name.to_string();
+        let _ = tracing_subscriber::fmt()
+            .with_env_filter(filter)
+            .with_writer(std::io::stderr)
+            .without_time()
+            .with_ansi(false)
+            .fmt_fields(tracing_subscriber::fmt::format::DefaultFields::new())
+            .event_format(Format { name })
+            .try_init();
+        if let Some(e) = bad {
+            tracing::warn!("{LEVEL_VAR}='{text}' is not a log filter ({e}); logging at warn");
+        }
+    });
+}
+
+/// `caravan[physics] WARN iceoryx2: message`: short, and says who spoke.
+struct Format {
+    name: String,
+}
+
+impl<S, N> tracing_subscriber::fmt::FormatEvent<S, N> for Format
+where
+    S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
+    N: for<'a> tracing_subscriber::fmt::FormatFields<'a> + 'static,
+{
+    fn format_event(
+        &self,
+        ctx: &tracing_subscriber::fmt::FmtContext<'_, S, N>,
+        mut writer: tracing_subscriber::fmt::format::Writer<'_>,
+        event: &tracing::Event<'_>,
+    ) -> std::fmt::Result {
+        let meta = event.metadata();
+        write!(
+            writer,
+            "caravan[{}] {} {}: ",
+            self.name,
+            meta.level(),
+            meta.target()
+        )?;
+        ctx.field_format().format_fields(writer.by_ref(), event)?;
+        writeln!(writer)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn iceoryx_level_follows_the_most_verbose_directive() {
+        let level = |f: &str| iceoryx_level(&tracing_subscriber::EnvFilter::new(f)) as u8;
+        assert_eq!(level("warn"), LogLevel::Warn as u8);
+        assert_eq!(level("error"), LogLevel::Error as u8);
+        assert_eq!(level("warn,iceoryx2=debug"), LogLevel::Debug as u8);
+        assert_eq!(level("off"), LogLevel::Fatal as u8);
+    }
+}
