@@ -2,20 +2,15 @@
 //
 //   node check-recording.mjs FILE.mcap
 //
-// - Opens the file with @mcap/core's indexed reader (summary, chunk indexes; zstd/lz4 through
-//   @mcap/support), as Foxglove does for a local file.
-// - Raw channels (json + jsonschema): every array in the schema has `items`, and every message
-//   validates against its channel's schema.
-// - Foxglove channels (protobuf): the schema is parsed from its FileDescriptorSet with the
-//   same function Foxglove uses (protobufFromBinaryDescriptor), every message is decoded and
-//   validated against the official JSON schema of its type (@foxglove/schemas).
+// Opens the file with @mcap/core's indexed reader (summary, chunk indexes; zstd/lz4 through
+// @mcap/support), as Foxglove does for a local file, and checks each channel and message as
+// checks.mjs says.
 // Prints one JSON line {channels: {topic: {schema, encoding, messages}}, errors: [...]} and
 // exits 1 if there is any error.
 import { open } from "node:fs/promises";
 import { McapIndexedReader } from "@mcap/core";
-import { loadDecompressHandlers, protobufFromBinaryDescriptor } from "@mcap/support";
-import * as foxgloveSchemas from "@foxglove/schemas/jsonschema.js";
-import Ajv from "ajv";
+import { loadDecompressHandlers } from "@mcap/support";
+import { channelChecker } from "./checks.mjs";
 
 const file = process.argv[2];
 const handle = await open(file, "r");
@@ -32,59 +27,15 @@ const reader = await McapIndexedReader.Initialize({
   decompressHandlers: await loadDecompressHandlers(),
 });
 
-const ajv = new Ajv({ strict: false, allErrors: false });
 const errors = [];
 const channels = {};
 const checkers = new Map();
 
-function arraysWithoutItems(schema, path, out) {
-  if (schema?.type === "array" && schema.items === undefined) out.push(path);
-  for (const [k, v] of Object.entries(schema?.properties ?? {})) arraysWithoutItems(v, `${path}.${k}`, out);
-  if (schema?.items) arraysWithoutItems(schema.items, `${path}[]`, out);
-}
-
-// protobuf's Timestamp {seconds, nanos} is Foxglove's time {sec, nsec}.
-function foxgloveShape(value) {
-  if (Array.isArray(value)) return value.map(foxgloveShape);
-  if (value && typeof value === "object") {
-    const keys = Object.keys(value);
-    if (keys.length === 2 && "seconds" in value && "nanos" in value) {
-      return { sec: Number(value.seconds), nsec: value.nanos };
-    }
-    return Object.fromEntries(keys.map((k) => [k, foxgloveShape(value[k])]));
-  }
-  return value;
-}
-
 for (const channel of reader.channelsById.values()) {
   const schema = reader.schemasById.get(channel.schemaId);
   channels[channel.topic] = { schema: schema?.name, encoding: channel.messageEncoding, messages: 0 };
-  if (channel.messageEncoding === "json" && schema?.encoding === "jsonschema") {
-    const json = JSON.parse(new TextDecoder().decode(schema.data));
-    const missing = [];
-    arraysWithoutItems(json, channel.topic, missing);
-    if (missing.length) errors.push(`${channel.topic}: arrays without items: ${missing.join(", ")}`);
-    const validate = ajv.compile(json);
-    checkers.set(channel.id, (data) => {
-      const value = JSON.parse(new TextDecoder().decode(data));
-      return validate(value) ? null : ajv.errorsText(validate.errors);
-    });
-  } else if (channel.messageEncoding === "protobuf" && schema?.encoding === "protobuf") {
-    const type = protobufFromBinaryDescriptor(schema.data).lookupType(schema.name);
-    const official = foxgloveSchemas[schema.name.replace(/^foxglove\./, "")];
-    if (!official) {
-      errors.push(`${channel.topic}: ${schema.name} is not a Foxglove well-known schema`);
-      continue;
-    }
-    const validate = ajv.compile(official);
-    checkers.set(channel.id, (data) => {
-      const message = type.toObject(type.decode(data), { longs: Number, enums: Number, bytes: String, defaults: true });
-      const value = foxgloveShape(message);
-      return validate(value) ? null : ajv.errorsText(validate.errors);
-    });
-  } else {
-    errors.push(`${channel.topic}: unexpected encoding ${channel.messageEncoding} / ${schema?.encoding}`);
-  }
+  const check = channelChecker(channel.topic, channel.messageEncoding, schema?.name, schema?.encoding, schema?.data, errors);
+  if (check) checkers.set(channel.id, check);
 }
 
 for await (const message of reader.readMessages()) {

@@ -17,7 +17,11 @@ fn ensure_installed() {
     // SAFETY: flock on a file descriptor this function owns; released when `lock` drops.
     let locked = unsafe { libc::flock(std::os::fd::AsRawFd::as_raw_fd(&lock), libc::LOCK_EX) };
     assert_eq!(locked, 0, "cannot lock {}", dir.display());
-    if dir.join("node_modules/.package-lock.json").is_file() {
+    // The lock file as installed: a changed lock installs again.
+    let stamp = dir.join("node_modules/.caravan-installed-lock.json");
+    let wanted =
+        std::fs::read(dir.join("package-lock.json")).expect("tests/node/package-lock.json");
+    if std::fs::read(&stamp).is_ok_and(|installed| installed == wanted) {
         return;
     }
     let out = Command::new("npm")
@@ -31,6 +35,35 @@ fn ensure_installed() {
         dir.display(),
         String::from_utf8_lossy(&out.stderr)
     );
+    std::fs::write(&stamp, wanted).expect("write the install stamp");
+}
+
+/// Reads a live group the way the Foxglove app does (`check-live.mjs`, the
+/// `@foxglove/ws-protocol` client): connects to `url` (retrying until it listens), subscribes
+/// to every channel, and returns when each of `topics` delivered a message or `seconds` passed.
+/// The verdict is `{server, channels: {topic: {schema, encoding, messages}}, errors: [...]}`.
+pub fn check_live(url: &str, seconds: u32, topics: &[&str]) -> serde_json::Value {
+    ensure_installed();
+    let out = Command::new("node")
+        .arg(node_dir().join("check-live.mjs"))
+        .args([url, &seconds.to_string(), &topics.join(",")])
+        .output()
+        .expect("run node");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(stdout.trim()).unwrap_or_else(|_| {
+        panic!(
+            "check-live.mjs gave no verdict: {stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+/// A TCP port on loopback that was free a moment ago, for a server under test.
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("bind a free port")
+        .port()
 }
 
 /// Reads `mcap` as Foxglove does (`check-recording.mjs`): returns its JSON verdict

@@ -70,3 +70,92 @@ fn info_on_a_file_that_is_not_a_recording_names_it_and_fails() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The convoy served live with `--foxglove PORT` in `clock`; a Foxglove WebSocket client
+/// subscribes to everything and must get the laser scan (raw and Foxglove) and the transforms,
+/// each message valid against its schema. Then the group stops cleanly.
+fn live_convoy_reaches_a_foxglove_client(clock: &str) {
+    let group = caravan_tests::TestGroup::new(&format!("live-{clock}"));
+    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
+    let port = node::free_port();
+    let launcher = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
+        .arg("launch")
+        .arg(caravan_tests::workspace_root().join("launch/convoy/convoy.toml"))
+        .args([
+            "--quiet",
+            "--clock",
+            clock,
+            "--duration",
+            "10min",
+            "--foxglove",
+        ])
+        .arg(port.to_string())
+        .args(["--set", &format!("group.name={}", group.name)])
+        .arg("--runs-dir")
+        .arg(&runs)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let verdict = node::check_live(
+        &format!("ws://127.0.0.1:{port}"),
+        120,
+        &[
+            "tf",
+            "foxglove/robot/0/scan",
+            "robot/0/scan",
+            "foxglove/robot/1/pose",
+        ],
+    );
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(launcher.id() as i32, libc::SIGINT) };
+    let out = launcher.wait_with_output().unwrap();
+    assert_no_errors(&verdict);
+    assert_eq!(
+        verdict["server"]["capabilities"],
+        serde_json::json!(["time"])
+    );
+    assert_eq!(
+        verdict["channels"]["tf"]["schema"],
+        "foxglove.FrameTransforms"
+    );
+    assert_eq!(verdict["channels"]["robot/0/scan"]["encoding"], "json");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let prefix = caravan::group::prefix(&group.name);
+    let left: Vec<_> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
+
+#[test]
+fn a_live_realtime_convoy_reaches_a_foxglove_websocket_client() {
+    live_convoy_reaches_a_foxglove_client("realtime");
+}
+
+#[test]
+fn a_live_lockstep_convoy_reaches_a_foxglove_websocket_client() {
+    live_convoy_reaches_a_foxglove_client("lockstep");
+}
+
+#[test]
+fn a_taken_foxglove_port_is_bad_input_and_starts_nothing() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port().to_string();
+    let s = Scenario::new("live-taken", &realtime_ping_pong("2s"));
+    let out = s.run(&["--foxglove", &port]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "--foxglove {port}: cannot serve on 127.0.0.1:{port}"
+        )),
+        "{err}"
+    );
+    assert!(s.run_dirs().is_empty(), "no run directory is made");
+}

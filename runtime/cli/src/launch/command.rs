@@ -32,6 +32,10 @@ pub struct LaunchArgs {
     /// Do not echo process output to the terminal (it still goes to the logs)
     #[arg(long)]
     pub quiet: bool,
+    /// Serve the running group to the Foxglove app (Open connection → Foxglove WebSocket,
+    /// ws://127.0.0.1:PORT); PORT defaults to 8765, 0 picks a free one
+    #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "8765")]
+    pub foxglove: Option<u16>,
 }
 
 /// Exit code for bad input: nothing was started.
@@ -88,6 +92,18 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     };
     let reports = report_entries(&lf);
     let group = lf.group.name.clone();
+    // Before anything starts: a port already taken is bad input.
+    let live = match args
+        .foxglove
+        .map(|port| crate::record::live::LiveView::start(port, &group))
+    {
+        Some(Err(e)) => {
+            eprintln!("caravan: {e:#}");
+            return Ok(EXIT_BAD_INPUT);
+        }
+        Some(Ok(live)) => Some(live),
+        None => None,
+    };
     let already = || {
         eprintln!(
             "caravan: group '{group}' is already running; stop it, or give this run another name with --set group.name=…"
@@ -122,7 +138,14 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
         dir.display()
     ));
 
-    let result = run::run_group(&lf, &dir, &config_path, &console).map(|mut facts| {
+    if let Some(live) = &live {
+        console.say(&format!(
+            "Foxglove live view on ws://{}:{} (Foxglove: Open connection → Foxglove WebSocket)",
+            crate::record::live::HOST,
+            live.port()
+        ));
+    }
+    let result = run::run_group(&lf, &dir, &config_path, &console, live).map(|mut facts| {
         facts.reports = reports;
         facts
     });

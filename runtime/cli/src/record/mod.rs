@@ -2,6 +2,7 @@
 
 pub mod command;
 pub mod info;
+pub mod live;
 pub mod recorder;
 pub mod scene;
 pub mod schema;

@@ -130,6 +130,8 @@ pub struct Recorder {
     /// When each running node's status last arrived (wall clock).
     status_heard: BTreeMap<String, std::time::Instant>,
     buffer: Vec<(usize, Tapped)>,
+    /// The live view, which gets every topic; the file gets those the patterns match.
+    live: Option<super::live::LiveView>,
 }
 
 impl Recorder {
@@ -189,7 +191,18 @@ impl Recorder {
             status_series: BTreeMap::new(),
             status_heard: BTreeMap::new(),
             buffer: Vec::new(),
+            live: None,
         })
+    }
+
+    /// Serves every topic of the group to `live` as well (from the next discovery on).
+    pub fn serve(&mut self, live: super::live::LiveView) {
+        self.live = Some(live);
+    }
+
+    /// Whether `topic` goes into the file.
+    fn is_recorded(&self, topic: &str) -> bool {
+        self.patterns.iter().any(|p| glob_match(p, topic))
     }
 
     /// Whether any of `published` (topic hashes) was never looked at by discovery.
@@ -206,8 +219,8 @@ impl Recorder {
             if !self.seen.insert(hash) {
                 continue;
             }
-            let wanted = info.name == status.name()
-                || self.patterns.iter().any(|p| glob_match(p, &info.name));
+            let wanted =
+                info.name == status.name() || self.live.is_some() || self.is_recorded(&info.name);
             if !wanted {
                 continue;
             }
@@ -236,9 +249,31 @@ impl Recorder {
         // Listing order is the file system's; channel ids follow the topics' names.
         opened.sort();
         for (topic, type_name) in opened {
-            self.channel(&topic, type_name)?;
+            let recorded = self.is_recorded(&topic);
+            if recorded {
+                self.channel(&topic, type_name)?;
+            }
             for (view, schema) in scene::topics_of(&topic, type_name) {
-                self.scene_channel(&view, schema)?;
+                if recorded {
+                    self.scene_channel(&view, schema)?;
+                }
+                if let Some(live) = &mut self.live {
+                    let s = schema();
+                    live.advertise(
+                        &view,
+                        &s.encoding,
+                        foxglove::Schema::new(&s.name, &s.encoding, s.data),
+                    )?;
+                }
+            }
+            if let Some(live) = &mut self.live {
+                let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
+                let data = schema.to_string().into_bytes();
+                live.advertise(
+                    &topic,
+                    "json",
+                    foxglove::Schema::new(type_name, "jsonschema", data),
+                )?;
             }
         }
         Ok(())
@@ -350,7 +385,6 @@ impl Recorder {
         let tap = &self.taps[tap_index];
         let topic = tap.topic().to_string();
         let type_name = tap.type_name();
-        let channel = self.channel(&topic, type_name)?;
         let stamp_ns = msg.header.stamp_ns;
         let views = scene::views(&topic, type_name, &msg.json, stamp_ns);
         let mut record = msg.json;
@@ -358,7 +392,18 @@ impl Recorder {
             let header = schema::header_json(&msg.header, !self.lockstep);
             fields.insert("header".into(), header);
         }
-        self.write_message(channel, stamp_ns, &serde_json::to_vec(&record)?)?;
+        let bytes = serde_json::to_vec(&record)?;
+        if let Some(live) = &mut self.live {
+            live.log(&topic, stamp_ns, &bytes);
+            for view in &views {
+                live.log(&view.topic, stamp_ns, &view.bytes);
+            }
+        }
+        if !self.is_recorded(&topic) {
+            return Ok(());
+        }
+        let channel = self.channel(&topic, type_name)?;
+        self.write_message(channel, stamp_ns, &bytes)?;
         for view in views {
             let channel = self.scene_channel(&view.topic, view.schema)?;
             self.write_message(channel, stamp_ns, &view.bytes)?;

@@ -38,6 +38,8 @@ pub struct DriverConfig {
     pub join_timeout: Duration,
     /// Realtime: the processes that are Caravan nodes, which publish a status once a second.
     pub reporting: Vec<String>,
+    /// The live view, if `--foxglove` asked for one.
+    pub live: Option<crate::record::live::LiveView>,
     /// The recording's metadata and attachment.
     pub meta: RecordingMeta,
 }
@@ -52,7 +54,7 @@ pub struct DriverOutcome {
 /// It sends `Event::DriverDone` when the schedule ends, then waits for `finish` (all
 /// processes exited) to drain the last messages and close the recording.
 pub fn spawn(
-    cfg: DriverConfig,
+    mut cfg: DriverConfig,
     lockstep: bool,
     control: Arc<Control>,
     events: Sender<Event>,
@@ -66,6 +68,9 @@ pub fn spawn(
             lockstep,
             &cfg.meta,
         )?;
+        if let Some(live) = cfg.live.take() {
+            recorder.serve(live);
+        }
         // The recorder's node made the group's global files; keep them to this user.
         caravan::group::make_private(&cfg.group);
         let sim_time_ns = if lockstep {

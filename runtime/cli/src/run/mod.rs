@@ -60,6 +60,7 @@ pub fn run_group(
     dir: &Path,
     config_path: &Path,
     console: &Console,
+    live: Option<crate::record::live::LiveView>,
 ) -> Result<RunFacts> {
     let lockstep = lf.group.clock == ClockMode::Lockstep;
     let (events_tx, events) = unbounded();
@@ -99,6 +100,7 @@ pub fn run_group(
                 .filter(|p| preflight::is_checked(p))
                 .map(|p| p.spec.name.clone())
                 .collect(),
+            live,
             meta: RecordingMeta {
                 metadata: crate::record::recorder::run_metadata(
                     Some(lf.group.seed),

@@ -391,6 +391,7 @@ fn validate(plan: &Plan) -> Vec<String> {
             seed: plan.seeds.first().copied(),
             runs_dir: PathBuf::new(),
             quiet: true,
+            foxglove: None,
         };
         match crate::launch::command::load(&args) {
             Ok(_) => {}
