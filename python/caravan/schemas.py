@@ -9,7 +9,9 @@ port and a Rust port of one topic only connect when they agree on the type.
 
 A Rust ``FixedString<N>`` field ``node`` appears as ``node_len`` and ``node`` (N bytes), a
 ``FixedVec<T, N>`` field ``poses`` as ``poses_len`` and ``poses`` (N items); read and write
-them with ``fixed_str``, ``set_fixed_str``, ``fixed_vec`` and ``set_fixed_vec``.
+them with ``fixed_str``, ``set_fixed_str``, ``fixed_vec`` and ``set_fixed_vec``. Every class
+derives from ``Message``: ``msg.to_dict()`` is the message as recordings and ``caravan topic
+echo`` show it, and ``print(msg)`` prints it readably.
 """
 
 import ctypes
@@ -63,6 +65,62 @@ def set_fixed_vec(msg: ctypes.Structure, field: str, values) -> int:
     return n
 
 
+class Message(ctypes.Structure):
+    """Base of every generated structure. ``to_dict()`` gives the JSON view that recordings
+    and ``caravan topic echo`` print (strings as text, vectors and counted arrays cut to their
+    valid part, explicit padding left out); ``repr()`` prints it readably."""
+
+    # Array field -> the fields whose product counts its valid part (LaserScan's beam_count).
+    _counts_ = {}
+
+    def to_dict(self) -> dict:
+        names = {name for name, _ in self._fields_}
+        # A count that alone counts an array is implied by the array's length.
+        implied = {by[0] for by in self._counts_.values() if len(by) == 1}
+        out = {}
+        for name, ctype in self._fields_:
+            if name.startswith("_pad") or (name.endswith("_len") and name[:-4] in names):
+                continue
+            if name in implied:
+                continue
+            value = getattr(self, name)
+            if name + "_len" in names and getattr(ctype, "_type_", None) is ctypes.c_uint8:
+                out[name] = fixed_str(self, name)
+                continue
+            if name + "_len" in names:
+                value = fixed_vec(self, name)
+            elif name in self._counts_:
+                n = 1
+                for count in self._counts_[name]:
+                    n *= getattr(self, count)
+                value = value[: min(n, len(value))]
+            out[name] = _plain(value)
+        return out
+
+    def __repr__(self) -> str:
+        fields = ", ".join(f"{k}={_short(v)}" for k, v in self.to_dict().items())
+        return f"{type(self).__name__}({fields})"
+
+
+def _plain(value):
+    if isinstance(value, Message):
+        return value.to_dict()
+    if isinstance(value, (ctypes.Array, list)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _short(value) -> str:
+    """A value for ``repr``: long lists shortened to their first items and their length."""
+    if isinstance(value, list) and len(value) > 8:
+        return "[" + ", ".join(_short(v) for v in value[:4]) + f", … ({len(value)} items)]"
+    if isinstance(value, list):
+        return "[" + ", ".join(_short(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}={_short(v)}" for k, v in value.items()) + "}"
+    return repr(value)
+
+
 def name_hash(name: str) -> int:
     """64-bit FNV-1a of ``name``: a node's ``source_id`` in headers, a topic in the lockstep
     protocol (``caravan_schemas::lockstep::name_hash``)."""
@@ -72,7 +130,7 @@ def name_hash(name: str) -> int:
     return h
 
 
-class Header(ctypes.Structure):
+class Header(Message):
     """``caravan::Header``: 32 bytes, aligned to 8."""
 
     _fields_ = [
@@ -91,7 +149,7 @@ class Header(ctypes.Structure):
         return "caravan::Header"
 
 
-class Vector3(ctypes.Structure):
+class Vector3(Message):
     """``caravan::Vector3``: 24 bytes, aligned to 8."""
 
     _fields_ = [
@@ -109,7 +167,7 @@ class Vector3(ctypes.Structure):
         return "caravan::Vector3"
 
 
-class Quaternion(ctypes.Structure):
+class Quaternion(Message):
     """``caravan::Quaternion``: 32 bytes, aligned to 8."""
 
     _fields_ = [
@@ -128,7 +186,7 @@ class Quaternion(ctypes.Structure):
         return "caravan::Quaternion"
 
 
-class Pose2D(ctypes.Structure):
+class Pose2D(Message):
     """``caravan::Pose2D``: 24 bytes, aligned to 8."""
 
     _fields_ = [
@@ -146,7 +204,7 @@ class Pose2D(ctypes.Structure):
         return "caravan::Pose2D"
 
 
-class Pose3D(ctypes.Structure):
+class Pose3D(Message):
     """``caravan::Pose3D``: 56 bytes, aligned to 8."""
 
     _fields_ = [
@@ -163,7 +221,7 @@ class Pose3D(ctypes.Structure):
         return "caravan::Pose3D"
 
 
-class Twist(ctypes.Structure):
+class Twist(Message):
     """``caravan::Twist``: 48 bytes, aligned to 8."""
 
     _fields_ = [
@@ -180,7 +238,7 @@ class Twist(ctypes.Structure):
         return "caravan::Twist"
 
 
-class WheelSetpoint(ctypes.Structure):
+class WheelSetpoint(Message):
     """``caravan::WheelSetpoint``: 16 bytes, aligned to 8."""
 
     _fields_ = [
@@ -197,7 +255,7 @@ class WheelSetpoint(ctypes.Structure):
         return "caravan::WheelSetpoint"
 
 
-class WheelState(ctypes.Structure):
+class WheelState(Message):
     """``caravan::WheelState``: 48 bytes, aligned to 8."""
 
     _fields_ = [
@@ -225,7 +283,7 @@ class WheelState(ctypes.Structure):
         return "caravan::WheelState"
 
 
-class EncoderTicks(ctypes.Structure):
+class EncoderTicks(Message):
     """``caravan::EncoderTicks``: 24 bytes, aligned to 8."""
 
     _fields_ = [
@@ -244,7 +302,7 @@ class EncoderTicks(ctypes.Structure):
         return "caravan::EncoderTicks"
 
 
-class Odometry(ctypes.Structure):
+class Odometry(Message):
     """``caravan::Odometry``: 680 bytes, aligned to 8."""
 
     _fields_ = [
@@ -263,7 +321,7 @@ class Odometry(ctypes.Structure):
         return "caravan::Odometry"
 
 
-class LaserScan(ctypes.Structure):
+class LaserScan(Message):
     """``caravan::LaserScan``: 8680 bytes, aligned to 4."""
 
     _fields_ = [
@@ -278,6 +336,7 @@ class LaserScan(ctypes.Structure):
         ("ranges", ctypes.c_float * 1081),
         ("intensities", ctypes.c_float * 1081),
     ]
+    _counts_ = {"ranges": ("beam_count",), "intensities": ("beam_count",)}
     SIZE = 8680
     ALIGN = 4
     OFFSETS = {
@@ -299,7 +358,7 @@ class LaserScan(ctypes.Structure):
         return "caravan::LaserScan"
 
 
-class Imu(ctypes.Structure):
+class Imu(Message):
     """``caravan::Imu``: 296 bytes, aligned to 8."""
 
     _fields_ = [
@@ -327,7 +386,7 @@ class Imu(ctypes.Structure):
         return "caravan::Imu"
 
 
-class OccupancyGrid(ctypes.Structure):
+class OccupancyGrid(Message):
     """``caravan::OccupancyGrid``: 1048616 bytes, aligned to 8."""
 
     _fields_ = [
@@ -337,6 +396,7 @@ class OccupancyGrid(ctypes.Structure):
         ("height", ctypes.c_uint32),
         ("data", ctypes.c_int8 * 1048576),
     ]
+    _counts_ = {"data": ("width", "height",)}
     SIZE = 1048616
     ALIGN = 8
     OFFSETS = {"resolution": 0, "origin": 8, "width": 32, "height": 36, "data": 40}
@@ -347,7 +407,7 @@ class OccupancyGrid(ctypes.Structure):
         return "caravan::OccupancyGrid"
 
 
-class Path2D(ctypes.Structure):
+class Path2D(Message):
     """``caravan::Path2D``: 24584 bytes, aligned to 8."""
 
     _fields_ = [
@@ -364,7 +424,7 @@ class Path2D(ctypes.Structure):
         return "caravan::Path2D"
 
 
-class Goal(ctypes.Structure):
+class Goal(Message):
     """``caravan::Goal``: 40 bytes, aligned to 8."""
 
     _fields_ = [
@@ -383,7 +443,7 @@ class Goal(ctypes.Structure):
         return "caravan::Goal"
 
 
-class NodeStatus(ctypes.Structure):
+class NodeStatus(Message):
     """``caravan::NodeStatus``: 208 bytes, aligned to 8."""
 
     _fields_ = [
@@ -435,7 +495,7 @@ class NodeStatus(ctypes.Structure):
         return "caravan::NodeStatus"
 
 
-class Collision(ctypes.Structure):
+class Collision(Message):
     """``caravan::Collision``: 16 bytes, aligned to 4."""
 
     _fields_ = [
@@ -454,7 +514,7 @@ class Collision(ctypes.Structure):
         return "caravan::Collision"
 
 
-class JointValue(ctypes.Structure):
+class JointValue(Message):
     """``caravan::JointValue``: 88 bytes, aligned to 8."""
 
     _fields_ = [
@@ -474,7 +534,7 @@ class JointValue(ctypes.Structure):
         return "caravan::JointValue"
 
 
-class JointState(ctypes.Structure):
+class JointState(Message):
     """``caravan::JointState``: 5640 bytes, aligned to 8."""
 
     _fields_ = [
@@ -491,7 +551,7 @@ class JointState(ctypes.Structure):
         return "caravan::JointState"
 
 
-class JointCommand(ctypes.Structure):
+class JointCommand(Message):
     """``caravan::JointCommand``: 5640 bytes, aligned to 8."""
 
     _fields_ = [
@@ -508,7 +568,7 @@ class JointCommand(ctypes.Structure):
         return "caravan::JointCommand"
 
 
-class LinkState(ctypes.Structure):
+class LinkState(Message):
     """``caravan::LinkState``: 168 bytes, aligned to 8."""
 
     _fields_ = [
@@ -527,7 +587,7 @@ class LinkState(ctypes.Structure):
         return "caravan::LinkState"
 
 
-class LinkStates(ctypes.Structure):
+class LinkStates(Message):
     """``caravan::LinkStates``: 10760 bytes, aligned to 8."""
 
     _fields_ = [
@@ -544,7 +604,7 @@ class LinkStates(ctypes.Structure):
         return "caravan::LinkStates"
 
 
-class Contact(ctypes.Structure):
+class Contact(Message):
     """``caravan::Contact``: 192 bytes, aligned to 8."""
 
     _fields_ = [
@@ -578,7 +638,7 @@ class Contact(ctypes.Structure):
         return "caravan::Contact"
 
 
-class Contacts(ctypes.Structure):
+class Contacts(Message):
     """``caravan::Contacts``: 12296 bytes, aligned to 8."""
 
     _fields_ = [
@@ -595,7 +655,7 @@ class Contacts(ctypes.Structure):
         return "caravan::Contacts"
 
 
-class Wrench(ctypes.Structure):
+class Wrench(Message):
     """``caravan::Wrench``: 152 bytes, aligned to 8."""
 
     _fields_ = [
@@ -627,7 +687,7 @@ class Wrench(ctypes.Structure):
         return "caravan::Wrench"
 
 
-class ForceTorque(ctypes.Structure):
+class ForceTorque(Message):
     """``caravan::ForceTorque``: 112 bytes, aligned to 8."""
 
     _fields_ = [
@@ -646,7 +706,7 @@ class ForceTorque(ctypes.Structure):
         return "caravan::ForceTorque"
 
 
-class ForceTorques(ctypes.Structure):
+class ForceTorques(Message):
     """``caravan::ForceTorques``: 1800 bytes, aligned to 8."""
 
     _fields_ = [
@@ -663,7 +723,7 @@ class ForceTorques(ctypes.Structure):
         return "caravan::ForceTorques"
 
 
-class ContactEstimate(ctypes.Structure):
+class ContactEstimate(Message):
     """``caravan::ContactEstimate``: 128 bytes, aligned to 8."""
 
     _fields_ = [
@@ -695,7 +755,7 @@ class ContactEstimate(ctypes.Structure):
         return "caravan::ContactEstimate"
 
 
-class EnvStep(ctypes.Structure):
+class EnvStep(Message):
     """``caravan::EnvStep``: 296 bytes, aligned to 8."""
 
     _fields_ = [
@@ -727,7 +787,7 @@ class EnvStep(ctypes.Structure):
         return "caravan::EnvStep"
 
 
-class AgentAction(ctypes.Structure):
+class AgentAction(Message):
     """``caravan::AgentAction``: 88 bytes, aligned to 8."""
 
     _fields_ = [
@@ -747,7 +807,7 @@ class AgentAction(ctypes.Structure):
         return "caravan::AgentAction"
 
 
-class NamedValue(ctypes.Structure):
+class NamedValue(Message):
     """``caravan::NamedValue``: 40 bytes, aligned to 8."""
 
     _fields_ = [
@@ -765,7 +825,7 @@ class NamedValue(ctypes.Structure):
         return "caravan::NamedValue"
 
 
-class EpisodeEnd(ctypes.Structure):
+class EpisodeEnd(Message):
     """``caravan::EpisodeEnd``: 704 bytes, aligned to 8."""
 
     _fields_ = [
@@ -797,7 +857,7 @@ class EpisodeEnd(ctypes.Structure):
         return "caravan::EpisodeEnd"
 
 
-class Hello(ctypes.Structure):
+class Hello(Message):
     """``caravan::lockstep::Hello``: 4184 bytes, aligned to 8."""
 
     _fields_ = [
@@ -817,7 +877,7 @@ class Hello(ctypes.Structure):
         return "caravan::lockstep::Hello"
 
 
-class Grant(ctypes.Structure):
+class Grant(Message):
     """``caravan::lockstep::Grant``: 24 bytes, aligned to 8."""
 
     _fields_ = [
@@ -836,7 +896,7 @@ class Grant(ctypes.Structure):
         return "caravan::lockstep::Grant"
 
 
-class Done(ctypes.Structure):
+class Done(Message):
     """``caravan::lockstep::Done``: 4128 bytes, aligned to 8."""
 
     _fields_ = [

@@ -22,6 +22,15 @@ use crate::{
 use core::mem::{align_of, offset_of, size_of};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 
+/// Arrays whose JSON view holds only their valid part, counted by other fields: (type, array
+/// field, count fields whose product is the count). A `FixedVec` is counted by its own `_len`
+/// and is not listed.
+pub const COUNTED_ARRAYS: &[(&str, &str, &[&str])] = &[
+    ("LaserScan", "ranges", &["beam_count"]),
+    ("LaserScan", "intensities", &["beam_count"]),
+    ("OccupancyGrid", "data", &["width", "height"]),
+];
+
 /// A plain number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scalar {

@@ -9,12 +9,8 @@
 //! A `header` key is ignored, so a recorded message can be given whole. Unknown keys, wrong
 //! types, numbers outside their type's range and over-long arrays are errors naming the key.
 
-use crate::describe::{Element, Kind, Scalar, TypeLayout, layouts};
+use crate::describe::{COUNTED_ARRAYS, Element, Kind, Scalar, TypeLayout, layouts};
 use serde_json::Value;
-
-/// Counts that a JSON view leaves out because an array's length gives them: (type, count
-/// field, array field).
-const DERIVED_COUNTS: &[(&str, &str, &str)] = &[("LaserScan", "beam_count", "ranges")];
 
 /// Writes `json` into `bytes`, a value of the message type named `type_name` (its stable name,
 /// `caravan::Pose2D`). `bytes` must hold a valid value of that type (a default one, say): the
@@ -86,11 +82,16 @@ impl Writer<'_> {
                     names.join(", ")
                 ));
             };
+            // A count the JSON view leaves out (one field counting the array) is set from the
+            // array's length; a product of fields (a grid's width × height) is given instead.
             let counter = field(&format!("{key}_len")).map(|c| c.offset).or_else(|| {
-                DERIVED_COUNTS
+                COUNTED_ARRAYS
                     .iter()
-                    .find(|(t, _, array)| *t == layout.name && *array == key)
-                    .and_then(|(_, count, _)| field(count))
+                    .find(|(t, array, _)| *t == layout.name && *array == key)
+                    .and_then(|(_, _, counts)| match counts {
+                        [count] => field(count),
+                        _ => None,
+                    })
                     .map(|c| c.offset)
             });
             let slot = &mut bytes[f.offset..f.offset + f.size];

@@ -205,3 +205,112 @@ fn python_agent_with_bad_params_exits_2() {
         text(&bad_urdf)
     );
 }
+
+/// A Python message's `to_dict()` is the JSON view Rust writes into recordings, and `print`
+/// shows it readably.
+#[test]
+fn python_messages_print_the_recordings_json_view() {
+    use caravan_schemas::{LaserScan, NodeStatus, OccupancyGrid, Path2D, Pose2D};
+    let script = r#"
+import json
+from caravan.schemas import *
+pose = Pose2D(1.0, 2.0, 0.5)
+scan = LaserScan(); scan.angle_max = 1.5; scan.beam_count = 3; scan.ranges[0] = 1.5; scan.ranges[2] = 4.0
+status = NodeStatus(); set_fixed_str(status, "node", "ping"); status.steps = 5
+path = Path2D(); set_fixed_vec(path, "poses", [Pose2D(1.0, 2.0, 0.0), Pose2D(3.0, 4.0, 1.0)])
+grid = OccupancyGrid(); grid.resolution = 0.05; grid.width = 2; grid.height = 2; grid.data[3] = 100
+for m in (pose, scan, status, path, grid):
+    print(json.dumps(m.to_dict()))
+print(repr(pose))
+"#;
+    let out = Command::new(python_env())
+        .args(["-c", script])
+        .current_dir(workspace_root().join("python"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    let lines: Vec<&str> = stdout.lines().collect();
+    let pose = Pose2D {
+        x: 1.0,
+        y: 2.0,
+        theta: 0.5,
+    };
+    let mut scan = caravan_schemas::boxed_placement_new::<LaserScan>();
+    scan.angle_max = 1.5;
+    scan.beam_count = 3;
+    scan.ranges[0] = 1.5;
+    scan.ranges[2] = 4.0;
+    let mut status = caravan_schemas::placement_new::<NodeStatus>();
+    status.node = caravan_schemas::FixedString::new("ping");
+    status.steps = 5;
+    let mut path = caravan_schemas::boxed_placement_new::<Path2D>();
+    path.poses
+        .push(Pose2D {
+            x: 1.0,
+            y: 2.0,
+            theta: 0.0,
+        })
+        .unwrap();
+    path.poses
+        .push(Pose2D {
+            x: 3.0,
+            y: 4.0,
+            theta: 1.0,
+        })
+        .unwrap();
+    let mut grid = caravan_schemas::boxed_placement_new::<OccupancyGrid>();
+    grid.resolution = 0.05;
+    grid.width = 2;
+    grid.height = 2;
+    grid.data[3] = 100;
+    let rust = [
+        serde_json::to_value(pose).unwrap(),
+        serde_json::to_value(scan.as_ref()).unwrap(),
+        serde_json::to_value(status).unwrap(),
+        serde_json::to_value(path.as_ref()).unwrap(),
+        serde_json::to_value(grid.as_ref()).unwrap(),
+    ];
+    for (py, rust) in lines.iter().zip(&rust) {
+        let py: serde_json::Value = serde_json::from_str(py).unwrap();
+        assert_eq!(&py, rust);
+    }
+    assert_eq!(lines[5], "Pose2D(x=1.0, y=2.0, theta=0.5)");
+}
+
+/// `python/` is an installable package: pip builds it from its pyproject and installs the
+/// `caravan` package with the generated message module.
+#[test]
+fn python_package_installs_with_pip() {
+    let dir = std::env::temp_dir().join(format!("caravan-pip-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    // Built from a copy: setuptools writes build/ and egg-info/ beside the sources.
+    let source = dir.join("source");
+    std::fs::create_dir_all(source.join("caravan")).unwrap();
+    let python = workspace_root().join("python");
+    std::fs::copy(python.join("pyproject.toml"), source.join("pyproject.toml")).unwrap();
+    for file in std::fs::read_dir(python.join("caravan")).unwrap().flatten() {
+        if file.path().extension().is_some_and(|e| e == "py") {
+            std::fs::copy(file.path(), source.join("caravan").join(file.file_name())).unwrap();
+        }
+    }
+    let target = dir.join("installed");
+    let out = Command::new(python_env())
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "--no-deps",
+            "--target",
+        ])
+        .arg(&target)
+        .arg(&source)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(target.join("caravan/schemas.py").is_file());
+    assert!(target.join("caravan/node.py").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}

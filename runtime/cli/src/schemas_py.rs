@@ -143,7 +143,9 @@ port and a Rust port of one topic only connect when they agree on the type.
 
 A Rust ``FixedString<N>`` field ``node`` appears as ``node_len`` and ``node`` (N bytes), a
 ``FixedVec<T, N>`` field ``poses`` as ``poses_len`` and ``poses`` (N items); read and write
-them with ``fixed_str``, ``set_fixed_str``, ``fixed_vec`` and ``set_fixed_vec``.
+them with ``fixed_str``, ``set_fixed_str``, ``fixed_vec`` and ``set_fixed_vec``. Every class
+derives from ``Message``: ``msg.to_dict()`` is the message as recordings and ``caravan topic
+echo`` show it, and ``print(msg)`` prints it readably.
 """
 "#;
 
@@ -185,6 +187,62 @@ def set_fixed_vec(msg: ctypes.Structure, field: str, values) -> int:
     return n
 
 
+class Message(ctypes.Structure):
+    """Base of every generated structure. ``to_dict()`` gives the JSON view that recordings
+    and ``caravan topic echo`` print (strings as text, vectors and counted arrays cut to their
+    valid part, explicit padding left out); ``repr()`` prints it readably."""
+
+    # Array field -> the fields whose product counts its valid part (LaserScan's beam_count).
+    _counts_ = {}
+
+    def to_dict(self) -> dict:
+        names = {name for name, _ in self._fields_}
+        # A count that alone counts an array is implied by the array's length.
+        implied = {by[0] for by in self._counts_.values() if len(by) == 1}
+        out = {}
+        for name, ctype in self._fields_:
+            if name.startswith("_pad") or (name.endswith("_len") and name[:-4] in names):
+                continue
+            if name in implied:
+                continue
+            value = getattr(self, name)
+            if name + "_len" in names and getattr(ctype, "_type_", None) is ctypes.c_uint8:
+                out[name] = fixed_str(self, name)
+                continue
+            if name + "_len" in names:
+                value = fixed_vec(self, name)
+            elif name in self._counts_:
+                n = 1
+                for count in self._counts_[name]:
+                    n *= getattr(self, count)
+                value = value[: min(n, len(value))]
+            out[name] = _plain(value)
+        return out
+
+    def __repr__(self) -> str:
+        fields = ", ".join(f"{k}={_short(v)}" for k, v in self.to_dict().items())
+        return f"{type(self).__name__}({fields})"
+
+
+def _plain(value):
+    if isinstance(value, Message):
+        return value.to_dict()
+    if isinstance(value, (ctypes.Array, list)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _short(value) -> str:
+    """A value for ``repr``: long lists shortened to their first items and their length."""
+    if isinstance(value, list) and len(value) > 8:
+        return "[" + ", ".join(_short(v) for v in value[:4]) + f", … ({len(value)} items)]"
+    if isinstance(value, list):
+        return "[" + ", ".join(_short(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}={_short(v)}" for k, v in value.items()) + "}"
+    return repr(value)
+
+
 def name_hash(name: str) -> int:
     """64-bit FNV-1a of ``name``: a node's ``source_id`` in headers, a topic in the lockstep
     protocol (``caravan_schemas::lockstep::name_hash``)."""
@@ -220,13 +278,21 @@ pub fn python_module() -> Result<String> {
         let fields = ctypes_fields(layout, &layouts[..i])?;
         write!(
             py,
-            "\n\nclass {}(ctypes.Structure):\n    \"\"\"``{}``: {} bytes, aligned to {}.\"\"\"\n\n    _fields_ = [\n",
+            "\n\nclass {}(Message):\n    \"\"\"``{}``: {} bytes, aligned to {}.\"\"\"\n\n    _fields_ = [\n",
             layout.name, layout.type_name, layout.size, layout.align
         )?;
         for (name, ty) in &fields {
             writeln!(py, "        (\"{name}\", {ty}),")?;
         }
         py.push_str("    ]\n");
+        let counts: Vec<String> = describe::COUNTED_ARRAYS
+            .iter()
+            .filter(|(t, _, _)| *t == layout.name)
+            .map(|(_, array, by)| format!("\"{array}\": (\"{}\",)", by.join("\", \"")))
+            .collect();
+        if !counts.is_empty() {
+            writeln!(py, "    _counts_ = {{{}}}", counts.join(", "))?;
+        }
         writeln!(py, "    SIZE = {}", layout.size)?;
         writeln!(py, "    ALIGN = {}", layout.align)?;
         py.push_str("    OFFSETS = {");
