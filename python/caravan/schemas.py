@@ -20,6 +20,7 @@ SCAN_MAX_BEAMS = 1081
 MAP_MAX_SIDE = 1024
 MAP_MAX_CELLS = 1048576
 PATH_MAX_POSES = 1024
+SCENE_MAX_SHAPES = 2048
 NAME_BYTES = 60
 MAX_JOINTS = 64
 MAX_LINKS = 64
@@ -441,6 +442,43 @@ class Goal(Message):
     def type_name(cls) -> str:
         """The name iceoryx2 matches across languages."""
         return "caravan::Goal"
+
+
+class Shape(Message):
+    """``caravan::Shape``: 104 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("kind", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
+        ("pose", Pose3D),
+        ("size", Vector3),
+        ("color", ctypes.c_float * 4),
+    ]
+    SIZE = 104
+    ALIGN = 8
+    OFFSETS = {"kind": 0, "_reserved": 4, "pose": 8, "size": 64, "color": 88}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::Shape"
+
+
+class Scene(Message):
+    """``caravan::Scene``: 213000 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("shapes_len", ctypes.c_uint32),
+        ("shapes", Shape * 2048),
+    ]
+    SIZE = 213000
+    ALIGN = 8
+    OFFSETS = {"shapes_len": 0, "shapes": 8}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::Scene"
 
 
 class NodeStatus(Message):
@@ -944,6 +982,7 @@ MESSAGE_TYPES = (
     EnvStep,
     AgentAction,
     EpisodeEnd,
+    Scene,
 )
 BY_TYPE_NAME = {t.type_name(): t for t in MESSAGE_TYPES}
 # Every generated structure, the header and lockstep messages included.
@@ -963,6 +1002,8 @@ ALL_TYPES = (
     OccupancyGrid,
     Path2D,
     Goal,
+    Shape,
+    Scene,
     NodeStatus,
     Collision,
     JointValue,
@@ -992,6 +1033,7 @@ class topics:
     STATUS = "status"
     MAP = "map"
     GOAL = "goal"
+    SCENE = "scene"
     COLLISIONS = "collisions"
     AGENT_OBSERVATION = "agent/observation"
     AGENT_ACTION = "agent/action"

@@ -17,7 +17,8 @@ use crate::{
     AgentAction, Collision, Contact, ContactEstimate, Contacts, EncoderTicks, EnvStep, EpisodeEnd,
     FixedString, FixedVec, ForceTorque, ForceTorques, Goal, Header, Imu, JointCommand, JointState,
     JointValue, LaserScan, LinkState, LinkStates, NamedValue, NodeStatus, OccupancyGrid, Odometry,
-    Path2D, Pose2D, Pose3D, Quaternion, Twist, Vector3, WheelSetpoint, WheelState, Wrench,
+    Path2D, Pose2D, Pose3D, Quaternion, Scene, Shape, Twist, Vector3, WheelSetpoint, WheelState,
+    Wrench,
 };
 use core::mem::{align_of, offset_of, size_of};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
@@ -277,6 +278,8 @@ describe! {
     OccupancyGrid { resolution, origin, width, height, data }
     Path2D { poses }
     Goal { index, total, pose, tolerance_m }
+    Shape { kind, _reserved, pose, size, color }
+    Scene { shapes }
     NodeStatus {
         node, host, period_ns, steps, deadline_misses, jitter_p50_ns, jitter_p99_ns,
         jitter_max_ns, compute_mean_ns, compute_p99_ns, compute_max_ns, messages_missed,
@@ -322,6 +325,7 @@ pub const TOPIC_CONSTANTS: &[(&str, GlobalTopic)] = topic_names![
     STATUS = status,
     MAP = map,
     GOAL = goal,
+    SCENE = scene,
     COLLISIONS = collisions,
     AGENT_OBSERVATION = agent_observation,
     AGENT_ACTION = agent_action,

@@ -33,6 +33,10 @@ pub fn status() -> Topic<NodeStatus> {
 pub fn map() -> Topic<OccupancyGrid> {
     Topic::new("map")
 }
+/// The world's solids, for viewers (`scene`), published by the physics.
+pub fn scene() -> Topic<crate::Scene> {
+    Topic::new("scene")
+}
 /// The current operator goal (`goal`).
 pub fn goal() -> Topic<Goal> {
     Topic::new("goal")

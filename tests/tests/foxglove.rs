@@ -28,6 +28,8 @@ fn a_convoy_recording_opens_in_foxglove_with_valid_scene_messages() {
         ("foxglove/robot/4/pose", "foxglove.PoseInFrame"),
         ("robot/0/scan", "caravan::LaserScan"),
         ("map", "caravan::OccupancyGrid"),
+        ("foxglove/scene", "foxglove.SceneUpdate"),
+        ("scene", "caravan::Scene"),
     ] {
         assert_eq!(verdict["channels"][topic]["schema"], schema, "{topic}");
         assert!(messages(&verdict, topic) > 0, "{topic} has no messages");

@@ -5,7 +5,8 @@
 //! `robot/i/wheel_setpoint`), `robot/i/joint_states` (which takes `robot/i/joint_command`),
 //! `robot/i/link_states`, `robot/i/contacts` and `robot/i/force_torque`. It takes
 //! `robot/i/cmd_vel` for a kinematic base and every `robot/i/wrench`. Commands are held until
-//! changed. Contact events go to `collisions`. The node steps at 100 Hz unless the launch
+//! changed. Contact events go to `collisions`, and the world's solids to `scene` (once a
+//! simulated second, for viewers). The node steps at 100 Hz unless the launch
 //! file gives a `rate`; each step runs `substeps` physics steps.
 //! Params and inputs are checked before the node joins the group, so bad input never leaves
 //! anything behind in shared memory.
@@ -29,9 +30,14 @@ fn main() -> ExitCode {
     caravan::node_main("caravan-physics", setup, run)
 }
 
+/// How often the world's solids are published again, ns of simulated time.
+const SCENE_PERIOD_NS: u64 = 1_000_000_000;
+
 /// A simulation built from checked input, and the step it advances by.
 struct Ready {
     sim: Simulation,
+    /// The world's solids, published on `scene` for viewers.
+    scene: Box<caravan::schemas::Scene>,
     period_ns: u64,
     dt_ns: u64,
     max_steps: u64,
@@ -49,8 +55,12 @@ fn setup(params: Params, identity: &NodeIdentity) -> Result<Ready, String> {
         ));
     }
     let sim = caravan_physics::load(&params, &identity.launch_dir, dt_ns).map_err(|e| e.0)?;
+    // Loaded and checked by `load` already; read again for its solids.
+    let world = caravan_world::load_world(&identity.launch_dir.join(&params.world))
+        .map_err(|e| e.to_string())?;
     Ok(Ready {
         sim,
+        scene: caravan_world::scene::scene_of(&world),
         period_ns,
         dt_ns,
         max_steps: params.substeps as u64 * MAX_CATCH_UP_PERIODS,
@@ -208,6 +218,7 @@ fn send_filled<T: caravan_schemas::Message>(
 fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     let Ready {
         mut sim,
+        scene,
         period_ns,
         dt_ns,
         max_steps,
@@ -216,6 +227,8 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         .map(|i| RobotPorts::open(&node, &sim, i))
         .collect::<Result<Vec<_>, _>>()?;
     let collisions = node.publisher(&topics::collisions())?;
+    let scene_out = node.publisher(&topics::scene())?;
+    let mut next_scene_ns = 0;
     let mut commands = CommandReader::default();
 
     let mut slip_ns = 0u64;
@@ -232,6 +245,13 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         }
         for c in sim.take_collisions() {
             collisions.publish(&c)?;
+        }
+        // Static, but sent again every simulated second for viewers that join late.
+        if step.now_ns() >= next_scene_ns {
+            let mut m = scene_out.loan()?;
+            *m = *scene;
+            m.send()?;
+            next_scene_ns = step.now_ns() + SCENE_PERIOD_NS;
         }
         Ok(())
     })?;

@@ -7,6 +7,7 @@ pub mod geometry;
 pub mod kinematics;
 pub mod limits;
 pub mod robot;
+pub mod scene;
 pub mod world;
 
 pub use robot::{RobotError, RobotModel, load_robot};

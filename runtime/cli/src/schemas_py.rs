@@ -261,6 +261,7 @@ pub fn python_module() -> Result<String> {
         ("MAP_MAX_SIDE", caravan_schemas::MAP_MAX_SIDE),
         ("MAP_MAX_CELLS", caravan_schemas::MAP_MAX_CELLS),
         ("PATH_MAX_POSES", caravan_schemas::PATH_MAX_POSES),
+        ("SCENE_MAX_SHAPES", caravan_schemas::SCENE_MAX_SHAPES),
         ("NAME_BYTES", caravan_schemas::NAME_BYTES),
         ("MAX_JOINTS", caravan_schemas::MAX_JOINTS),
         ("MAX_LINKS", caravan_schemas::MAX_LINKS),

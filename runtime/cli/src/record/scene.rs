@@ -6,14 +6,16 @@
 //! (`robot/<i>/pose`), `robot_<i>/base_link_true` where it is (`robot/<i>/pose_true`), and
 //! `robot_<i>/<link>` each link of an articulated robot (`robot/<i>/link_states`). Transforms
 //! go to one `tf` channel, as in ROS; every other view is on `foxglove/<raw topic>`. A scan is
-//! drawn in its robot's `base_link`.
+//! drawn in its robot's `base_link`; the world's solids (`scene`, from the physics) are a
+//! `foxglove.SceneUpdate` on `foxglove/scene`.
 //!
 //! Views depend only on the raw message, so a lockstep recording stays byte-identical.
 
 use foxglove::Encode;
 use foxglove::messages::{
-    FrameTransform, FrameTransforms, Grid, LaserScan, PackedElementField, Pose, PoseInFrame,
-    PosesInFrame, Quaternion, Timestamp, Vector2, Vector3, packed_element_field::NumericType,
+    Color, CubePrimitive, CylinderPrimitive, FrameTransform, FrameTransforms, Grid, LaserScan,
+    PackedElementField, Pose, PoseInFrame, PosesInFrame, Quaternion, SceneEntity, SceneUpdate,
+    SpherePrimitive, Timestamp, Vector2, Vector3, packed_element_field::NumericType,
 };
 use serde_json::Value;
 
@@ -232,7 +234,53 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
                 .collect();
             vec![view(TF_TOPIC.into(), &FrameTransforms { transforms })]
         }
+        "caravan::Scene" => vec![view(own, &scene_update(json, stamp))],
         _ => Vec::new(),
+    }
+}
+
+/// A `Scene` as one entity (`world`) of cubes, cylinders and spheres in the map frame, which
+/// replaces the previous one each time it is sent.
+fn scene_update(json: &Value, stamp: Timestamp) -> SceneUpdate {
+    let mut entity = SceneEntity {
+        timestamp: Some(stamp),
+        frame_id: MAP_FRAME.into(),
+        id: "world".into(),
+        // Zero: shown until replaced.
+        lifetime: Some(foxglove::messages::Duration::new(0, 0)),
+        frame_locked: true,
+        ..Default::default()
+    };
+    for s in json["shapes"].as_array().map(Vec::as_slice).unwrap_or(&[]) {
+        let c = f64s(&s["color"]);
+        let color = Some(Color {
+            r: c.first().copied().unwrap_or(1.0),
+            g: c.get(1).copied().unwrap_or(1.0),
+            b: c.get(2).copied().unwrap_or(1.0),
+            a: c.get(3).copied().unwrap_or(1.0),
+        });
+        let pose = Some(pose_3d(&s["pose"]));
+        let size = Some(Vector3 {
+            x: num(&s["size"], "x"),
+            y: num(&s["size"], "y"),
+            z: num(&s["size"], "z"),
+        });
+        match s["kind"].as_u64() {
+            Some(0) => entity.cubes.push(CubePrimitive { pose, size, color }),
+            Some(1) => entity.cylinders.push(CylinderPrimitive {
+                pose,
+                size,
+                bottom_scale: 1.0,
+                top_scale: 1.0,
+                color,
+            }),
+            Some(2) => entity.spheres.push(SpherePrimitive { pose, size, color }),
+            _ => {}
+        }
+    }
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities: vec![entity],
     }
 }
 
@@ -250,6 +298,36 @@ mod tests {
     use super::*;
     use prost::Message;
     use serde_json::json;
+
+    #[test]
+    fn a_scene_is_one_world_entity_of_primitives() {
+        let mut scene = caravan_schemas::boxed_placement_new::<caravan_schemas::Scene>();
+        for kind in [0, 1, 2, 7] {
+            let mut shape = caravan_schemas::Shape {
+                kind,
+                color: [0.5, 0.25, 1.0, 1.0],
+                ..Default::default()
+            };
+            shape.size.z = 0.3;
+            shape.pose.orientation.w = 1.0;
+            scene.shapes.push(shape).unwrap();
+        }
+        let json = serde_json::to_value(scene.as_ref()).unwrap();
+        let v = views("scene", "caravan::Scene", &json, 2_000_000_000);
+        assert_eq!(v.len(), 1);
+        assert_eq!(v[0].topic, "foxglove/scene");
+        assert_eq!((v[0].schema)().name, "foxglove.SceneUpdate");
+        let update = SceneUpdate::decode(v[0].bytes.as_slice()).unwrap();
+        let e = &update.entities[0];
+        assert_eq!((e.id.as_str(), e.frame_id.as_str()), ("world", "map"));
+        // An unknown kind is skipped, not drawn as something else.
+        assert_eq!(
+            (e.cubes.len(), e.cylinders.len(), e.spheres.len()),
+            (1, 1, 1)
+        );
+        assert_eq!(e.cylinders[0].size.unwrap().z, 0.3);
+        assert_eq!(e.spheres[0].color.unwrap().g, 0.25);
+    }
 
     #[test]
     fn a_robot_pose_is_a_transform_and_a_pose_in_the_map() {
