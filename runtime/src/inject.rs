@@ -71,23 +71,14 @@ pub fn open_injector(
         topic: &str,
         delivery: crate::Delivery,
     ) -> Result<Box<dyn DynInject>, Error> {
-        let existing = iox
-            .service_builder(&transport::service_name(topic)?)
-            .publish_subscribe::<T>()
-            .user_header::<Header>()
-            .open();
-        let service = match existing {
+        let service = match transport::open_existing::<T>(iox, topic) {
             Ok(service) => service,
             Err(_) => transport::open_pubsub::<T>(iox, topic, delivery)?,
         };
-        let backpressure = if service.static_config().has_safe_overflow() {
-            BackpressureStrategy::DiscardData
-        } else {
-            BackpressureStrategy::RetryUntilDelivered
-        };
+        let lossless = !service.static_config().has_safe_overflow();
         let port = service
             .publisher_builder()
-            .backpressure_strategy(backpressure)
+            .backpressure_strategy(transport::backpressure(lossless))
             .max_loaned_samples(2)
             .create()
             .map_err(|e| Error::topic(topic, format!("cannot create publisher: {e:?}")))?;

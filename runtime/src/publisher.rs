@@ -33,14 +33,9 @@ pub struct Loan<'p, T: Message> {
 impl<T: Message> Publisher<T> {
     pub(crate) fn new(shared: Rc<Shared>, topic: &Topic<T>) -> Result<Self, Error> {
         let service = transport::open_pubsub::<T>(&shared.iox, topic.name(), topic.delivery())?;
-        let backpressure = if topic.delivery().is_lossless() {
-            BackpressureStrategy::RetryUntilDelivered
-        } else {
-            BackpressureStrategy::DiscardData
-        };
         let port = service
             .publisher_builder()
-            .backpressure_strategy(backpressure)
+            .backpressure_strategy(transport::backpressure(topic.delivery().is_lossless()))
             .max_loaned_samples(2)
             .create()
             .map_err(|e| Error::topic(topic.name(), format!("cannot create publisher: {e:?}")))?;

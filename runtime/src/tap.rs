@@ -127,12 +127,7 @@ pub fn open_tap(
         iox: &iceoryx2::node::Node<ipc::Service>,
         topic: &str,
     ) -> Result<Box<dyn DynTap>, Error> {
-        let service = iox
-            .service_builder(&transport::service_name(topic)?)
-            .publish_subscribe::<T>()
-            .user_header::<Header>()
-            .open()
-            .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))?;
+        let service = transport::open_existing::<T>(iox, topic)?;
         let depth = service.static_config().subscriber_max_buffer_size();
         let port = service
             .subscriber_builder()
@@ -178,12 +173,7 @@ pub fn topic_ports(
         iox: &iceoryx2::node::Node<ipc::Service>,
         topic: &str,
     ) -> Result<TopicPorts, Error> {
-        let service = iox
-            .service_builder(&transport::service_name(topic)?)
-            .publish_subscribe::<T>()
-            .user_header::<Header>()
-            .open()
-            .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))?;
+        let service = transport::open_existing::<T>(iox, topic)?;
         let config = service.static_config();
         let mut ports = TopicPorts {
             lossless: !config.has_safe_overflow(),

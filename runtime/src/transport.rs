@@ -65,6 +65,28 @@ pub(crate) fn service_name(topic: &str) -> Result<ServiceName, Error> {
     ServiceName::new(topic).map_err(|e| Error::topic(topic, format!("not a valid name: {e:?}")))
 }
 
+/// Opens the publish-subscribe service of a topic that exists, whatever its contract.
+pub(crate) fn open_existing<T: Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+) -> Result<PubSubFactory<ipc::Service, T, Header>, Error> {
+    iox.service_builder(&service_name(topic)?)
+        .publish_subscribe::<T>()
+        .user_header::<Header>()
+        .open()
+        .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))
+}
+
+/// A publisher's behaviour when a subscriber's buffer is full: wait on a lossless topic,
+/// drop the oldest on a latest-value one.
+pub(crate) fn backpressure(lossless: bool) -> BackpressureStrategy {
+    if lossless {
+        BackpressureStrategy::RetryUntilDelivered
+    } else {
+        BackpressureStrategy::DiscardData
+    }
+}
+
 /// Opens (or creates) the publish-subscribe service of a topic with its delivery contract.
 pub(crate) fn open_pubsub<T: Message>(
     iox: &iceoryx2::node::Node<ipc::Service>,
