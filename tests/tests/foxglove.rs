@@ -36,6 +36,24 @@ fn a_convoy_recording_opens_in_foxglove_with_valid_scene_messages() {
     }
     // Recorded from the start, though nothing collided.
     assert_eq!(messages(&verdict, "collisions"), 0);
+    // The shipped layout shows what the recording holds.
+    let layout = caravan_tests::workspace_root().join("launch/convoy/foxglove-layout.json");
+    let mut topics = Vec::new();
+    layout_topics(
+        &serde_json::from_str(&std::fs::read_to_string(layout).unwrap()).unwrap(),
+        &mut topics,
+    );
+    for topic in topics {
+        let shown = if verdict["channels"][format!("foxglove/{topic}")].is_object() {
+            format!("foxglove/{topic}")
+        } else {
+            topic
+        };
+        assert!(
+            messages(&verdict, &shown) > 0,
+            "the layout shows {shown}, which has no messages"
+        );
+    }
 }
 
 #[test]
@@ -160,4 +178,119 @@ fn a_taken_foxglove_port_is_bad_input_and_starts_nothing() {
         "{err}"
     );
     assert!(s.run_dirs().is_empty(), "no run directory is made");
+}
+
+/// The topics a shipped layout names: its 3D panels' Foxglove channels (as their raw topics)
+/// and the quoted topics of its plot paths.
+fn layout_topics(layout: &Value, out: &mut Vec<String>) {
+    match layout {
+        Value::Object(map) => {
+            if map.get("panelType").and_then(Value::as_str) == Some("ThreeDee") {
+                for topic in map["config"]["topics"]
+                    .as_object()
+                    .into_iter()
+                    .flatten()
+                    .map(|(k, _)| k)
+                {
+                    out.push(topic.trim_start_matches("foxglove/").to_string());
+                }
+            }
+            if let Some(path) = map.get("value").and_then(Value::as_str)
+                && let Some(rest) = path.strip_prefix('"')
+                && let Some((topic, _)) = rest.split_once('"')
+            {
+                out.push(topic.to_string());
+            }
+            map.values().for_each(|v| layout_topics(v, out));
+        }
+        Value::Array(items) => items.iter().for_each(|v| layout_topics(v, out)),
+        _ => {}
+    }
+}
+
+/// `*` matches any run of characters, as in a launch file's `record`.
+fn matches(pattern: &str, topic: &str) -> bool {
+    match pattern.split_once('*') {
+        None => pattern == topic,
+        Some((head, tail)) => {
+            topic.starts_with(head)
+                && (0..=topic.len() - head.len()).any(|i| matches(tail, &topic[head.len() + i..]))
+        }
+    }
+}
+
+/// Every shipped layout is the generator's output (`python/layouts/make_layouts.py`, with the
+/// Foxglove SDK's layout classes), and names only topics its scenario's launch files record.
+#[test]
+fn shipped_layouts_are_generated_and_name_recorded_topics() {
+    let root = caravan_tests::workspace_root();
+    let out = std::env::temp_dir().join(format!("caravan-layouts-{}", std::process::id()));
+    let made = std::process::Command::new(root.join("python/caravan-python"))
+        .args([
+            "--venv",
+            "layouts",
+            "--requirements",
+            "layouts/requirements.txt",
+        ])
+        .arg(root.join("python/layouts/make_layouts.py"))
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    for (scenario, file) in [
+        ("convoy", "convoy/foxglove-layout.json"),
+        ("tracked", "tracked/foxglove-layout.json"),
+        ("imu", "imu/foxglove-layout.json"),
+        ("contact", "contact/foxglove-layout.json"),
+        ("uav", "uav/foxglove-layout.json"),
+        ("", "pingpong.foxglove-layout.json"),
+    ] {
+        let shipped = std::fs::read_to_string(root.join("launch").join(file)).unwrap();
+        let generated = std::fs::read_to_string(out.join(file)).unwrap();
+        assert_eq!(
+            shipped, generated,
+            "launch/{file} is not the generator's output"
+        );
+        let mut topics = Vec::new();
+        layout_topics(&serde_json::from_str(&shipped).unwrap(), &mut topics);
+        assert!(!topics.is_empty(), "{file}");
+        // The record patterns of the scenario's launch files.
+        let dir = root.join("launch").join(scenario);
+        let files: Vec<std::path::PathBuf> = if scenario.is_empty() {
+            vec![root.join("launch/pingpong.toml")]
+        } else {
+            std::fs::read_dir(&dir)
+                .unwrap()
+                .flatten()
+                .map(|e| e.path())
+                .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+                .collect()
+        };
+        let patterns: Vec<String> = files
+            .iter()
+            .filter_map(|f| {
+                let doc: toml::Table = std::fs::read_to_string(f).unwrap().parse().ok()?;
+                Some(
+                    doc.get("group")?
+                        .get("record")?
+                        .as_array()?
+                        .iter()
+                        .filter_map(|p| p.as_str().map(str::to_string))
+                        .collect::<Vec<_>>(),
+                )
+            })
+            .flatten()
+            .collect();
+        for topic in &topics {
+            assert!(
+                patterns.iter().any(|p| matches(p, topic)),
+                "{file} shows '{topic}', which no launch file of its scenario records ({patterns:?})"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
 }
