@@ -7,7 +7,24 @@ use caravan_tests::{assert_convoy_succeeded, run_convoy};
 fn lockstep_convoy_reaches_every_goal_without_collision() {
     let run = run_convoy("convoy.toml");
     assert_convoy_succeeded(&run.report["convoy"]);
-    assert!(run.dir.join("trajectories.svg").exists());
+    let trajectories = std::fs::read_to_string(run.dir.join("trajectories.svg")).unwrap();
+    assert!(trajectories.contains(">1 m</text>"), "a metre scale bar");
+    // The gaps and cross-track errors against time, one line per follower in each panel.
+    assert_eq!(run.report["convoy"]["series_plot"], "series.svg");
+    let series = std::fs::read_to_string(run.dir.join("series.svg")).unwrap();
+    for text in [
+        "gap to predecessor (m)",
+        "cross-track to predecessor",
+        "R1",
+        "R4",
+        "time (s)",
+    ] {
+        assert!(series.contains(text), "series.svg lacks {text}");
+    }
+    assert!(
+        series.matches("<polyline").count() >= 8,
+        "4 followers × 2 panels"
+    );
 }
 
 #[test]

@@ -30,6 +30,17 @@ fn lockstep_group_runs_records_and_reports() {
     assert_eq!(node(&report, "sum")["steps"], 201);
     assert_eq!(node(&report, "pong")["steps"], 100); // one tick after each ping but the last
     assert_eq!(node(&report, "pong")["exit_status"], "exited 0");
+    // The charts of the nodes' compute times and the topics' latencies, shown in report.md.
+    let dir = &s.run_dirs()[0];
+    let markdown = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    for chart in ["nodes.svg", "topics.svg"] {
+        let svg = std::fs::read_to_string(dir.join(chart)).unwrap();
+        assert!(
+            svg.contains(">ping<") || svg.contains(">demo/ping<"),
+            "{chart}: {svg}"
+        );
+        assert!(markdown.contains(&format!("]({chart})")), "{markdown}");
+    }
     assert!(
         s.shm_entries().is_empty(),
         "left behind: {:?}",

@@ -76,53 +76,6 @@ pub fn readings_svg(path: &Path, title: &str, readings: &[Reading]) -> anyhow::R
     Ok(())
 }
 
-/// One labelled line of [`lines_svg`], drawn as separate segments (gaps between them).
-pub struct Series {
-    pub label: &'static str,
-    pub segments: Vec<Vec<(f64, f64)>>,
-}
-
-/// Writes labelled lines against time to `path`: the force-sensor accelerometer beside the
-/// finite-difference one and the ideal value.
-pub fn lines_svg(path: &Path, title: &str, y_label: &str, series: &[Series]) -> anyhow::Result<()> {
-    let points = || series.iter().flat_map(|s| s.segments.iter().flatten());
-    let (t_end, lo, hi) = points().fold((0.0f64, f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-        (a.0.max(p.0), a.1.min(p.1), a.2.max(p.1))
-    });
-    let pad = ((hi - lo) * 0.08).max(0.05);
-    let root = SVGBackend::new(path, (900, 400)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(55)
-        .build_cartesian_2d(0.0..t_end.max(1e-3), (lo - pad)..(hi + pad))?;
-    chart
-        .configure_mesh()
-        .x_desc("time (s)")
-        .y_desc(y_label)
-        .draw()?;
-    const COLOURS: [RGBColor; 3] = [AXES[2].1, AXES[0].1, BLACK];
-    for (s, colour) in series.iter().zip(COLOURS.iter().cycle()) {
-        for (k, segment) in s.segments.iter().enumerate() {
-            let every = segment.len().div_ceil(MAX_POINTS).max(1);
-            let drawn = chart.draw_series(LineSeries::new(
-                segment.iter().step_by(every).copied(),
-                colour,
-            ))?;
-            if k == 0 {
-                drawn
-                    .label(s.label)
-                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], *colour));
-            }
-        }
-    }
-    legend(&mut chart)?;
-    root.present()?;
-    Ok(())
-}
-
 /// Writes the Allan deviation of each triad (log–log) with its configured model
 /// √(N²/τ + (0.664·B)²) to `path`.
 pub fn allan_svg(path: &Path, triads: &[crate::allan_run::TriadResult]) -> anyhow::Result<()> {

@@ -191,8 +191,8 @@ fn force_plot(
     forced: &[Reading],
     phases: &[crate::scenario::Phase],
 ) -> anyhow::Result<()> {
-    use crate::plot::{Series, lines_svg};
     use crate::scenario::Expect;
+    use caravan_report::plot::{Panel, Series, lines_svg};
     let z = |rs: &[Reading]| vec![rs.iter().map(|r| (r.t_s, r.accel[2])).collect()];
     let ideal = phases
         .iter()
@@ -201,24 +201,21 @@ fn force_plot(
             Expect::Norm(_) => None,
         })
         .collect();
+    let series = |label: &str, segments| Series {
+        label: label.into(),
+        segments,
+    };
     lines_svg(
         path,
         "The two accelerometer designs: vertical specific force",
-        "f z (m/s²)",
-        &[
-            Series {
-                label: "finite difference",
-                segments: z(readings),
-            },
-            Series {
-                label: "force sensor, F/m",
-                segments: z(forced),
-            },
-            Series {
-                label: "ideal (scored windows)",
-                segments: ideal,
-            },
-        ],
+        &[Panel {
+            y_label: "f z (m/s²)".into(),
+            series: vec![
+                series("finite difference", z(readings)),
+                series("force sensor, F/m", z(forced)),
+                series("ideal (scored windows)", ideal),
+            ],
+        }],
     )
 }
 

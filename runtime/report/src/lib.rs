@@ -61,6 +61,7 @@ mod facts;
 pub mod format;
 pub mod fuzz;
 mod locate;
+pub mod plot;
 pub mod plugin;
 mod recording;
 mod section;

@@ -92,7 +92,8 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
         .collect();
     let trajectories: Vec<&Trajectory> = robots.values().collect();
     let paths: Vec<Polyline> = trajectories.iter().map(|t| extended_path(t)).collect();
-    let (min_gap, order_kept) = gaps_and_order(&trajectories, &paths[0], &scene.footprint);
+    let (min_gap, order_kept, gap_series) =
+        gaps_and_order(&trajectories, &paths[0], &scene.footprint);
     let followers: Vec<Value> = (1..trajectories.len())
         .map(|i| {
             let errors = |path: &Polyline| {
@@ -112,6 +113,15 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
         .collect();
     let plot = plot(scene, &robots, &goals);
     let _ = std::fs::write(run_dir.join("trajectories.svg"), plot);
+    let cross_track: Vec<Vec<(f64, f64)>> = (1..trajectories.len())
+        .map(|i| {
+            trajectories[i]
+                .iter()
+                .map(|(t, p)| (*t as f64 * 1e-9, paths[i - 1].project([p[0], p[1]]).0))
+                .collect()
+        })
+        .collect();
+    let series_written = series_plot(&run_dir.join(SERIES_FILE), &robots, gap_series, cross_track);
     Some(json!({
         "robots": robots.len(),
         "goals_total": total,
@@ -124,6 +134,7 @@ pub fn section(messages: &[RecordedMessage], scene: &Scene, run_dir: &Path) -> O
         "cross_track_to_predecessor_mean_m": mean_over(&followers, "cross_track_to_predecessor_m"),
         "followers": followers,
         "plot": "trajectories.svg",
+        "series_plot": series_written.then_some(SERIES_FILE),
     }))
 }
 
@@ -146,7 +157,49 @@ fn extended_path(t: &Trajectory) -> Polyline {
     Polyline::from_trajectory(&points, 0.02)
 }
 
-fn gaps_and_order(robots: &[&Trajectory], leader_path: &Polyline, fp: &Footprint) -> (f64, bool) {
+/// Gaps and cross-track errors against time, one line per follower.
+const SERIES_FILE: &str = "series.svg";
+
+/// Writes the gap of each follower to its predecessor and its cross-track error to the
+/// predecessor's path against time; whether it could.
+fn series_plot(
+    path: &Path,
+    robots: &BTreeMap<usize, Trajectory>,
+    gaps: Vec<Vec<(f64, f64)>>,
+    cross_track: Vec<Vec<(f64, f64)>>,
+) -> bool {
+    use caravan_report::plot::{Panel, Series, lines_svg};
+    let names: Vec<String> = robots.keys().skip(1).map(|i| format!("R{i}")).collect();
+    let lines = |data: Vec<Vec<(f64, f64)>>| -> Vec<Series> {
+        names
+            .iter()
+            .zip(data)
+            .map(|(label, points)| Series {
+                label: label.clone(),
+                segments: vec![points],
+            })
+            .collect()
+    };
+    let panels = [
+        Panel {
+            y_label: "gap to predecessor (m)".into(),
+            series: lines(gaps),
+        },
+        Panel {
+            y_label: "cross-track to predecessor's path (m)".into(),
+            series: lines(cross_track),
+        },
+    ];
+    lines_svg(path, "Convoy: gaps and cross-track errors", &panels).is_ok()
+}
+
+/// The minimum gap between any two robots, whether the order was kept along the leader's
+/// path, and each follower's gap to its predecessor against time (s, m).
+fn gaps_and_order(
+    robots: &[&Trajectory],
+    leader_path: &Polyline,
+    fp: &Footprint,
+) -> (f64, bool, Vec<Vec<(f64, f64)>>) {
     // Physics publishes every robot at the same stamps; compare robots at the stamps where all
     // were recorded (a realtime recording may start a robot's topic a little later).
     let mut at_stamp: BTreeMap<u64, Vec<[f64; 3]>> = BTreeMap::new();
@@ -157,14 +210,19 @@ fn gaps_and_order(robots: &[&Trajectory], leader_path: &Polyline, fp: &Footprint
     }
     let mut min_gap = f64::INFINITY;
     let mut order_kept = true;
-    for poses in at_stamp.values().filter(|p| p.len() == robots.len()) {
+    let mut series = vec![Vec::new(); robots.len().saturating_sub(1)];
+    for (stamp, poses) in at_stamp.iter().filter(|(_, p)| p.len() == robots.len()) {
         let rects: Vec<_> = poses
             .iter()
             .map(|p| footprint(*p, fp.half, fp.offset))
             .collect();
         for a in 0..rects.len() {
             for b in a + 1..rects.len() {
-                min_gap = min_gap.min(rect_distance(&rects[a], &rects[b]));
+                let gap = rect_distance(&rects[a], &rects[b]);
+                min_gap = min_gap.min(gap);
+                if b == a + 1 {
+                    series[a].push((*stamp as f64 * 1e-9, gap));
+                }
             }
         }
         let along: Vec<f64> = poses
@@ -173,7 +231,7 @@ fn gaps_and_order(robots: &[&Trajectory], leader_path: &Polyline, fp: &Footprint
             .collect();
         order_kept &= along.windows(2).all(|w| w[1] <= w[0] + 0.05);
     }
-    (min_gap, order_kept)
+    (min_gap, order_kept, series)
 }
 
 fn stats(mut v: Vec<f64>) -> Value {

@@ -49,6 +49,12 @@ pub fn convoy(c: &Value) -> String {
         c["order_kept"],
         c["plot"].as_str().unwrap_or("")
     );
+    if let Some(series) = c["series_plot"].as_str() {
+        let _ = writeln!(
+            md,
+            "![gaps and cross-track errors against time]({series})\n"
+        );
+    }
     md.push_str("| follower | cross-track to predecessor mean / p95 / max m | to leader mean / p95 / max m |\n|---|---|---|\n");
     for f in c["followers"].as_array().into_iter().flatten() {
         let _ = writeln!(

@@ -1,5 +1,6 @@
 //! The convoy's report plugin (`caravan-convoy-report`): the `convoy` section (goals, gaps,
-//! collisions, order, cross-track errors, `trajectories.svg`) and the `slam` section (map
+//! collisions, order, cross-track errors, `trajectories.svg`, `series.svg` with the gaps and
+//! cross-track errors against time) and the `slam` section (map
 //! scale on the world's surveys, the leader's pose error, `map.svg`).
 //!
 //! Params (in the launch file's `[[report]]` entry):

@@ -23,7 +23,11 @@
 //!   is the mean step compute time times the host's `cpu_slowdown` (null without one).
 //! - one key per plugin section (e.g. `convoy`, `slam`), laid out as its plugin documents;
 //! - `failed_sections[]` (only when a plugin failed): `{exec, message}`.
+//!
+//! Beside them, `nodes.svg` (compute time per step by node) and `topics.svg` (latency by topic)
+//! chart the nodes' and topics' numbers; report.md shows them.
 
+mod charts;
 mod links;
 mod markdown;
 mod plugins;
@@ -47,6 +51,9 @@ pub fn write(run_dir: &Path) -> Result<Written> {
     let messages = caravan_report::read_all(&run_dir.join(caravan_report::RECORDING_FILE))?;
     let mut report = generic(&facts, &messages, run_dir);
     let mut markdown = markdown::render(&report);
+    for chart in charts::write(run_dir, &report) {
+        markdown.push_str(&format!("\n![{chart}]({chart})\n"));
+    }
     let outcome = plugins::run_all(run_dir, &facts.reports);
     // Sections go into report.json as their plugins wrote them: reading their numbers back
     // and printing them again could change a last digit.
