@@ -124,6 +124,8 @@ fn live_convoy_reaches_a_foxglove_client(clock: &str) {
             "foxglove/robot/0/scan",
             "robot/0/scan",
             "foxglove/robot/1/pose",
+            "foxglove/scene",
+            "status",
         ],
     );
     // SAFETY: signalling our own child.

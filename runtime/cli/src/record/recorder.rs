@@ -233,7 +233,20 @@ impl Recorder {
                 continue;
             }
             match open_tap(&self.iox, &info.name, &info.type_name) {
-                Ok(tap) if info.name == status.name() => self.status_tap = Some(tap),
+                Ok(tap) if info.name == status.name() => {
+                    // Served live (wall-clock measurements are fine there), never recorded.
+                    if let Some(live) = &mut self.live {
+                        let schema = schema::for_type(tap.type_name(), true).unwrap_or(json!({}));
+                        let data = schema.to_string().into_bytes();
+                        let type_name = tap.type_name();
+                        live.advertise(
+                            status.name(),
+                            "json",
+                            foxglove::Schema::new(type_name, "jsonschema", data),
+                        )?;
+                    }
+                    self.status_tap = Some(tap)
+                }
                 Ok(tap) => {
                     opened.push((tap.topic().to_string(), tap.type_name()));
                     self.taps.push(tap);
@@ -350,6 +363,15 @@ impl Recorder {
         if let Some(tap) = &self.status_tap {
             tap.drain(&mut batch)?;
             for m in batch.drain(..) {
+                if let Some(live) = &mut self.live {
+                    let mut record = m.json.clone();
+                    record["header"] = schema::header_json(&m.header, true);
+                    live.log(
+                        tap.topic(),
+                        m.header.stamp_ns,
+                        &serde_json::to_vec(&record)?,
+                    );
+                }
                 let Some(node) = m
                     .json
                     .get("node")
