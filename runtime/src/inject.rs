@@ -28,24 +28,8 @@ impl<T: Message> DynInject for Inject<T> {
     }
 
     fn publish_json(&self, header: Header, json: &serde_json::Value) -> Result<(), Error> {
-        let mut uninit = self
-            .port
-            .loan_uninit()
-            .map_err(|e| Error::topic(&self.topic, format!("cannot loan a sample: {e:?}")))?;
-        // SAFETY: placement_default initialises every field of the payload in place.
-        let mut sample = unsafe {
-            T::placement_default(uninit.payload_mut().as_mut_ptr());
-            uninit.assume_init()
-        };
-        // SAFETY: `T` is plain data whose fields are all numbers (the registry's types); the
-        // slice covers exactly the payload, and `write_message` writes valid numbers only.
-        let bytes = unsafe {
-            std::slice::from_raw_parts_mut(
-                (sample.payload_mut() as *mut T).cast::<u8>(),
-                std::mem::size_of::<T>(),
-            )
-        };
-        caravan_schemas::from_json::write_message(caravan_schemas::type_name::<T>(), json, bytes)
+        let mut sample = crate::publisher::loan_default(&self.port, &self.topic)?;
+        caravan_schemas::from_json::write_into(sample.payload_mut(), json)
             .map_err(|e| Error::topic(&self.topic, e))?;
         *sample.user_header_mut() = header;
         sample

@@ -31,6 +31,7 @@ pub mod log;
 pub mod network;
 mod node;
 mod params;
+pub mod pattern;
 mod publisher;
 mod rate;
 mod stats;

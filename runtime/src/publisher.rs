@@ -62,17 +62,8 @@ impl<T: Message> Publisher<T> {
     /// Loans a message in shared memory, initialised to its default, to be filled in place.
     /// Use it for large messages (scans, maps) to avoid copies.
     pub fn loan(&self) -> Result<Loan<'_, T>, Error> {
-        let mut uninit = self
-            .port
-            .loan_uninit()
-            .map_err(|e| Error::topic(&self.topic, format!("cannot loan a sample: {e:?}")))?;
-        // SAFETY: placement_default initialises every field of the payload in place.
-        let sample = unsafe {
-            T::placement_default(uninit.payload_mut().as_mut_ptr());
-            uninit.assume_init()
-        };
         Ok(Loan {
-            sample,
+            sample: loan_default(&self.port, &self.topic)?,
             publisher: self,
         })
     }
@@ -122,6 +113,21 @@ impl<T: Message> Publisher<T> {
         }
         Ok(())
     }
+}
+
+/// A sample of `port` loaned in shared memory and initialised in place to `T`'s default.
+pub(crate) fn loan_default<T: Message>(
+    port: &IoxPublisher<T>,
+    topic: &str,
+) -> Result<SampleMut<ipc::Service, T, Header>, Error> {
+    let mut uninit = port
+        .loan_uninit()
+        .map_err(|e| Error::topic(topic, format!("cannot loan a sample: {e:?}")))?;
+    // SAFETY: placement_default initialises every field of the payload in place.
+    Ok(unsafe {
+        T::placement_default(uninit.payload_mut().as_mut_ptr());
+        uninit.assume_init()
+    })
 }
 
 impl<T: Message> Loan<'_, T> {

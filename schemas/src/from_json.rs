@@ -16,7 +16,9 @@ use serde_json::Value;
 /// `caravan::Pose2D`). `bytes` must hold a valid value of that type (a default one, say): the
 /// fields the JSON leaves out keep theirs.
 pub fn write_message(type_name: &str, json: &Value, bytes: &mut [u8]) -> Result<(), String> {
-    let known = layouts();
+    // Built once: `caravan play` writes every message of a recording through here.
+    static KNOWN: std::sync::LazyLock<Vec<TypeLayout>> = std::sync::LazyLock::new(layouts);
+    let known: &[TypeLayout] = &KNOWN;
     let layout = known
         .iter()
         .find(|l| l.type_name == type_name)
@@ -28,7 +30,7 @@ pub fn write_message(type_name: &str, json: &Value, bytes: &mut [u8]) -> Result<
             bytes.len()
         ));
     }
-    Writer { known: &known }.object(layout, json, bytes, "")
+    Writer { known }.object(layout, json, bytes, "")
 }
 
 struct Writer<'k> {
@@ -207,18 +209,20 @@ fn scalar(s: Scalar, json: &Value, slot: &mut [u8], at: &str) -> Result<(), Stri
     Ok(())
 }
 
+/// Writes `json` into `msg`, a valid message (a default one, say): see [`write_message`].
+pub fn write_into<T: crate::Message>(msg: &mut T, json: &Value) -> Result<(), String> {
+    // SAFETY: `T` is plain data (ZeroCopySend, repr(C)) whose fields are all numbers or arrays
+    // of numbers; the slice covers exactly `msg`, and `write_message` writes valid numbers only.
+    let bytes = unsafe {
+        core::slice::from_raw_parts_mut((msg as *mut T).cast::<u8>(), core::mem::size_of::<T>())
+    };
+    write_message(crate::type_name::<T>(), json, bytes)
+}
+
 /// Builds a message of type `T` from JSON (on the heap: some messages are megabytes).
 pub fn message_from_json<T: crate::Message>(json: &Value) -> Result<Box<T>, String> {
     let mut value = crate::boxed_placement_new::<T>();
-    // SAFETY: `T` is plain data (ZeroCopySend, repr(C)); every field is a number or an array
-    // of numbers, which any bytes written by `write_message` form validly.
-    let bytes = unsafe {
-        core::slice::from_raw_parts_mut(
-            (value.as_mut() as *mut T).cast::<u8>(),
-            core::mem::size_of::<T>(),
-        )
-    };
-    write_message(crate::type_name::<T>(), json, bytes)?;
+    write_into(value.as_mut(), json)?;
     Ok(value)
 }
 

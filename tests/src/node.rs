@@ -43,16 +43,25 @@ fn ensure_installed() {
 /// to every channel, and returns when each of `topics` delivered a message or `seconds` passed.
 /// The verdict is `{server, channels: {topic: {schema, encoding, messages}}, errors: [...]}`.
 pub fn check_live(url: &str, seconds: u32, topics: &[&str]) -> serde_json::Value {
+    verdict(
+        "check-live.mjs",
+        &[url, &seconds.to_string(), &topics.join(",")],
+    )
+}
+
+/// Runs one of the checking scripts with `args` and parses the JSON line it prints; panics,
+/// with its output, if it printed none.
+fn verdict<S: AsRef<std::ffi::OsStr>>(script: &str, args: &[S]) -> serde_json::Value {
     ensure_installed();
     let out = Command::new("node")
-        .arg(node_dir().join("check-live.mjs"))
-        .args([url, &seconds.to_string(), &topics.join(",")])
+        .arg(node_dir().join(script))
+        .args(args)
         .output()
         .expect("run node");
     let stdout = String::from_utf8_lossy(&out.stdout);
     serde_json::from_str(stdout.trim()).unwrap_or_else(|_| {
         panic!(
-            "check-live.mjs gave no verdict: {stdout}\n{}",
+            "{script} gave no verdict: {stdout}\n{}",
             String::from_utf8_lossy(&out.stderr)
         )
     })
@@ -70,17 +79,5 @@ pub fn free_port() -> u16 {
 /// `{channels: {topic: {schema, encoding, messages}}, errors: [...]}`; panics if Node cannot
 /// read the file at all.
 pub fn check_recording(mcap: &Path) -> serde_json::Value {
-    ensure_installed();
-    let out = Command::new("node")
-        .arg(node_dir().join("check-recording.mjs"))
-        .arg(mcap)
-        .output()
-        .expect("run node");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    serde_json::from_str(stdout.trim()).unwrap_or_else(|_| {
-        panic!(
-            "check-recording.mjs gave no verdict: {stdout}\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        )
-    })
+    verdict("check-recording.mjs", &[mcap])
 }

@@ -210,17 +210,6 @@ fn layout_topics(layout: &Value, out: &mut Vec<String>) {
     }
 }
 
-/// `*` matches any run of characters, as in a launch file's `record`.
-fn matches(pattern: &str, topic: &str) -> bool {
-    match pattern.split_once('*') {
-        None => pattern == topic,
-        Some((head, tail)) => {
-            topic.starts_with(head)
-                && (0..=topic.len() - head.len()).any(|i| matches(tail, &topic[head.len() + i..]))
-        }
-    }
-}
-
 /// Every shipped layout is the generator's output (`python/layouts/make_layouts.py`, with the
 /// Foxglove SDK's layout classes), and names only topics its scenario's launch files record.
 #[test]
@@ -289,7 +278,9 @@ fn shipped_layouts_are_generated_and_name_recorded_topics() {
             .collect();
         for topic in &topics {
             assert!(
-                patterns.iter().any(|p| matches(p, topic)),
+                patterns
+                    .iter()
+                    .any(|p| caravan::pattern::glob_match(p, topic)),
                 "{file} shows '{topic}', which no launch file of its scenario records ({patterns:?})"
             );
         }

@@ -52,8 +52,26 @@ impl LiveView {
         self.server.as_ref().map_or(0, |s| s.port())
     }
 
+    /// Advertises a raw Caravan topic: JSON with the schema generated for `type_name`.
+    pub fn advertise_raw(&mut self, topic: &str, type_name: &str, wall_clock: bool) -> Result<()> {
+        let schema =
+            super::schema::for_type(type_name, wall_clock).unwrap_or_else(|| serde_json::json!({}));
+        let data = schema.to_string().into_bytes();
+        self.advertise(topic, "json", Schema::new(type_name, "jsonschema", data))
+    }
+
+    /// Advertises a Foxglove view (`tf`, `foxglove/…`).
+    pub fn advertise_view(&mut self, topic: &str, schema: super::scene::SceneSchema) -> Result<()> {
+        let encoding = schema.encoding.clone();
+        self.advertise(
+            topic,
+            &encoding,
+            Schema::new(schema.name, schema.encoding, schema.data),
+        )
+    }
+
     /// Advertises `topic` (once; later calls keep the first schema).
-    pub fn advertise(&mut self, topic: &str, encoding: &str, schema: Schema) -> Result<()> {
+    fn advertise(&mut self, topic: &str, encoding: &str, schema: Schema) -> Result<()> {
         if self.channels.contains_key(topic) {
             return Ok(());
         }

@@ -236,14 +236,7 @@ impl Recorder {
                 Ok(tap) if info.name == status.name() => {
                     // Served live (wall-clock measurements are fine there), never recorded.
                     if let Some(live) = &mut self.live {
-                        let schema = schema::for_type(tap.type_name(), true).unwrap_or(json!({}));
-                        let data = schema.to_string().into_bytes();
-                        let type_name = tap.type_name();
-                        live.advertise(
-                            status.name(),
-                            "json",
-                            foxglove::Schema::new(type_name, "jsonschema", data),
-                        )?;
+                        live.advertise_raw(status.name(), tap.type_name(), true)?;
                     }
                     self.status_tap = Some(tap)
                 }
@@ -271,22 +264,11 @@ impl Recorder {
                     self.scene_channel(&view, schema)?;
                 }
                 if let Some(live) = &mut self.live {
-                    let s = schema();
-                    live.advertise(
-                        &view,
-                        &s.encoding,
-                        foxglove::Schema::new(&s.name, &s.encoding, s.data),
-                    )?;
+                    live.advertise_view(&view, schema())?;
                 }
             }
             if let Some(live) = &mut self.live {
-                let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
-                let data = schema.to_string().into_bytes();
-                live.advertise(
-                    &topic,
-                    "json",
-                    foxglove::Schema::new(type_name, "jsonschema", data),
-                )?;
+                live.advertise_raw(&topic, type_name, !self.lockstep)?;
             }
         }
         Ok(())
@@ -303,7 +285,7 @@ impl Recorder {
         Ok(id)
     }
 
-    /// The raw channel of `topic`, added on first use.
+    /// The raw channel of `topic`, added at discovery.
     fn channel(&mut self, topic: &str, type_name: &str) -> Result<u16> {
         if let Some(&id) = self.channels.get(topic) {
             return Ok(id);
@@ -421,10 +403,10 @@ impl Recorder {
                 live.log(&view.topic, stamp_ns, &view.bytes);
             }
         }
-        if !self.is_recorded(&topic) {
+        // Discovery gave every recorded topic its channel; the others are served live only.
+        let Some(&channel) = self.channels.get(&topic) else {
             return Ok(());
-        }
-        let channel = self.channel(&topic, type_name)?;
+        };
         self.write_message(channel, stamp_ns, &bytes)?;
         for view in views {
             let channel = self.scene_channel(&view.topic, view.schema)?;
