@@ -17,6 +17,8 @@ pub struct Step {
     now_ns: u64,
     index: u64,
     stop: bool,
+    /// The next step asked for with [`Step::wake_at`] ([`Trigger::Scheduled`] nodes).
+    wake_ns: Option<u64>,
 }
 
 impl Step {
@@ -37,6 +39,22 @@ impl Step {
     /// Ends the run after this step.
     pub fn stop(&mut self) {
         self.stop = true;
+    }
+
+    /// Asks for the next step at simulated time `at` (a [`Trigger::Scheduled`] node; other
+    /// triggers ignore it). A time not after this step's, or none asked for, leaves the node
+    /// asleep until the run ends.
+    pub fn wake_at(&mut self, at: Duration) {
+        self.wake_ns = Some(at.as_nanos().min(u64::MAX as u128) as u64);
+    }
+
+    fn new() -> Self {
+        Step {
+            now_ns: 0,
+            index: 0,
+            stop: false,
+            wake_ns: None,
+        }
     }
 }
 
@@ -110,15 +128,14 @@ impl Executor<'_> {
     {
         let listener = match trigger {
             Trigger::OnMessage(topic) => Some(self.shared.listener(topic)?),
-            Trigger::Every(_) => None,
+            Trigger::Every(_) | Trigger::Scheduled => None,
         };
+        // A scheduled node steps at once, then when it asks (ns since the group's epoch).
+        let scheduled = matches!(trigger, Trigger::Scheduled);
+        let mut wake_ns = scheduled.then_some(0u64);
         let ws = waitset()?;
         let mut stats = StepStats::new(trigger.period());
-        let mut state = Step {
-            now_ns: 0,
-            index: 0,
-            stop: false,
-        };
+        let mut state = Step::new();
         let attach_err = |e| Error::transport("waitset attach", e);
         let period_guard = trigger
             .period()
@@ -152,6 +169,16 @@ impl Executor<'_> {
                     .map_err(|e| Error::transport("waitset wait", e))?;
                 fired |= crate::wall_clock_ns() >= arrival;
                 result
+            } else if let Some(wake) = wake_ns {
+                let timeout = Duration::from_nanos(wake.saturating_sub(self.since_epoch_ns()));
+                let result = ws
+                    .wait_and_process_once_with_timeout(on_event, timeout)
+                    .map_err(|e| Error::transport("waitset wait", e))?;
+                if self.since_epoch_ns() >= wake {
+                    fired = true;
+                    wake_ns = None;
+                }
+                result
             } else {
                 ws.wait_and_process_once(on_event)
                     .map_err(|e| Error::transport("waitset wait", e))?
@@ -174,6 +201,9 @@ impl Executor<'_> {
                 }
                 // After a long stall, resume the period from now instead of bursting.
                 next_due_ns = (next_due_ns + period_ns).max(start_ns);
+                if scheduled {
+                    wake_ns = state.wake_ns.take().filter(|&w| w > start_ns);
+                }
             }
             if status_due {
                 self.publish_status(&stats, true)?;
@@ -194,15 +224,11 @@ impl Executor<'_> {
         let ws = waitset()?;
         let triggers: Vec<&str> = match trigger {
             Trigger::OnMessage(topic) => vec![topic.as_str()],
-            Trigger::Every(_) => vec![],
+            Trigger::Every(_) | Trigger::Scheduled => vec![],
         };
         let client = Client::connect(self.shared.clone(), self.name, trigger.period(), &triggers)?;
         let mut stats = StepStats::new(trigger.period());
-        let mut state = Step {
-            now_ns: 0,
-            index: 0,
-            stop: false,
-        };
+        let mut state = Step::new();
         let mut next_status_ns = 0;
         let outcome = loop {
             let grant = match client.wait_for_grant(&ws)? {
@@ -229,6 +255,7 @@ impl Executor<'_> {
             let arrival = self.shared.next_arrival_ns.get();
             let wake_ns = match trigger {
                 Trigger::OnMessage(_) if arrival != u64::MAX => arrival,
+                Trigger::Scheduled => state.wake_ns.take().unwrap_or(0),
                 _ => 0,
             };
             client.report_done(grant.now_ns, wake_ns)?;

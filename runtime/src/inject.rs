@@ -3,10 +3,11 @@
 //! ([`crate::tap`]) read from it.
 
 use crate::Error;
-use crate::transport;
+use crate::transport::{self, Shared};
 use caravan_schemas::{Header, Message};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
+use std::rc::Rc;
 
 /// A publisher of a topic whose type is known only by name.
 pub trait DynInject {
@@ -20,6 +21,9 @@ struct Inject<T: Message> {
     topic: String,
     port: iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>,
     notifier: Notifier<ipc::Service>,
+    /// The node publishing, when the injector belongs to one ([`crate::Node::injector`]): in
+    /// lockstep its scheduler, not the notifier, wakes subscribers.
+    node: Option<Rc<Shared>>,
 }
 
 impl<T: Message> DynInject for Inject<T> {
@@ -35,8 +39,15 @@ impl<T: Message> DynInject for Inject<T> {
         sample
             .send()
             .map_err(|e| Error::topic(&self.topic, format!("cannot send: {e:?}")))?;
-        // A failed wake-up only delays an event-driven subscriber; the message is delivered.
-        let _ = self.notifier.notify();
+        match &self.node {
+            Some(shared) if shared.lockstep => {
+                shared.note_published(caravan_schemas::lockstep::name_hash(&self.topic))
+            }
+            // A failed wake-up only delays an event-driven subscriber; the message is delivered.
+            _ => {
+                let _ = self.notifier.notify();
+            }
+        }
         Ok(())
     }
 }
@@ -50,8 +61,46 @@ pub fn open_injector(
     type_name: &str,
     delivery: crate::Delivery,
 ) -> Result<Box<dyn DynInject>, Error> {
+    open_for(iox, None, topic, type_name, delivery)
+}
+
+/// Opens injectors for a node of the group ([`crate::Node::injectors`]); its lockstep
+/// scheduler learns of what they publish.
+pub struct Injectors {
+    pub(crate) shared: Rc<Shared>,
+}
+
+impl Injectors {
+    /// A publisher of `topic`, whose type is named `type_name` (e.g. `caravan::Twist`). An
+    /// existing topic keeps its contract; a new one gets `delivery`.
+    pub fn open(
+        &self,
+        topic: &str,
+        type_name: &str,
+        delivery: crate::Delivery,
+    ) -> Result<Box<dyn DynInject>, Error> {
+        open_for(
+            &self.shared.iox,
+            Some(self.shared.clone()),
+            topic,
+            type_name,
+            delivery,
+        )
+    }
+}
+
+/// [`open_injector`] for a node of the group (`node`), whose publications its lockstep
+/// scheduler learns of.
+fn open_for(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    node: Option<Rc<Shared>>,
+    topic: &str,
+    type_name: &str,
+    delivery: crate::Delivery,
+) -> Result<Box<dyn DynInject>, Error> {
     fn open<T: Message>(
         iox: &iceoryx2::node::Node<ipc::Service>,
+        node: Option<Rc<Shared>>,
         topic: &str,
         delivery: crate::Delivery,
     ) -> Result<Box<dyn DynInject>, Error> {
@@ -70,13 +119,19 @@ pub fn open_injector(
             topic: topic.to_string(),
             port,
             notifier: transport::notifier(iox, topic)?,
+            node,
         }))
     }
-    caravan_schemas::with_message_type!(type_name, |T| open::<T>(iox, topic, delivery))
-        .unwrap_or_else(|| {
-            Err(Error::topic(
-                topic,
-                format!("unknown message type '{type_name}'"),
-            ))
-        })
+    caravan_schemas::with_message_type!(type_name, |T| open::<T>(
+        iox,
+        node.clone(),
+        topic,
+        delivery
+    ))
+    .unwrap_or_else(|| {
+        Err(Error::topic(
+            topic,
+            format!("unknown message type '{type_name}'"),
+        ))
+    })
 }

@@ -352,7 +352,9 @@ impl Scheduler {
         for topic in hello.triggers.as_slice() {
             self.subscribers.entry(*topic).or_default().push(index);
         }
-        if hello.period_ns > 0 {
+        // A node with neither a period nor triggers is scheduled by its own wake-ups: it
+        // steps once now to ask for the first.
+        if hello.period_ns > 0 || hello.triggers.as_slice().is_empty() {
             self.queue.entry(self.now_ns).or_default().insert(index);
         }
         Ok(())

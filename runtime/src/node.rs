@@ -141,6 +141,14 @@ impl Node {
         Subscriber::new(self.shared.clone(), topic)
     }
 
+    /// Opens publishers of topics whose type is known only by name, fed JSON: what a player
+    /// of recordings publishes with. The opener can be moved into the step function.
+    pub fn injectors(&self) -> crate::inject::Injectors {
+        crate::inject::Injectors {
+            shared: self.shared.clone(),
+        }
+    }
+
     /// Simulated time of the current (or last) step.
     pub fn now(&self) -> Duration {
         Duration::from_nanos(self.shared.now_ns.get())

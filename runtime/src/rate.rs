@@ -10,6 +10,9 @@ pub enum Trigger {
     Every(Duration),
     /// Whenever a message arrives on this topic.
     OnMessage(String),
+    /// At the times the node asks for with [`crate::Step::wake_at`]: first at once (time 0
+    /// in lockstep), then only when asked. A player of recorded messages steps this way.
+    Scheduled,
 }
 
 impl Trigger {
@@ -25,7 +28,7 @@ impl Trigger {
     pub fn period(&self) -> Option<Duration> {
         match self {
             Trigger::Every(p) => Some(*p),
-            Trigger::OnMessage(_) => None,
+            Trigger::OnMessage(_) | Trigger::Scheduled => None,
         }
     }
 }

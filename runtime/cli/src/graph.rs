@@ -33,6 +33,33 @@ impl Graph {
         })
     }
 
+    /// The live node `name`; an error lists those there are.
+    fn node(&self, group: &str, name: &str) -> Result<&LiveNode> {
+        self.nodes.iter().find(|n| n.name == name).ok_or_else(|| {
+            let names: Vec<&str> = self
+                .nodes
+                .iter()
+                .map(|n| n.name.as_str())
+                .filter(|n| !n.is_empty())
+                .collect();
+            let hint = crate::launch::suggest::hint(name, &names);
+            anyhow!("group '{group}' has no live node '{name}'{hint}")
+        })
+    }
+
+    /// The topics node `name` publishes, and those it subscribes to.
+    fn topics_of(&self, group: &str, name: &str) -> Result<(Vec<&TopicInfo>, Vec<&TopicInfo>)> {
+        let node = self.node(group, name)?;
+        let on = |pick: fn(&TopicPorts) -> &Vec<iceoryx2::identifiers::UniqueNodeId>| {
+            self.topics
+                .iter()
+                .filter(|(_, p)| pick(p).contains(&node.id))
+                .map(|(t, _)| t)
+                .collect()
+        };
+        Ok((on(|p| &p.publishers), on(|p| &p.subscribers)))
+    }
+
     /// How a node is named: its process name, or the Caravan tool (launcher, recorder, an
     /// inspecting command) with its pid.
     fn name_of(&self, id: &iceoryx2::identifiers::UniqueNodeId) -> Value {
@@ -85,28 +112,27 @@ pub fn topic_info(group: &str, topic: &str, as_json: bool) -> Result<()> {
     Ok(())
 }
 
+/// The topics node `name` of `group` publishes and those it subscribes to.
+pub fn topics_of(group: &str, name: &str) -> Result<(Vec<String>, Vec<String>)> {
+    let graph = Graph::read(group)?;
+    let names = |topics: Vec<&TopicInfo>| -> Vec<String> {
+        topics.iter().map(|t| t.name.clone()).collect()
+    };
+    let (publishes, subscribes) = graph.topics_of(group, name)?;
+    Ok((names(publishes), names(subscribes)))
+}
+
 pub fn node_info(group: &str, name: &str, as_json: bool) -> Result<()> {
     let graph = Graph::read(group)?;
-    let node = graph.nodes.iter().find(|n| n.name == name).ok_or_else(|| {
-        let names: Vec<&str> = graph
-            .nodes
+    let node = graph.node(group, name)?;
+    let listed = |topics: Vec<&TopicInfo>| -> Vec<Value> {
+        topics
             .iter()
-            .map(|n| n.name.as_str())
-            .filter(|n| !n.is_empty())
-            .collect();
-        let hint = crate::launch::suggest::hint(name, &names);
-        anyhow!("group '{group}' has no live node '{name}'{hint}")
-    })?;
-    let on = |pick: fn(&TopicPorts) -> &Vec<iceoryx2::identifiers::UniqueNodeId>| -> Vec<Value> {
-        graph
-            .topics
-            .iter()
-            .filter(|(_, p)| pick(p).contains(&node.id))
-            .map(|(t, _)| json!({"name": t.name, "type": t.type_name}))
+            .map(|t| json!({"name": t.name, "type": t.type_name}))
             .collect()
     };
-    let publishes = on(|p| &p.publishers);
-    let subscribes = on(|p| &p.subscribers);
+    let (publishes, subscribes) = graph.topics_of(group, name)?;
+    let (publishes, subscribes) = (listed(publishes), listed(subscribes));
     let mut status = Value::Null;
     follow(group, "status", Some(STATUS_WAIT), |_, s| {
         let mine = s["node"] == name;

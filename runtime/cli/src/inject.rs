@@ -1,17 +1,14 @@
 //! Publishing into a running group from outside it: `caravan topic pub` (one message, at a
-//! rate, as `ros2 topic pub`) and `caravan play` (a recording's topics at their recorded
-//! times, as `ros2 bag play`).
+//! rate, as `ros2 topic pub`). `caravan play` ([`crate::play`]) shares its pieces.
 
 use crate::clean::choose_group;
 use crate::inspect::{GroupArg, GroupEnd, iox};
-use anyhow::{Context, Result, anyhow, bail};
-use caravan::inject::{DynInject, open_injector};
+use anyhow::{Result, anyhow, bail};
+use caravan::inject::open_injector;
 use caravan::tap::list_topics;
 use caravan::{Delivery, Header};
 use clap::Args;
 use serde_json::Value;
-use std::collections::BTreeMap;
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 #[derive(Args)]
@@ -49,7 +46,7 @@ fn rate_arg(text: &str) -> Result<f64, String> {
 
 /// The id a message published by this command carries as its source (a node's is a hash of
 /// its name; this one is named for the command).
-fn source_id(what: &str) -> u64 {
+pub(crate) fn source_id(what: &str) -> u64 {
     caravan_schemas::lockstep::name_hash(what)
 }
 
@@ -118,132 +115,10 @@ fn header(seq: u64, stamp_ns: u64, source: &str) -> Header {
 
 /// Sleeps until `when`; false when Ctrl-C or SIGTERM came first (iceoryx2's node wait
 /// returns early on either).
-fn sleep_until(
+pub(crate) fn sleep_until(
     node: &iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
     when: Instant,
 ) -> bool {
     let left = when.saturating_duration_since(Instant::now());
     node.wait(left).is_ok()
-}
-
-#[derive(Args)]
-pub struct PlayArgs {
-    /// The recording (a run's record.mcap, or one made by `caravan record`)
-    pub file: PathBuf,
-    #[command(flatten)]
-    pub group: GroupArg,
-    /// Only these topics (as in the launch file's `record`: names or patterns with *)
-    #[arg(long, num_args = 1..)]
-    pub topics: Vec<String>,
-    /// Playback speed: 2 plays twice as fast as recorded
-    #[arg(long, default_value = "1", value_parser = speed_arg)]
-    pub speed: f64,
-}
-
-fn speed_arg(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(s) if s > 0.0 && s <= 1000.0 => Ok(s),
-        _ => Err(format!(
-            "'{text}': expected a speed above 0 and at most 1000"
-        )),
-    }
-}
-
-/// One recorded message to play: when (ns since the recording's first), where and what.
-struct Recorded {
-    at_ns: u64,
-    topic: String,
-    json: Value,
-}
-
-/// The recording's Caravan channels (JSON, a registry type) that `patterns` select, with their
-/// types, and their messages in time order.
-fn read_recording(
-    path: &std::path::Path,
-    patterns: &[String],
-) -> Result<(BTreeMap<String, String>, Vec<Recorded>)> {
-    let bytes =
-        caravan::input::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let mut types = BTreeMap::new();
-    let mut messages = Vec::new();
-    let at = || path.display().to_string();
-    for message in mcap::MessageStream::new(&bytes).with_context(at)? {
-        let message = message.with_context(at)?;
-        let channel = &message.channel;
-        let Some(schema) = channel.schema.as_ref() else {
-            continue;
-        };
-        let caravan_type = caravan_schemas::message_type_names().contains(&schema.name.as_str());
-        let chosen = patterns.is_empty()
-            || patterns
-                .iter()
-                .any(|p| crate::launch::model::glob_match(p, &channel.topic));
-        if channel.message_encoding != "json"
-            || !caravan_type
-            || !chosen
-            || channel.topic == "status"
-        {
-            continue;
-        }
-        types.insert(channel.topic.clone(), schema.name.clone());
-        messages.push(Recorded {
-            at_ns: message.log_time,
-            topic: channel.topic.clone(),
-            json: serde_json::from_slice(&message.data)
-                .with_context(|| format!("{}: a message on {} is not JSON", at(), channel.topic))?,
-        });
-    }
-    messages.sort_by_key(|m| m.at_ns);
-    Ok((types, messages))
-}
-
-pub fn play(args: &PlayArgs) -> Result<()> {
-    let (types, messages) = read_recording(&args.file, &args.topics)?;
-    if messages.is_empty() {
-        bail!(
-            "{}: no recorded Caravan messages to play{}",
-            args.file.display(),
-            if args.topics.is_empty() {
-                String::new()
-            } else {
-                format!(" on {}", args.topics.join(", "))
-            }
-        );
-    }
-    let group = choose_group(args.group.group.as_deref())?;
-    let (_config, node) = iox(&group)?;
-    let mut injectors: BTreeMap<&str, Box<dyn DynInject>> = BTreeMap::new();
-    for (topic, type_name) in &types {
-        injectors.insert(
-            topic,
-            open_injector(&node, topic, type_name, Delivery::Latest { depth: 8 })?,
-        );
-    }
-    let first = messages[0].at_ns;
-    let start = Instant::now();
-    let mut group_end = GroupEnd::watch(&group);
-    let mut played = 0u64;
-    for m in &messages {
-        let due = start + Duration::from_secs_f64((m.at_ns - first) as f64 / 1e9 / args.speed);
-        if !sleep_until(&node, due) || group_end.ended()? {
-            break;
-        }
-        // The recorded header travels with the message, so subscribers see the original
-        // sequence numbers, stamps and sources.
-        let h = &m.json["header"];
-        let header = Header {
-            seq: caravan_report::as_u64(&h["seq"]).unwrap_or(played + 1),
-            stamp_ns: caravan_report::as_u64(&h["stamp_ns"]).unwrap_or(m.at_ns),
-            send_wall_ns: caravan::wall_clock_ns(),
-            source_id: caravan_report::as_u64(&h["source_id"]).unwrap_or_else(|| source_id("play")),
-        };
-        injectors[m.topic.as_str()].publish_json(header, &m.json)?;
-        played += 1;
-    }
-    eprintln!(
-        "caravan: played {played} of {} messages on {} topics into group '{group}'",
-        messages.len(),
-        types.len()
-    );
-    Ok(())
 }

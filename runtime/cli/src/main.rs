@@ -6,8 +6,10 @@ mod graph;
 mod inject;
 mod inspect;
 mod launch;
+mod play;
 mod record;
 mod report;
+mod resim;
 mod run;
 mod schemas_py;
 mod sweep;
@@ -44,7 +46,10 @@ enum Command {
     /// Record a running group's topics to an MCAP file
     Record(record::command::RecordArgs),
     /// Play a recording's topics into a running group at their recorded times
-    Play(inject::PlayArgs),
+    Play(play::PlayArgs),
+    /// Run one node of a lockstep recording again, fed the recorded inputs, and compare its
+    /// outputs with the recorded ones (deterministic re-simulation)
+    Resim(resim::ResimArgs),
     /// What a recording holds: time span, channels with schema and count, metadata
     Info(record::info::InfoArgs),
     /// Recompute report.json and report.md of a run directory
@@ -95,7 +100,8 @@ fn main() -> ExitCode {
         Command::Clean(args) => clean::clean(&args).map(|_| ExitCode::SUCCESS),
         Command::Bench(cmd) => bench::run(cmd).map(|_| ExitCode::SUCCESS),
         Command::Schemas(args) => schemas_py::run(&args).map(|_| ExitCode::SUCCESS),
-        Command::Play(args) => inject::play(&args).map(|_| ExitCode::SUCCESS),
+        Command::Play(args) => play::play(&args).map(|_| ExitCode::SUCCESS),
+        Command::Resim(args) => resim::resim(&args).map(ExitCode::from),
         Command::Top(args) => top::top(&args).map(|_| ExitCode::SUCCESS),
         Command::Completions { shell } => {
             use clap::CommandFactory;

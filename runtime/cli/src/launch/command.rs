@@ -36,6 +36,32 @@ pub struct LaunchArgs {
     /// ws://127.0.0.1:PORT); PORT defaults to 8765, 0 picks a free one
     #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "8765")]
     pub foxglove: Option<u16>,
+    /// Play a recording's topics into the group, in the group's clock: each message at its
+    /// recorded time (in lockstep, the simulated time it was published at)
+    #[arg(long, value_name = "FILE.mcap")]
+    pub play: Option<PathBuf>,
+    /// With --play: only these topics (names or patterns with *)
+    #[arg(long, value_name = "TOPIC", num_args = 1.., requires = "play")]
+    pub play_topics: Vec<String>,
+    /// Start only these processes of the file (a recording played with --play stands in for
+    /// the others)
+    #[arg(long, value_name = "PROCESS", num_args = 1..)]
+    pub only: Vec<String>,
+}
+
+/// How to run a loaded launch file: the command line's options besides the file.
+pub struct RunOptions {
+    pub runs_dir: PathBuf,
+    pub quiet: bool,
+    pub foxglove: Option<u16>,
+    pub play: Option<crate::play::InGroup>,
+    pub only: Vec<String>,
+}
+
+/// How a launch ended: the exit code, and the run directory if the group started.
+pub struct Launched {
+    pub code: u8,
+    pub dir: Option<PathBuf>,
 }
 
 /// Exit code for bad input: nothing was started.
@@ -82,7 +108,6 @@ pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
 
 /// Runs the group; returns the process exit code.
 pub fn launch(args: &LaunchArgs) -> Result<u8> {
-    let console = Console::new(args.quiet);
     let lf = match load(args) {
         Ok(lf) => lf,
         Err(e) => {
@@ -90,25 +115,75 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
             return Ok(EXIT_BAD_INPUT);
         }
     };
+    let options = RunOptions {
+        runs_dir: args.runs_dir.clone(),
+        quiet: args.quiet,
+        foxglove: args.foxglove,
+        play: args.play.as_ref().map(|file| crate::play::InGroup {
+            file: file.clone(),
+            topics: args.play_topics.clone(),
+            under_test: None,
+        }),
+        only: args.only.clone(),
+    };
+    start(lf, &options).map(|l| l.code)
+}
+
+/// Leaves out the processes `only` does not name and adds the player of `play`; an error
+/// names what the launch file lacks or the recording cannot give.
+fn reshape(lf: &mut LaunchFile, options: &RunOptions) -> Result<()> {
+    if !options.only.is_empty() {
+        let names: Vec<&str> = lf.processes.iter().map(|p| p.name.as_str()).collect();
+        for name in &options.only {
+            if !names.contains(&name.as_str()) {
+                let hint = super::suggest::hint(name, &names);
+                anyhow::bail!(
+                    "--only {name}: {} has no process '{name}'{hint}",
+                    lf.path.display()
+                );
+            }
+        }
+        let (kept, left): (Vec<_>, Vec<_>) = std::mem::take(&mut lf.processes)
+            .into_iter()
+            .partition(|p| options.only.contains(&p.name));
+        lf.processes = kept;
+        lf.left_out = left.into_iter().map(|p| (p.name, p.host)).collect();
+    }
+    if let Some(play) = &options.play {
+        let player = play.process(lf)?;
+        lf.processes.push(player);
+    }
+    Ok(())
+}
+
+/// Runs a loaded launch file as `options` say.
+pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
+    let console = Console::new(options.quiet);
+    let bad = |e: anyhow::Error| {
+        eprintln!("caravan: {e:#}");
+        Ok(Launched {
+            code: EXIT_BAD_INPUT,
+            dir: None,
+        })
+    };
+    if let Err(e) = reshape(&mut lf, options) {
+        return bad(e);
+    }
     let reports = report_entries(&lf);
     let group = lf.group.name.clone();
     // Before anything starts: a port already taken is bad input.
-    let live = match args
+    let live = match options
         .foxglove
         .map(|port| crate::record::live::LiveView::start(port, &group))
     {
-        Some(Err(e)) => {
-            eprintln!("caravan: {e:#}");
-            return Ok(EXIT_BAD_INPUT);
-        }
+        Some(Err(e)) => return bad(e),
         Some(Ok(live)) => Some(live),
         None => None,
     };
     let already = || {
-        eprintln!(
-            "caravan: group '{group}' is already running; stop it, or give this run another name with --set group.name=…"
-        );
-        Ok(EXIT_BAD_INPUT)
+        bad(anyhow::anyhow!(
+            "group '{group}' is already running; stop it, or give this run another name with --set group.name=…"
+        ))
     };
     // Held until the run ends: a second launch of the group gets the message above.
     let Some(_lock) = crate::clean::lock_group(&group)? else {
@@ -123,7 +198,7 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
         return already();
     }
     crate::clean::remove_stale(&group)?;
-    let dir = run_dir(&args.runs_dir, &group)?;
+    let dir = run_dir(&options.runs_dir, &group)?;
     let resolved = dir.join("launch.toml");
     std::fs::write(&resolved, &lf.resolved_toml)
         .with_context(|| format!("cannot write {}", resolved.display()))?;
@@ -169,10 +244,13 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
         facts.real_time_factor(),
         dir.join("report.md").display()
     ));
-    Ok(if failed || !written.failures.is_empty() {
-        1
-    } else {
-        0
+    Ok(Launched {
+        code: if failed || !written.failures.is_empty() {
+            1
+        } else {
+            0
+        },
+        dir: Some(dir),
     })
 }
 

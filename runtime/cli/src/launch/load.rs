@@ -99,7 +99,22 @@ pub fn load_checked(
     resolve_exec: &dyn Fn(&str) -> Option<PathBuf>,
     check_processes: &dyn Fn(&LaunchFile) -> Vec<ProcessProblem>,
 ) -> Result<LaunchFile, LaunchError> {
-    let source = match Source::read(path, 0) {
+    load_source(path, None, overrides, resolve_exec, check_processes)
+}
+
+/// [`load_checked`] of `text` (when given) as if it were the file at `path`.
+pub fn load_source(
+    path: &Path,
+    text: Option<String>,
+    overrides: &[String],
+    resolve_exec: &dyn Fn(&str) -> Option<PathBuf>,
+    check_processes: &dyn Fn(&LaunchFile) -> Vec<ProcessProblem>,
+) -> Result<LaunchFile, LaunchError> {
+    let read = match text {
+        Some(text) => Source::parse(path, text, 0),
+        None => Source::read(path, 0),
+    };
+    let source = match read {
         Ok(s) => Rc::new(s),
         Err(ReadFailure::Io(reason)) => {
             return Err(LaunchError::Read {
@@ -204,6 +219,7 @@ pub fn load_checked(
             processes,
             reports,
             resolved_toml: String::new(),
+            left_out: Default::default(),
         };
         for p in check_processes(&file) {
             let mut at = root.at("process");

@@ -22,6 +22,10 @@ pub struct LaunchFile {
     /// it in the run directory so a run can be repeated exactly. It names executables and
     /// paths as written, so an included file's relative paths stay relative to its directory.
     pub resolved_toml: String,
+    /// Processes the file declares but this run leaves out (`caravan launch --only`), by name,
+    /// with their hosts: a recording played in their place still crosses the emulated links
+    /// from where they ran.
+    pub left_out: BTreeMap<String, String>,
 }
 
 /// The `[group]` table.

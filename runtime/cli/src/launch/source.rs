@@ -33,6 +33,12 @@ impl Source {
     pub fn read(path: &Path, rank: usize) -> Result<Source, ReadFailure> {
         let text =
             caravan::input::read_to_string(path).map_err(|e| ReadFailure::Io(e.to_string()))?;
+        Self::parse(path, text, rank)
+    }
+
+    /// A file's `text` as if read from `path` (a recording's resolved launch file, put back
+    /// in the directory of the file it came from).
+    pub fn parse(path: &Path, text: String, rank: usize) -> Result<Source, ReadFailure> {
         let original = Document::parse(text.clone()).map_err(|e| syntax_error(path, &text, &e))?;
         let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
         let base = if dir.as_os_str().is_empty() {

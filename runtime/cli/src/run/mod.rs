@@ -25,6 +25,9 @@ use std::sync::Arc;
 use std::time::Instant;
 use supervisor::{Event, Planned, Supervisor};
 
+/// The `run` metadata key naming the launch file.
+pub const LAUNCH_FILE_KEY: &str = "launch_file";
+
 fn plan(lf: &LaunchFile) -> Vec<Planned> {
     lf.processes
         .iter()
@@ -102,10 +105,16 @@ pub fn run_group(
                 .collect(),
             live,
             meta: RecordingMeta {
-                metadata: crate::record::recorder::run_metadata(
-                    Some(lf.group.seed),
-                    (!lockstep).then(caravan::wall_clock_ns),
-                ),
+                metadata: {
+                    let mut m = crate::record::recorder::run_metadata(
+                        Some(lf.group.seed),
+                        (!lockstep).then(caravan::wall_clock_ns),
+                    );
+                    // As given on the command line: `caravan resim` finds the directory the
+                    // attached launch file's relative paths start from by it.
+                    m.insert(LAUNCH_FILE_KEY.into(), lf.path.display().to_string());
+                    m
+                },
                 launch_file: Some(lf.resolved_toml.clone().into_bytes()),
             },
         },

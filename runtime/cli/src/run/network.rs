@@ -48,6 +48,7 @@ pub fn resolve(lf: &LaunchFile) -> Option<Network> {
             .processes
             .iter()
             .map(|p| (p.name.clone(), p.host.clone()))
+            .chain(lf.left_out.clone())
             .collect(),
         cpu_slowdown,
         links,

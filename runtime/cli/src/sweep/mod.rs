@@ -392,6 +392,9 @@ fn validate(plan: &Plan) -> Vec<String> {
             runs_dir: PathBuf::new(),
             quiet: true,
             foxglove: None,
+            play: None,
+            play_topics: Vec::new(),
+            only: Vec::new(),
         };
         match crate::launch::command::load(&args) {
             Ok(_) => {}
