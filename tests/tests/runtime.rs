@@ -202,3 +202,49 @@ fn lockstep_nodes_step_at_granted_times_and_never_see_the_future() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn a_scheduled_node_steps_exactly_when_it_asks() {
+    let group = TestGroup::new("scheduled");
+    let group = &group.name;
+    let dir = std::env::temp_dir().join(group);
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = dir.join("sink.log");
+    let config = caravan::group::config(group).unwrap();
+    let mut scheduler = Scheduler::new(&config, Duration::from_millis(1)).unwrap();
+    let spawn = |name: &str, mode: &str, params| {
+        test_node(group, name, mode, params)
+            .env("CARAVAN_CLOCK", "lockstep")
+            .spawn()
+            .unwrap()
+    };
+    let mut timer = spawn(
+        "timer",
+        "lockstep-scheduled",
+        json!({"topic": "sc/pose", "count": 4}),
+    );
+    let mut sink = spawn(
+        "sink",
+        "lockstep-sink",
+        json!({"topic": "sc/pose", "out": log.to_str().unwrap()}),
+    );
+    let names = vec!["timer".to_string(), "sink".to_string()];
+    scheduler.wait_for_nodes(&names, |_| Ok(vec![])).unwrap();
+    let mut advances = Vec::new();
+    // Runs until nobody is due again: the timer stops asking after its fifth step.
+    while let Some(a) = scheduler.advance(|_| Ok(vec![])).unwrap() {
+        advances.push(a);
+    }
+    scheduler.stop_all().unwrap();
+    assert!(timer.wait().unwrap().success() && sink.wait().unwrap().success());
+    let times = |node: &str| -> Vec<u64> {
+        advances
+            .iter()
+            .filter(|a| a.stepped.contains(&node.to_string()))
+            .map(|a| a.now_ns / 1_000_000)
+            .collect()
+    };
+    assert_eq!(times("timer"), vec![0, 10, 40, 90, 160]);
+    assert_eq!(times("sink"), vec![1, 11, 41, 91, 161]);
+    std::fs::remove_dir_all(dir).ok();
+}

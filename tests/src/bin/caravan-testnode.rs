@@ -8,6 +8,8 @@
 //! - `steps`: steps `count` times at the launch rate, then exits 0.
 //! - `params`: only parses its params (`gain: f64`, `name: String`).
 //! - `lockstep-source` / `lockstep-sink`: see the lockstep protocol test.
+//! - `lockstep-scheduled`: a `Trigger::Scheduled` node asking for steps at (k + 1)² × 10 ms
+//!   for k < `count`, publishing on `topic` at each.
 //! - `hang`: steps at 10 Hz and hangs in its step after `count` steps.
 //! - `wrong-type`: after `count` ms, publishes `WheelSetpoint`s on `topic` (type-mismatch tests).
 //! - `arm-commands`: the physics topics test's commands, see [`arm_commands`].
@@ -19,6 +21,7 @@ use caravan::{Error, Node, Topic, Trigger};
 use caravan_schemas::Pose2D;
 use serde::Deserialize;
 use std::io::Write;
+use std::time::Duration;
 
 #[derive(Deserialize, Default)]
 #[serde(default)]
@@ -107,6 +110,19 @@ fn run(mode: &str) -> Result<(), Error> {
                     y: 0.0,
                     theta: 0.0,
                 })
+            })?;
+        }
+        "lockstep-scheduled" => {
+            // Asks for steps at (k + 1)² × 10 ms, k = 0 … count − 1, publishing at each.
+            let publisher = node.publisher(&Topic::<Pose2D>::new(&p.topic))?;
+            let count = p.count;
+            node.run(Trigger::Scheduled, |step| {
+                publisher.publish(&Pose2D::default())?;
+                let k = step.index();
+                if k < count {
+                    step.wake_at(Duration::from_millis((k + 1) * (k + 1) * 10));
+                }
+                Ok(())
             })?;
         }
         "lockstep-sink" => {
