@@ -38,6 +38,21 @@ pub fn read(path: &Path) -> Result<Vec<u8>, Error> {
     Ok(bytes)
 }
 
+/// A recording (MCAP), mapped into memory rather than read: recordings of long runs are far
+/// larger than [`MAX_INPUT_BYTES`], and only the parts a reader touches are loaded. Only
+/// regular files are mapped. A file is mapped at its size when opened; one that another
+/// process is still appending to is seen up to there.
+pub fn map_recording(path: &Path) -> Result<memmap2::Mmap, Error> {
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(Error::new(ErrorKind::InvalidInput, "not a regular file"));
+    }
+    let file = File::open(path)?;
+    // SAFETY: the map is read-only. Recordings are written by appending; a file truncated
+    // while mapped would fault, which Caravan's recorders never do.
+    unsafe { memmap2::Mmap::map(&file) }
+}
+
 /// The text of a regular file of bounded size (see [`open_regular`]).
 pub fn read_to_string(path: &Path) -> Result<String, Error> {
     String::from_utf8(read(path)?).map_err(|e| Error::new(ErrorKind::InvalidData, e))

@@ -84,8 +84,8 @@ pub struct Recording {
 
 /// Reads the Caravan channels of `path` that `patterns` select (all when empty).
 pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
-    let bytes =
-        caravan::input::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let bytes = caravan::input::map_recording(path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
     if !bytes.starts_with(mcap::MAGIC) {
         bail!("{} is not an MCAP file", path.display());
     }

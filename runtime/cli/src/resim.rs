@@ -97,8 +97,8 @@ pub fn resim(args: &ResimArgs) -> Result<u8> {
 /// The launch file to rerun, with only what the rerun records, and the recorded messages.
 fn prepare(args: &ResimArgs) -> Result<(LaunchFile, Vec<Recorded>)> {
     let file = &args.file;
-    let bytes =
-        caravan::input::read(file).with_context(|| format!("cannot read {}", file.display()))?;
+    let bytes = caravan::input::map_recording(file)
+        .with_context(|| format!("cannot read {}", file.display()))?;
     let summary = mcap::Summary::read(&bytes)
         .ok()
         .flatten()

@@ -93,7 +93,7 @@ pub fn describe(bytes: &[u8]) -> Result<Value> {
 }
 
 pub fn info(args: &InfoArgs) -> Result<()> {
-    let bytes = std::fs::read(&args.file)
+    let bytes = caravan::input::map_recording(&args.file)
         .with_context(|| format!("cannot read {}", args.file.display()))?;
     if !bytes.starts_with(mcap::MAGIC) {
         bail!("{} is not an MCAP file", args.file.display());
