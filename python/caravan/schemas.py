@@ -449,14 +449,14 @@ class Shape(Message):
 
     _fields_ = [
         ("kind", ctypes.c_uint32),
-        ("_reserved", ctypes.c_uint32),
+        ("attached", ctypes.c_uint32),
         ("pose", Pose3D),
         ("size", Vector3),
         ("color", ctypes.c_float * 4),
     ]
     SIZE = 104
     ALIGN = 8
-    OFFSETS = {"kind": 0, "_reserved": 4, "pose": 8, "size": 64, "color": 88}
+    OFFSETS = {"kind": 0, "attached": 4, "pose": 8, "size": 64, "color": 88}
 
     @classmethod
     def type_name(cls) -> str:
@@ -895,6 +895,23 @@ class EpisodeEnd(Message):
         return "caravan::EpisodeEnd"
 
 
+class Metrics(Message):
+    """``caravan::Metrics``: 1288 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("values_len", ctypes.c_uint32),
+        ("values", NamedValue * 32),
+    ]
+    SIZE = 1288
+    ALIGN = 8
+    OFFSETS = {"values_len": 0, "values": 8}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::Metrics"
+
+
 class Hello(Message):
     """``caravan::lockstep::Hello``: 4184 bytes, aligned to 8."""
 
@@ -983,6 +1000,7 @@ MESSAGE_TYPES = (
     AgentAction,
     EpisodeEnd,
     Scene,
+    Metrics,
 )
 BY_TYPE_NAME = {t.type_name(): t for t in MESSAGE_TYPES}
 # Every generated structure, the header and lockstep messages included.
@@ -1021,6 +1039,7 @@ ALL_TYPES = (
     AgentAction,
     NamedValue,
     EpisodeEnd,
+    Metrics,
     Hello,
     Grant,
     Done,

@@ -25,6 +25,11 @@ def path(topic: str, field: str) -> str:
     return f'"{topic}".{field}'
 
 
+def metric(topic: str, name: str, label: str) -> tuple[str, str, str]:
+    """A series of one named value of a caravan::Metrics topic (a message path filter)."""
+    return (topic, f'values[:]{{name=="{name}"}}.value', label)
+
+
 def plot(title: str, series: list[tuple[str, str, str]]) -> fl.PlotPanel:
     """A plot over time of (topic, field, label) series."""
     return fl.PlotPanel(
@@ -66,7 +71,11 @@ def convoy() -> fl.Layout:
             split(
                 "column",
                 plot("x along the course (m)", [(f"robot/{i}/pose_true", "x", f"robot {i}") for i in robots]),
-                plot("y (m)", [(f"robot/{i}/pose_true", "y", f"robot {i}") for i in robots]),
+                plot("gap to predecessor (m)", [metric("convoy/metrics", f"gap_{i}_m", f"R{i}") for i in robots if i]),
+                plot(
+                    "cross-track to predecessor's path (m)",
+                    [metric("convoy/metrics", f"cross_track_{i}_m", f"R{i}") for i in robots if i],
+                ),
                 plot(
                     "leader command",
                     [("robot/0/cmd_vel", "linear.x", "v (m/s)"), ("robot/0/cmd_vel", "angular.z", "ω (rad/s)")],

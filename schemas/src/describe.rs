@@ -16,9 +16,9 @@ use crate::lockstep::{Done, Grant, Hello};
 use crate::{
     AgentAction, Collision, Contact, ContactEstimate, Contacts, EncoderTicks, EnvStep, EpisodeEnd,
     FixedString, FixedVec, ForceTorque, ForceTorques, Goal, Header, Imu, JointCommand, JointState,
-    JointValue, LaserScan, LinkState, LinkStates, NamedValue, NodeStatus, OccupancyGrid, Odometry,
-    Path2D, Pose2D, Pose3D, Quaternion, Scene, Shape, Twist, Vector3, WheelSetpoint, WheelState,
-    Wrench,
+    JointValue, LaserScan, LinkState, LinkStates, Metrics, NamedValue, NodeStatus, OccupancyGrid,
+    Odometry, Path2D, Pose2D, Pose3D, Quaternion, Scene, Shape, Twist, Vector3, WheelSetpoint,
+    WheelState, Wrench,
 };
 use core::mem::{align_of, offset_of, size_of};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
@@ -278,7 +278,7 @@ describe! {
     OccupancyGrid { resolution, origin, width, height, data }
     Path2D { poses }
     Goal { index, total, pose, tolerance_m }
-    Shape { kind, _reserved, pose, size, color }
+    Shape { kind, attached, pose, size, color }
     Scene { shapes }
     NodeStatus {
         node, host, period_ns, steps, deadline_misses, jitter_p50_ns, jitter_p99_ns,
@@ -301,6 +301,7 @@ describe! {
     AgentAction { episode, step, discrete, continuous }
     NamedValue { name, value }
     EpisodeEnd { episode, steps, _reserved, outcome, total_reward, metrics }
+    Metrics { values }
     Hello { node, period_ns, triggers }
     Grant { now_ns, tick_ns, stop, _reserved }
     Done { node_hash, now_ns, wake_ns, published }

@@ -17,6 +17,7 @@ pub mod lockstep;
 mod registry;
 pub use registry::message_type_names;
 mod map;
+mod metrics;
 mod robot;
 mod scene;
 mod sensors;
@@ -37,6 +38,7 @@ pub use fixed::{FixedString, FixedVec};
 pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3};
 pub use header::Header;
 pub use map::{Goal, MAP_MAX_CELLS, MAP_MAX_SIDE, OccupancyGrid, PATH_MAX_POSES, Path2D};
+pub use metrics::{MAX_METRICS, Metrics};
 pub use robot::{Collision, EncoderTicks, Odometry, WheelSetpoint, WheelState};
 pub use scene::{SCENE_MAX_SHAPES, Scene, Shape};
 pub use sensors::{Imu, LaserScan, SCAN_MAX_BEAMS};
@@ -126,6 +128,8 @@ pub fn wire_size<T: Message>(message: &T) -> usize {
         header + core::mem::offset_of!(AgentAction, continuous) + held(&m.continuous)
     } else if let Some(m) = any.downcast_ref::<EpisodeEnd>() {
         header + core::mem::offset_of!(EpisodeEnd, metrics) + held(&m.metrics)
+    } else if let Some(m) = any.downcast_ref::<Metrics>() {
+        header + held(&m.values)
     } else {
         header + core::mem::size_of::<T>()
     }

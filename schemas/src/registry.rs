@@ -13,7 +13,7 @@ macro_rules! with_message_type {
         $crate::with_message_type!(@arms $name, $T, $body;
             Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
             LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision JointState JointCommand
-            LinkStates Contacts Wrench ForceTorques ContactEstimate EnvStep AgentAction EpisodeEnd Scene)
+            LinkStates Contacts Wrench ForceTorques ContactEstimate EnvStep AgentAction EpisodeEnd Scene Metrics)
     };
     (@arms $name:expr, $T:ident, $body:expr; $($ty:ident)*) => {{
         let name: &str = $name;
@@ -34,5 +34,5 @@ pub fn message_type_names() -> Vec<&'static str> {
     }
     names!(Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
         LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision JointState JointCommand
-        LinkStates Contacts Wrench ForceTorques ContactEstimate EnvStep AgentAction EpisodeEnd Scene)
+        LinkStates Contacts Wrench ForceTorques ContactEstimate EnvStep AgentAction EpisodeEnd Scene Metrics)
 }

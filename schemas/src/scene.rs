@@ -1,4 +1,5 @@
-//! What a world is made of, for viewers: solids posed in the map frame. The physics publishes
+//! What a world is made of, for viewers: solids posed in the map frame, and the robots'
+//! bodies posed on the robots. The physics publishes
 //! its world on [`crate::topics::scene`] (again every simulated second, so a late viewer gets
 //! it), and the recorder and the live view turn it into Foxglove's `SceneUpdate`.
 
@@ -16,8 +17,10 @@ pub const SCENE_MAX_SHAPES: usize = 2048;
 pub struct Shape {
     /// [`Shape::BOX`], [`Shape::CYLINDER`] or [`Shape::SPHERE`].
     pub kind: u32,
-    pub _reserved: u32,
-    /// The solid's centre and orientation in the map frame (m).
+    /// Where it is posed: 0 in the map frame; i + 1 on robot i, in the frame of its true
+    /// pose (the shape moves with the robot).
+    pub attached: u32,
+    /// The solid's centre and orientation in its frame (m).
     pub pose: Pose3D,
     /// Extent along its own x, y and z, m (a cylinder's: diameter, diameter, height).
     pub size: Vector3,
@@ -31,7 +34,7 @@ impl Shape {
     pub const SPHERE: u32 = 2;
 }
 
-/// A world's solids: floor, walls, obstacles and goal markers.
+/// A world's solids (floor, walls, obstacles, goal markers) and its robots' bodies.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
 #[type_name("caravan::Scene")]

@@ -36,6 +36,7 @@ fn a_convoy_recording_opens_in_foxglove_with_valid_scene_messages() {
     }
     // Recorded from the start, though nothing collided.
     assert_eq!(messages(&verdict, "collisions"), 0);
+    assert_live_measures_agree_with_the_report(&run);
     // The shipped layout shows what the recording holds.
     let layout = caravan_tests::workspace_root().join("launch/convoy/foxglove-layout.json");
     let mut topics = Vec::new();
@@ -54,6 +55,46 @@ fn a_convoy_recording_opens_in_foxglove_with_valid_scene_messages() {
             "the layout shows {shown}, which has no messages"
         );
     }
+}
+
+/// The monitor's gaps (10 Hz, live) agree with the report's (every physics stamp, after
+/// the run): its smallest is the report's, or a little larger for sampling less often.
+fn assert_live_measures_agree_with_the_report(run: &caravan_tests::ConvoyRun) {
+    let recorded = caravan_report::read_all(&run.dir.join("record.mcap")).unwrap();
+    let metrics: Vec<&Value> = recorded
+        .iter()
+        .filter(|m| m.topic == "convoy/metrics")
+        .map(|m| &m.json)
+        .collect();
+    assert!(metrics.len() >= 100, "{} metrics messages", metrics.len());
+    let value = |m: &Value, name: &str| {
+        m["values"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|v| v["name"] == name)
+            .and_then(|v| v["value"].as_f64())
+            .unwrap_or_else(|| panic!("no {name} in {m}"))
+    };
+    for m in &metrics {
+        assert_eq!(m["values"].as_array().unwrap().len(), 9, "{m}");
+        for i in 1..5 {
+            assert!(
+                value(m, &format!("gap_{i}_m")) >= value(m, "min_gap_m"),
+                "{m}"
+            );
+            assert!(value(m, &format!("cross_track_{i}_m")) < 0.5, "{m}");
+        }
+    }
+    let live_min = metrics
+        .iter()
+        .map(|m| value(m, "min_gap_m"))
+        .fold(f64::INFINITY, f64::min);
+    let report_min = run.report["convoy"]["min_gap_m"].as_f64().unwrap();
+    assert!(
+        live_min >= report_min - 1e-9 && live_min <= report_min + 0.02,
+        "live {live_min} m, report {report_min} m"
+    );
 }
 
 #[test]

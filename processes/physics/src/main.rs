@@ -58,9 +58,15 @@ fn setup(params: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     // Loaded and checked by `load` already; read again for its solids.
     let world = caravan_world::load_world(&identity.launch_dir.join(&params.world))
         .map_err(|e| e.to_string())?;
+    let mut scene = caravan_world::scene::scene_of(&world);
+    // Robots the differential-drive description fits get their bodies drawn; others (arms,
+    // tracks, aircraft) are drawn by their frames alone.
+    if let Ok(robot) = caravan_world::load_robot(&identity.launch_dir.join(&params.urdf)) {
+        caravan_world::scene::add_robot_bodies(&mut scene, &robot, params.count);
+    }
     Ok(Ready {
         sim,
-        scene: caravan_world::scene::scene_of(&world),
+        scene,
         period_ns,
         dt_ns,
         max_steps: params.substeps as u64 * MAX_CATCH_UP_PERIODS,

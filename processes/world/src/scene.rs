@@ -1,5 +1,6 @@
 //! A world as solids for viewers ([`caravan::schemas::Scene`]): the floor, each wall, box and
-//! cylinder extruded from the floor to its height, and a marker at every goal.
+//! cylinder extruded from the floor to its height, and a marker at every goal; and the robots'
+//! bodies (chassis box and wheels from their description), posed on each robot.
 
 use crate::world::{Shape as Section, World};
 use caravan::schemas::{Pose3D, Quaternion, SCENE_MAX_SHAPES, Scene, Shape, Vector3};
@@ -12,6 +13,8 @@ const FLOOR: [f32; 4] = [0.85, 0.85, 0.82, 1.0];
 const WALL: [f32; 4] = [0.55, 0.55, 0.6, 1.0];
 const OBSTACLE: [f32; 4] = [0.75, 0.55, 0.35, 1.0];
 const GOAL: [f32; 4] = [0.2, 0.75, 0.3, 0.8];
+const CHASSIS: [f32; 4] = [0.25, 0.45, 0.85, 1.0];
+const WHEEL: [f32; 4] = [0.15, 0.15, 0.15, 1.0];
 
 fn pose(x: f64, y: f64, z: f64, yaw: f64) -> Pose3D {
     Pose3D {
@@ -82,6 +85,53 @@ pub fn scene_of(world: &World) -> Box<Scene> {
     scene
 }
 
+/// Adds the bodies of `count` robots described by `robot` to `scene`: each one's chassis box
+/// and wheels, attached to it (see [`Shape::attached`]), as far as the scene has room.
+pub fn add_robot_bodies(scene: &mut Scene, robot: &crate::RobotModel, count: usize) {
+    let c = robot.chassis_center;
+    let h = robot.chassis_half_extents;
+    // A cylinder's axis is its z; a wheel's turns about the robot's y: a quarter turn about x.
+    let wheel_axis = Quaternion {
+        x: std::f64::consts::FRAC_1_SQRT_2,
+        y: 0.0,
+        z: 0.0,
+        w: std::f64::consts::FRAC_1_SQRT_2,
+    };
+    for i in 0..count {
+        let attached = i as u32 + 1;
+        let chassis = Shape {
+            kind: Shape::BOX,
+            attached,
+            pose: pose(c[0], c[1], c[2], 0.0),
+            size: Vector3 {
+                x: 2.0 * h[0],
+                y: 2.0 * h[1],
+                z: 2.0 * h[2],
+            },
+            color: CHASSIS,
+        };
+        let wheels = robot.wheels.iter().map(|w| Shape {
+            kind: Shape::CYLINDER,
+            attached,
+            pose: Pose3D {
+                orientation: wheel_axis,
+                ..pose(w.position[0], w.position[1], w.position[2], 0.0)
+            },
+            size: Vector3 {
+                x: 2.0 * robot.wheel_radius,
+                y: 2.0 * robot.wheel_radius,
+                z: robot.wheel_width,
+            },
+            color: WHEEL,
+        });
+        for shape in std::iter::once(chassis).chain(wheels) {
+            if scene.shapes.push(shape).is_err() {
+                return;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -128,5 +178,21 @@ at = [2.0, 2.5]
         assert_eq!((c.kind, c.size.x, c.size.z), (Shape::CYLINDER, 0.2, 0.3));
         assert_eq!(shapes[3].kind, Shape::SPHERE);
         assert_eq!(shapes[3].pose.position.x, 2.0);
+    }
+
+    #[test]
+    fn each_robot_gets_its_chassis_and_wheels_attached_to_it() {
+        let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../launch/convoy/robots/convoy_bot.urdf");
+        let robot = crate::load_robot(&urdf).unwrap();
+        let mut scene = caravan::schemas::boxed_placement_new::<Scene>();
+        add_robot_bodies(&mut scene, &robot, 2);
+        let shapes = scene.shapes.as_slice();
+        let attached: Vec<u32> = shapes.iter().map(|s| s.attached).collect();
+        assert_eq!(attached, [1, 1, 1, 2, 2, 2]);
+        assert_eq!(shapes[0].size.x, 2.0 * robot.chassis_half_extents[0]);
+        assert_eq!(shapes[1].kind, Shape::CYLINDER);
+        assert_eq!(shapes[1].size.z, robot.wheel_width);
+        assert_eq!(shapes[1].pose.position.y, robot.wheels[0].position[1]);
     }
 }

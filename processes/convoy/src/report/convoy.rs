@@ -15,28 +15,14 @@
 //!   docs/fig9a.md).
 
 use super::plot::Plot;
+pub use crate::measures::Footprint;
+use crate::measures::{gaps, path};
 use caravan_report::RecordedMessage;
 use caravan_schemas::topics;
-use caravan_world::geometry::{Polyline, footprint, rect_distance};
+use caravan_world::geometry::Polyline;
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::path::Path;
-
-/// The robot's footprint rectangle: half extents and the offset of its centre along x from
-/// base_link, m (from the URDF's chassis box).
-pub struct Footprint {
-    pub half: [f64; 2],
-    pub offset: f64,
-}
-
-impl Footprint {
-    pub fn of(robot: &caravan_world::RobotModel) -> Self {
-        Self {
-            half: [robot.chassis_half_extents[0], robot.chassis_half_extents[1]],
-            offset: robot.chassis_center[0],
-        }
-    }
-}
 
 /// What the convoy section measures against: the world (for the plot) and the footprint.
 pub struct Scene {
@@ -147,14 +133,9 @@ fn mean_over(followers: &[Value], key: &str) -> Option<f64> {
     (!means.is_empty()).then(|| means.iter().sum::<f64>() / means.len() as f64)
 }
 
-/// A robot's path, with 5 m prepended behind its start along its start heading.
+/// A robot's path, extended behind its start ([`crate::measures::path`]).
 fn extended_path(t: &Trajectory) -> Polyline {
-    let mut points: Vec<[f64; 2]> = Vec::with_capacity(t.len() + 1);
-    if let Some((_, p)) = t.first() {
-        points.push([p[0] - 5.0 * p[2].cos(), p[1] - 5.0 * p[2].sin()]);
-    }
-    points.extend(t.iter().map(|(_, p)| [p[0], p[1]]));
-    Polyline::from_trajectory(&points, 0.02)
+    path(t.iter().map(|(_, p)| p), true)
 }
 
 /// Gaps and cross-track errors against time, one line per follower.
@@ -212,18 +193,10 @@ fn gaps_and_order(
     let mut order_kept = true;
     let mut series = vec![Vec::new(); robots.len().saturating_sub(1)];
     for (stamp, poses) in at_stamp.iter().filter(|(_, p)| p.len() == robots.len()) {
-        let rects: Vec<_> = poses
-            .iter()
-            .map(|p| footprint(*p, fp.half, fp.offset))
-            .collect();
-        for a in 0..rects.len() {
-            for b in a + 1..rects.len() {
-                let gap = rect_distance(&rects[a], &rects[b]);
-                min_gap = min_gap.min(gap);
-                if b == a + 1 {
-                    series[a].push((*stamp as f64 * 1e-9, gap));
-                }
-            }
+        let (neighbours, smallest) = gaps(poses, fp);
+        min_gap = min_gap.min(smallest);
+        for (line, gap) in series.iter_mut().zip(neighbours) {
+            line.push((*stamp as f64 * 1e-9, gap));
         }
         let along: Vec<f64> = poses
             .iter()

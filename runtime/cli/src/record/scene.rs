@@ -239,19 +239,34 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
     }
 }
 
-/// A `Scene` as one entity (`world`) of cubes, cylinders and spheres in the map frame, which
-/// replaces the previous one each time it is sent.
+/// A `Scene` as entities of cubes, cylinders and spheres, each replacing the previous one of
+/// its id each time it is sent: `world` in the map frame, and `robot_<i>` for the shapes
+/// attached to robot i, in `robot_<i>/base_link_true`, so they move with it.
 fn scene_update(json: &Value, stamp: Timestamp) -> SceneUpdate {
-    let mut entity = SceneEntity {
-        timestamp: Some(stamp),
-        frame_id: MAP_FRAME.into(),
-        id: "world".into(),
-        // Zero: shown until replaced.
-        lifetime: Some(foxglove::messages::Duration::new(0, 0)),
-        frame_locked: true,
-        ..Default::default()
+    let mut entities: std::collections::BTreeMap<u64, SceneEntity> = Default::default();
+    let entity = |attached: u64| {
+        let (frame_id, id) = match attached {
+            0 => (MAP_FRAME.to_string(), "world".to_string()),
+            k => (
+                format!("robot_{}/base_link_true", k - 1),
+                format!("robot_{}", k - 1),
+            ),
+        };
+        SceneEntity {
+            timestamp: Some(stamp),
+            frame_id,
+            id,
+            // Zero: shown until replaced.
+            lifetime: Some(foxglove::messages::Duration::new(0, 0)),
+            frame_locked: true,
+            ..Default::default()
+        }
     };
+    // The world first, even when empty, so that a scene always replaces it.
+    entities.insert(0, entity(0));
     for s in json["shapes"].as_array().map(Vec::as_slice).unwrap_or(&[]) {
+        let attached = s["attached"].as_u64().unwrap_or(0);
+        let entity = entities.entry(attached).or_insert_with(|| entity(attached));
         let c = f64s(&s["color"]);
         let color = Some(Color {
             r: c.first().copied().unwrap_or(1.0),
@@ -280,7 +295,7 @@ fn scene_update(json: &Value, stamp: Timestamp) -> SceneUpdate {
     }
     SceneUpdate {
         deletions: Vec::new(),
-        entities: vec![entity],
+        entities: entities.into_values().collect(),
     }
 }
 
@@ -327,6 +342,26 @@ mod tests {
         );
         assert_eq!(e.cylinders[0].size.unwrap().z, 0.3);
         assert_eq!(e.spheres[0].color.unwrap().g, 0.25);
+        assert_eq!(update.entities.len(), 1);
+        // A robot's body is an entity of its own, in the frame of its true pose.
+        let body = caravan_schemas::Shape {
+            attached: 3,
+            ..Default::default()
+        };
+        scene.shapes.push(body).unwrap();
+        let json = serde_json::to_value(scene.as_ref()).unwrap();
+        let v = views("scene", "caravan::Scene", &json, 2_000_000_000);
+        let update = SceneUpdate::decode(v[0].bytes.as_slice()).unwrap();
+        let ids: Vec<(&str, &str)> = update
+            .entities
+            .iter()
+            .map(|e| (e.id.as_str(), e.frame_id.as_str()))
+            .collect();
+        assert_eq!(
+            ids,
+            [("world", "map"), ("robot_2", "robot_2/base_link_true")]
+        );
+        assert_eq!(update.entities[1].cubes.len(), 1);
     }
 
     #[test]
