@@ -52,16 +52,19 @@ fn assert_identical(c: &Value, topics: &[&str]) {
     }
 }
 
-fn recording(s: &Scenario) -> PathBuf {
-    s.run_dirs().pop().unwrap().join("record.mcap")
+/// Runs `body` (a launch file after its group name) in lockstep for `duration` and returns
+/// its scenario and recording.
+fn recorded(tag: &str, body: &str, duration: &str) -> (Scenario, PathBuf) {
+    let s = Scenario::new(tag, body);
+    let out = s.run(&["--duration", duration]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let rec = s.run_dirs().pop().unwrap().join("record.mcap");
+    (s, rec)
 }
 
 #[test]
 fn pong_and_noise_resimulate_identically_and_a_change_shows_where_they_part() {
-    let s = Scenario::new("resim-demo", PINGPONG);
-    let out = s.run(&["--duration", "5s"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let rec = recording(&s);
+    let (s, rec) = recorded("resim-demo", PINGPONG, "5s");
     let runs = s.dir.join("resim");
 
     // pong is stepped by the played pings; noise by its period and the group's seed.
@@ -103,10 +106,7 @@ fn resim_refuses_what_it_cannot_compare() {
         "record = [\"demo/pong\", \"demo/noise\"]",
     );
     assert_ne!(body, PINGPONG);
-    let s = Scenario::new("resim-refused", &body);
-    let out = s.run(&["--duration", "2s"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let rec = recording(&s);
+    let (s, rec) = recorded("resim-refused", &body, "2s");
     let runs = s.dir.join("resim");
 
     let out = resim(&rec, "pong", &runs, &[]);
@@ -203,10 +203,7 @@ fn slam_and_a_follower_resimulate_byte_identically_from_a_convoy_recording() {
 
 #[test]
 fn a_realtime_group_is_fed_a_recording_by_launch_play() {
-    let recorded = Scenario::new("play-rt-source", PINGPONG);
-    let out = recorded.run(&["--duration", "3s"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let rec = recording(&recorded);
+    let (_source, rec) = recorded("play-rt-source", PINGPONG, "3s");
     // pong alone, in realtime: its pings come from the recording, at their recorded times.
     let s = Scenario::new("play-rt", PINGPONG);
     let out = s.run(&[

@@ -132,6 +132,14 @@ fn mistyped_param_names_key_and_expected_type() {
     );
 }
 
+/// Starts the test node `name` in `mode` under the lockstep clock.
+fn lockstep_node(group: &str, name: &str, mode: &str, params: serde_json::Value) -> Child {
+    test_node(group, name, mode, params)
+        .env("CARAVAN_CLOCK", "lockstep")
+        .spawn()
+        .unwrap()
+}
+
 #[test]
 fn lockstep_nodes_step_at_granted_times_and_never_see_the_future() {
     let group = TestGroup::new("lockstep");
@@ -142,12 +150,7 @@ fn lockstep_nodes_step_at_granted_times_and_never_see_the_future() {
     let config = caravan::group::config(group).unwrap();
     let tick = Duration::from_millis(1);
     let mut scheduler = Scheduler::new(&config, tick).unwrap();
-    let spawn = |name: &str, mode: &str, params| {
-        test_node(group, name, mode, params)
-            .env("CARAVAN_CLOCK", "lockstep")
-            .spawn()
-            .unwrap()
-    };
+    let spawn = |name: &str, mode: &str, params| lockstep_node(group, name, mode, params);
     let mut source = spawn("source", "lockstep-source", json!({"topic": "ls/pose"}));
     let mut sink = spawn(
         "sink",
@@ -212,12 +215,7 @@ fn a_scheduled_node_steps_exactly_when_it_asks() {
     let log = dir.join("sink.log");
     let config = caravan::group::config(group).unwrap();
     let mut scheduler = Scheduler::new(&config, Duration::from_millis(1)).unwrap();
-    let spawn = |name: &str, mode: &str, params| {
-        test_node(group, name, mode, params)
-            .env("CARAVAN_CLOCK", "lockstep")
-            .spawn()
-            .unwrap()
-    };
+    let spawn = |name: &str, mode: &str, params| lockstep_node(group, name, mode, params);
     let mut timer = spawn(
         "timer",
         "lockstep-scheduled",
