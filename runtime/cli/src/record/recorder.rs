@@ -107,6 +107,14 @@ fn with_writer<T>(
         .with_context(cannot)
 }
 
+/// The modification time of the directory iceoryx2 keeps the services' static configs in,
+/// which changes whenever a service is made or removed; `None` when it cannot be read.
+fn services_changed(config: &iceoryx2::config::Config) -> Option<std::time::SystemTime> {
+    let dir = Path::new(&config.global.root_path().to_string())
+        .join(config.global.service.directory.to_string());
+    std::fs::metadata(dir).and_then(|m| m.modified()).ok()
+}
+
 pub struct Recorder {
     iox: iceoryx2::node::Node<ipc::Service>,
     config: iceoryx2::config::Config,
@@ -116,6 +124,10 @@ pub struct Recorder {
     status_tap: Option<Box<dyn DynTap>>,
     /// Topic hashes discovery already looked at, recorded or not.
     seen: BTreeSet<u64>,
+    /// When the group's services last changed as of the last complete discovery (the
+    /// modification time of iceoryx2's service directory): discovery lists services only
+    /// after a change, so an idle group costs no listing every second.
+    services_changed: Option<std::time::SystemTime>,
     /// `None` once a write failed (a full disk): see [`abandon`].
     writer: Option<McapWriter>,
     /// The MCAP file, for messages about it (a full disk).
@@ -181,6 +193,7 @@ impl Recorder {
             taps: Vec::new(),
             status_tap: None,
             seen: BTreeSet::new(),
+            services_changed: None,
             writer,
             path: path.to_path_buf(),
             channels: BTreeMap::new(),
@@ -212,6 +225,12 @@ impl Recorder {
 
     /// Opens taps on new topics that match the patterns, and on `status`.
     pub fn discover(&mut self) -> Result<()> {
+        // Read before listing: a service made while listing changes it again.
+        let changed = services_changed(&self.config);
+        if changed.is_some() && changed == self.services_changed {
+            return Ok(());
+        }
+        let mut complete = true;
         let status = caravan_schemas::topics::status();
         let mut opened = Vec::new();
         for info in list_topics(&self.config, false)? {
@@ -244,12 +263,16 @@ impl Recorder {
                     opened.push((tap.topic().to_string(), tap.type_name()));
                     self.taps.push(tap);
                 }
-                // The service went away between listing and opening (its last node exited);
-                // look again next time.
+                // The service went away between listing and opening (its last node exited),
+                // or is still being made; look again next time.
                 Err(_) => {
                     self.seen.remove(&hash);
+                    complete = false;
                 }
             }
+        }
+        if complete {
+            self.services_changed = changed;
         }
         self.taps.sort_by(|a, b| a.topic().cmp(b.topic()));
         // Listing order is the file system's; channel ids follow the topics' names.
