@@ -80,7 +80,8 @@ pub fn resim(args: &ResimArgs) -> Result<u8> {
         return Ok(code);
     }
     let rerun = read_recording(&dir.join(caravan_report::RECORDING_FILE), &[])?;
-    let result = compare(&args.node, &original, &rerun.messages);
+    let mut result = compare(&args.node, &original, &rerun.messages);
+    result["run_dir"] = json!(dir.display().to_string());
     std::fs::write(
         dir.join(RESULT_FILE),
         serde_json::to_string_pretty(&result)?,
@@ -166,7 +167,7 @@ fn prepare(args: &ResimArgs) -> Result<(LaunchFile, Vec<Recorded>)> {
         format!("group.record={}", serde_json::to_string(&outputs)?),
     ];
     sets.extend(args.set.iter().cloned());
-    let lf = crate::launch::load::load_source(
+    let mut lf = crate::launch::load::load_source(
         &launch_dir.join(name),
         Some(text),
         &sets,
@@ -174,6 +175,9 @@ fn prepare(args: &ResimArgs) -> Result<(LaunchFile, Vec<Recorded>)> {
         &crate::run::preflight::check_processes,
     )
     .map_err(|e| anyhow!("the launch file attached to {}: {e}", file.display()))?;
+    // The scenario's report plugins judge whole runs; a rerun of one node is judged by the
+    // comparison.
+    lf.reports.clear();
     if lf.group.clock != caravan::ClockMode::Lockstep {
         bail!(
             "{} was recorded in realtime; only lockstep runs can be re-simulated exactly",
