@@ -59,51 +59,40 @@ def split(direction: str, *panels, proportions=None) -> fl.SplitContainer:
     )
 
 
+def scene_beside_plots(topics: list[str], *plots: fl.PlotPanel) -> fl.Layout:
+    """The 3D panel with `topics`, two thirds of the width, beside a column of `plots`."""
+    return fl.Layout(content=split("row", three_d(topics), split("column", *plots), proportions=[2, 1]))
+
+
 def convoy() -> fl.Layout:
     robots = range(5)
-    return fl.Layout(
-        content=split(
-            "row",
-            three_d(
-                ["foxglove/scene", "foxglove/map", "foxglove/robot/0/scan", "foxglove/robot/0/path"]
-                + [f"foxglove/robot/{i}/pose_true" for i in robots]
-            ),
-            split(
-                "column",
-                plot("x along the course (m)", [(f"robot/{i}/pose_true", "x", f"robot {i}") for i in robots]),
-                plot("gap to predecessor (m)", [metric("convoy/metrics", f"gap_{i}_m", f"R{i}") for i in robots if i]),
-                plot(
-                    "cross-track to predecessor's path (m)",
-                    [metric("convoy/metrics", f"cross_track_{i}_m", f"R{i}") for i in robots if i],
-                ),
-                plot(
-                    "leader command",
-                    [("robot/0/cmd_vel", "linear.x", "v (m/s)"), ("robot/0/cmd_vel", "angular.z", "ω (rad/s)")],
-                ),
-            ),
-            proportions=[2, 1],
-        )
+    return scene_beside_plots(
+        ["foxglove/scene", "foxglove/map", "foxglove/robot/0/scan", "foxglove/robot/0/path"]
+        + [f"foxglove/robot/{i}/pose_true" for i in robots],
+        plot("x along the course (m)", [(f"robot/{i}/pose_true", "x", f"robot {i}") for i in robots]),
+        plot("gap to predecessor (m)", [metric("convoy/metrics", f"gap_{i}_m", f"R{i}") for i in robots if i]),
+        plot(
+            "cross-track to predecessor's path (m)",
+            [metric("convoy/metrics", f"cross_track_{i}_m", f"R{i}") for i in robots if i],
+        ),
+        plot(
+            "leader command",
+            [("robot/0/cmd_vel", "linear.x", "v (m/s)"), ("robot/0/cmd_vel", "angular.z", "ω (rad/s)")],
+        ),
     )
 
 
 def tracked() -> fl.Layout:
-    return fl.Layout(
-        content=split(
-            "row",
-            three_d(["foxglove/scene", "foxglove/robot/0/ground_truth", "foxglove/robot/0/odometry"]),
-            split(
-                "column",
-                plot(
-                    "position (m)",
-                    [("robot/0/ground_truth", "pose.position.x", "x true"), ("robot/0/odometry", "pose.position.x", "x odometry")],
-                ),
-                plot(
-                    "speed",
-                    [("robot/0/cmd_vel", "linear.x", "v command (m/s)"), ("robot/0/ground_truth", "twist.linear.x", "v true (m/s)")],
-                ),
-            ),
-            proportions=[2, 1],
-        )
+    return scene_beside_plots(
+        ["foxglove/scene", "foxglove/robot/0/ground_truth", "foxglove/robot/0/odometry"],
+        plot(
+            "position (m)",
+            [("robot/0/ground_truth", "pose.position.x", "x true"), ("robot/0/odometry", "pose.position.x", "x odometry")],
+        ),
+        plot(
+            "speed",
+            [("robot/0/cmd_vel", "linear.x", "v command (m/s)"), ("robot/0/ground_truth", "twist.linear.x", "v true (m/s)")],
+        ),
     )
 
 
@@ -118,17 +107,10 @@ def imu() -> fl.Layout:
 
 
 def contact() -> fl.Layout:
-    return fl.Layout(
-        content=split(
-            "row",
-            three_d(["foxglove/scene"]),
-            split(
-                "column",
-                plot("applied force (N)", [("robot/0/wrench", f"force.{a}", a) for a in "xyz"]),
-                plot("estimated force (N)", [("robot/0/contact_estimate", f"force.{a}", a) for a in "xyz"]),
-            ),
-            proportions=[2, 1],
-        )
+    return scene_beside_plots(
+        ["foxglove/scene"],
+        plot("applied force (N)", [("robot/0/wrench", f"force.{a}", a) for a in "xyz"]),
+        plot("estimated force (N)", [("robot/0/contact_estimate", f"force.{a}", a) for a in "xyz"]),
     )
 
 

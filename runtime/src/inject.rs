@@ -20,9 +20,10 @@ pub trait DynInject {
 struct Inject<T: Message> {
     topic: String,
     port: iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>,
+    topic_hash: u64,
     notifier: Notifier<ipc::Service>,
-    /// The node publishing, when the injector belongs to one ([`crate::Node::injector`]): in
-    /// lockstep its scheduler, not the notifier, wakes subscribers.
+    /// The node publishing, when the injector belongs to one ([`crate::Node::injectors`]):
+    /// in lockstep its scheduler, not the notifier, wakes subscribers.
     node: Option<Rc<Shared>>,
 }
 
@@ -40,13 +41,8 @@ impl<T: Message> DynInject for Inject<T> {
             .send()
             .map_err(|e| Error::topic(&self.topic, format!("cannot send: {e:?}")))?;
         match &self.node {
-            Some(shared) if shared.lockstep => {
-                shared.note_published(caravan_schemas::lockstep::name_hash(&self.topic))
-            }
-            // A failed wake-up only delays an event-driven subscriber; the message is delivered.
-            _ => {
-                let _ = self.notifier.notify();
-            }
+            Some(shared) => shared.sent(self.topic_hash, &self.notifier),
+            None => transport::wake(&self.notifier),
         }
         Ok(())
     }
@@ -117,6 +113,7 @@ fn open_for(
             .map_err(|e| Error::topic(topic, format!("cannot create publisher: {e:?}")))?;
         Ok(Box::new(Inject::<T> {
             topic: topic.to_string(),
+            topic_hash: caravan_schemas::lockstep::name_hash(topic),
             port,
             notifier: transport::notifier(iox, topic)?,
             node,

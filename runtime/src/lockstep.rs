@@ -214,6 +214,9 @@ struct Member {
     /// False after the process died, until it says hello again (a restart).
     active: bool,
     period_ns: u64,
+    /// Whether it steps when it joins: it has a period, or (neither a period nor triggers)
+    /// it is scheduled by its own wake-ups and steps once to ask for the first.
+    steps_on_joining: bool,
     grant: Pub<Grant>,
     grant_notifier: Notifier<ipc::Service>,
 }
@@ -330,7 +333,7 @@ impl Scheduler {
             let member = &mut self.members[i];
             if !member.active {
                 member.active = true;
-                if member.period_ns > 0 {
+                if member.steps_on_joining {
                     self.queue
                         .entry(self.now_ns + self.tick_ns)
                         .or_default()
@@ -346,15 +349,14 @@ impl Scheduler {
             grant: publisher::<Grant>(&self.iox, &grant_name)?,
             grant_notifier: transport::notifier(&self.iox, &grant_name)?,
             period_ns: hello.period_ns,
+            steps_on_joining: hello.period_ns > 0 || hello.triggers.as_slice().is_empty(),
             name,
         });
         self.by_hash.insert(hash, index);
         for topic in hello.triggers.as_slice() {
             self.subscribers.entry(*topic).or_default().push(index);
         }
-        // A node with neither a period nor triggers is scheduled by its own wake-ups: it
-        // steps once now to ask for the first.
-        if hello.period_ns > 0 || hello.triggers.as_slice().is_empty() {
+        if self.members[index].steps_on_joining {
             self.queue.entry(self.now_ns).or_default().insert(index);
         }
         Ok(())

@@ -105,12 +105,7 @@ impl<T: Message> Publisher<T> {
         sample
             .send()
             .map_err(|e| Error::topic(&self.topic, format!("cannot send: {e:?}")))?;
-        self.shared.note_published(self.topic_hash);
-        // In lockstep the scheduler wakes subscribers. A failed wake-up only delays an
-        // event-driven subscriber to its next event; the message itself is delivered.
-        if !self.shared.lockstep {
-            let _ = self.notifier.notify();
-        }
+        self.shared.sent(self.topic_hash, &self.notifier);
         Ok(())
     }
 }

@@ -36,12 +36,17 @@ pub(crate) struct Shared {
 }
 
 impl Shared {
-    pub fn note_published(&self, topic_hash: u64) {
+    /// After a message on the topic hashed `topic_hash` was sent: in lockstep the scheduler
+    /// learns of it with the step's report (and wakes the topic's triggered nodes); in
+    /// realtime `notifier` wakes them.
+    pub fn sent(&self, topic_hash: u64, notifier: &Notifier<ipc::Service>) {
         if self.lockstep {
             let mut list = self.published.borrow_mut();
             if !list.contains(&topic_hash) {
                 list.push(topic_hash);
             }
+        } else {
+            wake(notifier);
         }
     }
 
@@ -145,4 +150,10 @@ pub(crate) fn listener(
         .listener_builder()
         .create()
         .map_err(|e| Error::topic(topic, format!("cannot create listener: {e:?}")))
+}
+
+/// Wakes the event-driven subscribers of a topic. A failed wake-up only delays them to their
+/// next event; the message itself is delivered.
+pub(crate) fn wake(notifier: &Notifier<ipc::Service>) {
+    let _ = notifier.notify();
 }
