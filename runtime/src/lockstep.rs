@@ -217,6 +217,9 @@ struct Member {
     /// Whether it steps when it joins: it has a period, or (neither a period nor triggers)
     /// it is scheduled by its own wake-ups and steps once to ask for the first.
     steps_on_joining: bool,
+    /// Wall time from its last grant to its report: the longest-running nodes are granted
+    /// first, so the step that bounds the advance starts soonest.
+    last_step: Duration,
     grant: Pub<Grant>,
     grant_notifier: Notifier<ipc::Service>,
 }
@@ -350,6 +353,7 @@ impl Scheduler {
             grant_notifier: transport::notifier(&self.iox, &grant_name)?,
             period_ns: hello.period_ns,
             steps_on_joining: hello.period_ns > 0 || hello.triggers.as_slice().is_empty(),
+            last_step: Duration::ZERO,
             name,
         });
         self.by_hash.insert(hash, index);
@@ -378,12 +382,17 @@ impl Scheduler {
             .into_iter()
             .filter(|&i| self.members[i].active)
             .collect();
-        for &i in &due {
+        // Which order nodes are granted in changes nothing they see (a message is visible one
+        // tick after it was sent), only how soon the slowest one starts.
+        let mut order: Vec<usize> = due.iter().copied().collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(self.members[i].last_step));
+        let started = std::time::Instant::now();
+        for &i in &order {
             self.grant(i, Grant::step(now_ns, self.tick_ns))?;
         }
         let mut waiting = due.clone();
         let mut published = BTreeSet::new();
-        let mut granted_at = std::time::Instant::now();
+        let mut granted_at = started;
         while !waiting.is_empty() {
             while let Some(sample) = self
                 .done
@@ -404,6 +413,7 @@ impl Scheduler {
                 if done.now_ns < now_ns || !waiting.remove(&i) {
                     continue;
                 }
+                self.members[i].last_step = started.elapsed();
                 published.extend(done.published.as_slice().iter().copied());
                 self.schedule_after(i, now_ns, done.published.as_slice());
                 if done.wake_ns > now_ns {

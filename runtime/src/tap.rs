@@ -48,10 +48,41 @@ pub fn list_topics(
     Ok(topics)
 }
 
-/// One message read by a tap.
+/// One message read by a tap: its header and a copy of its payload, converted to JSON only
+/// when asked (the recorder converts on its writer thread, off the scheduler's path).
 pub struct Tapped {
     pub header: Header,
-    pub json: serde_json::Value,
+    pub payload: Box<dyn TappedPayload>,
+}
+
+/// A payload copied out of shared memory, of a type known only at run time.
+pub trait TappedPayload: Send {
+    fn to_json(&self) -> Result<serde_json::Value, serde_json::Error>;
+}
+
+impl<T: Message> TappedPayload for T {
+    fn to_json(&self) -> Result<serde_json::Value, serde_json::Error> {
+        serde_json::to_value(self)
+    }
+}
+
+impl Tapped {
+    /// The payload as JSON (the `header` is not included).
+    pub fn json(&self) -> Result<serde_json::Value, Error> {
+        self.payload
+            .to_json()
+            .map_err(|e| Error::Config(format!("cannot convert to JSON: {e}")))
+    }
+}
+
+/// Copies `value` to the heap without a stack temporary: payloads reach megabytes (a map).
+fn boxed_copy<T: Message>(value: &T) -> Box<T> {
+    let mut boxed = Box::<T>::new_uninit();
+    // SAFETY: `T: Copy`, so a bitwise copy is a valid `T`, and the box has room for one.
+    unsafe {
+        std::ptr::copy_nonoverlapping(value, boxed.as_mut_ptr(), 1);
+        boxed.assume_init()
+    }
 }
 
 /// A subscriber of a topic whose type is known only by name.
@@ -104,9 +135,10 @@ impl<T: Message> DynTap for Tap<T> {
                 }
                 None => last_seq.push((header.source_id, header.seq)),
             }
-            let json = serde_json::to_value(sample.payload())
-                .map_err(|e| Error::topic(&self.topic, format!("cannot convert to JSON: {e}")))?;
-            out.push(Tapped { header, json });
+            out.push(Tapped {
+                header,
+                payload: boxed_copy::<T>(sample.payload()),
+            });
         }
         Ok(())
     }

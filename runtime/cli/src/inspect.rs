@@ -234,7 +234,7 @@ pub fn follow(
         let ended = group_end.ended()?;
         tap.drain(&mut batch)?;
         for m in batch.drain(..) {
-            if each(&m.header, m.json) {
+            if each(&m.header, m.json()?) {
                 return Ok(());
             }
         }

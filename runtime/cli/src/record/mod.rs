@@ -6,5 +6,6 @@ pub mod live;
 pub mod recorder;
 pub mod scene;
 pub mod schema;
+pub mod writer;
 
 pub use recorder::{Recorder, Recording, RecordingMeta};

@@ -69,7 +69,7 @@ pub fn spawn(
             &cfg.meta,
         )?;
         if let Some(live) = cfg.live.take() {
-            recorder.serve(live);
+            recorder.serve(live)?;
         }
         // The recorder's node made the group's global files; keep them to this user.
         caravan::group::make_private(&cfg.group);

@@ -1,0 +1,405 @@
+//! The recording's writer: the MCAP file, its Foxglove views and the live view, on a thread
+//! of its own.
+//!
+//! The [`Recorder`](super::Recorder) runs on the launcher's driver thread, which in lockstep is
+//! the scheduler's: it only copies each tapped message out of shared memory and hands the
+//! batch over. Converting to JSON, deriving the views, compressing and writing happen here, on
+//! the other core, while the next advance of simulated time runs. Commands are carried out in
+//! the order they were sent and each batch is sorted as it always was, so a lockstep recording
+//! is the same bytes whichever thread writes it.
+
+use super::{scene, schema};
+use anyhow::{Context, Result, anyhow};
+use caravan::tap::Tapped;
+use crossbeam::channel::{Receiver, Sender};
+use hdrhistogram::Histogram;
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+/// Batches the writer may fall behind by before the recorder waits for it. A lockstep advance
+/// is one batch; the bound keeps memory in check when writing is slower than the group.
+const QUEUED_BATCHES: usize = 64;
+
+/// Per-topic statistics seen by the recorder.
+pub struct TopicStats {
+    pub type_name: String,
+    pub messages: u64,
+    pub missed: u64,
+    /// Wall-clock latency from send to the recorder's tap, ns.
+    pub latency: Histogram<u64>,
+}
+
+/// What a recording says about its run: a `run` metadata record (seed, arguments, Caravan's
+/// version; the wall-clock start only in realtime, where reruns differ anyway) and the resolved
+/// launch file as the `launch.toml` attachment.
+#[derive(Default)]
+pub struct RecordingMeta {
+    pub metadata: BTreeMap<String, String>,
+    pub launch_file: Option<Vec<u8>>,
+}
+
+/// A topic the recorder opened a tap on.
+pub struct NewTopic {
+    /// The recorder's id for it, in the order of discovery; messages name it.
+    pub id: usize,
+    pub topic: String,
+    pub type_name: &'static str,
+    /// Whether it goes into the file (else it is served live only).
+    pub recorded: bool,
+}
+
+/// One message drained from a tap.
+pub struct Drained {
+    /// The tap's place among the taps sorted by topic, which orders messages of one stamp.
+    pub rank: usize,
+    /// The topic's [`NewTopic::id`].
+    pub id: usize,
+    pub message: Tapped,
+}
+
+/// What the recorder asks of the writer.
+pub enum Command {
+    /// Serve every topic to this live view too.
+    Serve(super::live::LiveView),
+    /// Newly discovered topics, sorted by name: their channels, before any of their messages.
+    Topics(Vec<NewTopic>),
+    /// The status topic: served live, never written.
+    StatusTopic { topic: String, type_name: String },
+    /// Messages drained together, with the wall clock then (for the latency statistics).
+    Batch {
+        messages: Vec<Drained>,
+        now_wall: u64,
+    },
+    /// A status message, for the live view.
+    LiveStatus {
+        topic: String,
+        stamp_ns: u64,
+        bytes: Vec<u8>,
+    },
+}
+
+type McapWriter = mcap::Writer<BufWriter<File>>;
+
+/// Gives up a writer after a failed write. The mcap crate's writer cannot finish then (its
+/// `finish`, which its `drop` calls, panics on the broken state), so it is never dropped: its
+/// file closes when the process exits.
+fn abandon(writer: McapWriter) {
+    std::mem::forget(writer);
+}
+
+fn cannot_write(path: &Path) -> String {
+    format!("cannot write the recording {}", path.display())
+}
+
+/// Applies `op` to the writer; on failure abandons it and says which file could not be written.
+fn with_writer<T>(
+    writer: &mut Option<McapWriter>,
+    path: &Path,
+    op: impl FnOnce(&mut McapWriter) -> mcap::McapResult<T>,
+) -> Result<T> {
+    let cannot = || cannot_write(path);
+    let w = writer
+        .as_mut()
+        .ok_or_else(|| anyhow!("an earlier write failed"))
+        .with_context(cannot)?;
+    op(w)
+        .inspect_err(|_| {
+            if let Some(w) = writer.take() {
+                abandon(w);
+            }
+        })
+        .with_context(cannot)
+}
+
+/// The MCAP file and the live view, fed by [`Command`]s.
+struct Writer {
+    /// `None` once a write failed (a full disk): see [`abandon`].
+    writer: Option<McapWriter>,
+    /// The MCAP file, for messages about it (a full disk).
+    path: PathBuf,
+    lockstep: bool,
+    /// (topic, type name) by [`NewTopic::id`].
+    topics: Vec<(String, &'static str)>,
+    channels: BTreeMap<String, u16>,
+    /// Schema ids by name.
+    schemas: BTreeMap<String, u16>,
+    sequences: BTreeMap<u16, u32>,
+    stats: BTreeMap<String, TopicStats>,
+    live: Option<super::live::LiveView>,
+}
+
+impl Writer {
+    /// Creates the file with the run's metadata and attachment.
+    fn create(path: &Path, lockstep: bool, meta: &RecordingMeta) -> Result<Self> {
+        let file =
+            File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        let mut options = mcap::WriteOptions::new().library("caravan");
+        if lockstep {
+            // Multi-threaded compression need not give the same bytes on another machine.
+            options = options.compression_threads(0);
+        }
+        let writer = options.create(BufWriter::new(file));
+        let mut writer = Some(writer.with_context(|| cannot_write(path))?);
+        if !meta.metadata.is_empty() {
+            let record = mcap::records::Metadata {
+                name: "run".into(),
+                metadata: meta.metadata.clone(),
+            };
+            with_writer(&mut writer, path, |w| w.write_metadata(&record))?;
+        }
+        if let Some(launch) = &meta.launch_file {
+            let attachment = mcap::Attachment {
+                log_time: 0,
+                create_time: 0,
+                name: caravan_report::RESOLVED_LAUNCH_FILE.into(),
+                media_type: "application/toml".into(),
+                data: std::borrow::Cow::Borrowed(launch),
+            };
+            with_writer(&mut writer, path, |w| w.attach(&attachment))?;
+        }
+        Ok(Self {
+            writer,
+            path: path.to_path_buf(),
+            lockstep,
+            topics: Vec::new(),
+            channels: BTreeMap::new(),
+            schemas: BTreeMap::new(),
+            sequences: BTreeMap::new(),
+            stats: BTreeMap::new(),
+            live: None,
+        })
+    }
+
+    fn handle(&mut self, command: Command) -> Result<()> {
+        match command {
+            Command::Serve(live) => self.live = Some(live),
+            Command::Topics(topics) => {
+                for topic in topics {
+                    self.add_topic(topic)?;
+                }
+            }
+            Command::StatusTopic { topic, type_name } => {
+                if let Some(live) = &mut self.live {
+                    live.advertise_raw(&topic, &type_name, true)?;
+                }
+            }
+            Command::Batch {
+                mut messages,
+                now_wall,
+            } => {
+                messages.sort_by_key(|d| {
+                    let h = &d.message.header;
+                    (h.stamp_ns, d.rank, h.source_id, h.seq)
+                });
+                for drained in messages {
+                    self.write(drained, now_wall)?;
+                }
+            }
+            Command::LiveStatus {
+                topic,
+                stamp_ns,
+                bytes,
+            } => {
+                if let Some(live) = &mut self.live {
+                    live.log(&topic, stamp_ns, &bytes);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn add_topic(&mut self, new: NewTopic) -> Result<()> {
+        if self.topics.len() <= new.id {
+            self.topics.resize(new.id + 1, (String::new(), ""));
+        }
+        self.topics[new.id] = (new.topic.clone(), new.type_name);
+        if new.recorded {
+            self.channel(&new.topic, new.type_name)?;
+        }
+        for (view, schema) in scene::topics_of(&new.topic, new.type_name) {
+            if new.recorded {
+                self.scene_channel(&view, schema)?;
+            }
+            if let Some(live) = &mut self.live {
+                live.advertise_view(&view, schema())?;
+            }
+        }
+        if let Some(live) = &mut self.live {
+            live.advertise_raw(&new.topic, new.type_name, !self.lockstep)?;
+        }
+        Ok(())
+    }
+
+    fn schema_id(&mut self, name: &str, encoding: &str, data: &[u8]) -> Result<u16> {
+        if let Some(&id) = self.schemas.get(name) {
+            return Ok(id);
+        }
+        let id = with_writer(&mut self.writer, &self.path, |w| {
+            w.add_schema(name, encoding, data)
+        })?;
+        self.schemas.insert(name.to_string(), id);
+        Ok(id)
+    }
+
+    /// The raw channel of `topic`, added at discovery.
+    fn channel(&mut self, topic: &str, type_name: &str) -> Result<u16> {
+        if let Some(&id) = self.channels.get(topic) {
+            return Ok(id);
+        }
+        let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
+        let schema_id = self.schema_id(type_name, "jsonschema", schema.to_string().as_bytes())?;
+        self.add_channel(topic, schema_id, "json")
+    }
+
+    /// A Foxglove view's channel, added on first use.
+    fn scene_channel(&mut self, topic: &str, schema: fn() -> scene::SceneSchema) -> Result<u16> {
+        if let Some(&id) = self.channels.get(topic) {
+            return Ok(id);
+        }
+        let s = schema();
+        let schema_id = self.schema_id(&s.name, &s.encoding, &s.data)?;
+        self.add_channel(topic, schema_id, &s.encoding)
+    }
+
+    fn add_channel(&mut self, topic: &str, schema_id: u16, encoding: &str) -> Result<u16> {
+        let id = with_writer(&mut self.writer, &self.path, |w| {
+            w.add_channel(schema_id, topic, encoding, &BTreeMap::new())
+        })?;
+        self.channels.insert(topic.to_string(), id);
+        Ok(id)
+    }
+
+    fn write_message(&mut self, channel: u16, stamp_ns: u64, data: &[u8]) -> Result<()> {
+        let sequence = self.sequences.entry(channel).or_insert(0);
+        *sequence += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: *sequence,
+            log_time: stamp_ns,
+            publish_time: stamp_ns,
+        };
+        with_writer(&mut self.writer, &self.path, |w| {
+            w.write_to_known_channel(&header, data)
+        })
+    }
+
+    fn write(&mut self, drained: Drained, now_wall: u64) -> Result<()> {
+        let (topic, type_name) = self
+            .topics
+            .get(drained.id)
+            .cloned()
+            .ok_or_else(|| anyhow!("a message of a topic the recorder never announced"))?;
+        let msg = drained.message;
+        let stamp_ns = msg.header.stamp_ns;
+        let mut record = msg.json().with_context(|| format!("topic '{topic}'"))?;
+        let views = scene::views(&topic, type_name, &record, stamp_ns);
+        if let Value::Object(fields) = &mut record {
+            let header = schema::header_json(&msg.header, !self.lockstep);
+            fields.insert("header".into(), header);
+        }
+        let bytes = serde_json::to_vec(&record)?;
+        if let Some(live) = &mut self.live {
+            live.log(&topic, stamp_ns, &bytes);
+            for view in &views {
+                live.log(&view.topic, stamp_ns, &view.bytes);
+            }
+        }
+        // Discovery gave every recorded topic its channel; the others are served live only.
+        let Some(&channel) = self.channels.get(&topic) else {
+            return Ok(());
+        };
+        self.write_message(channel, stamp_ns, &bytes)?;
+        for view in views {
+            let channel = self.scene_channel(&view.topic, view.schema)?;
+            self.write_message(channel, stamp_ns, &view.bytes)?;
+        }
+        let stats = self.stats.entry(topic).or_insert_with(|| TopicStats {
+            type_name: type_name.to_string(),
+            messages: 0,
+            missed: 0,
+            latency: Histogram::new_with_bounds(1, 3_600_000_000_000, 3).expect("valid bounds"),
+        });
+        stats.messages += 1;
+        stats
+            .latency
+            .saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));
+        Ok(())
+    }
+
+    /// Writes the summary and flushes the file.
+    fn finish(mut self) -> Result<BTreeMap<String, TopicStats>> {
+        with_writer(&mut self.writer, &self.path, |w| w.finish().map(|_| ()))?;
+        if let Some(w) = self.writer.take() {
+            // The last bytes leave the buffer here; a full disk must not pass unseen.
+            use std::io::Write;
+            w.into_inner()
+                .flush()
+                .with_context(|| cannot_write(&self.path))?;
+        }
+        Ok(self.stats)
+    }
+}
+
+/// The writer's thread, seen from the recorder.
+pub struct WriterThread {
+    commands: Option<Sender<Command>>,
+    thread: Option<std::thread::JoinHandle<Result<BTreeMap<String, TopicStats>>>>,
+}
+
+impl WriterThread {
+    /// Creates the file (its metadata and attachment written) and starts the thread.
+    pub fn start(path: &Path, lockstep: bool, meta: &RecordingMeta) -> Result<Self> {
+        let mut writer = Writer::create(path, lockstep, meta)?;
+        let (commands, queue): (Sender<Command>, Receiver<Command>) =
+            crossbeam::channel::bounded(QUEUED_BATCHES);
+        let thread = std::thread::Builder::new()
+            .name("recording writer".into())
+            .spawn(move || {
+                for command in queue {
+                    writer.handle(command)?;
+                }
+                writer.finish()
+            })
+            .context("cannot start the recording's writer thread")?;
+        Ok(Self {
+            commands: Some(commands),
+            thread: Some(thread),
+        })
+    }
+
+    /// Queues `command`; waits while the writer is [`QUEUED_BATCHES`] behind. A writer that
+    /// failed (a full disk) makes this fail with its error.
+    pub fn send(&mut self, command: Command) -> Result<()> {
+        let sent = match &self.commands {
+            Some(commands) => commands.send(command).is_ok(),
+            None => false,
+        };
+        if sent {
+            return Ok(());
+        }
+        Err(self
+            .join()
+            .err()
+            .unwrap_or_else(|| anyhow!("the recording's writer has stopped")))
+    }
+
+    /// Waits for every queued command to be written, closes the file and returns the
+    /// statistics.
+    pub fn finish(mut self) -> Result<BTreeMap<String, TopicStats>> {
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<BTreeMap<String, TopicStats>> {
+        self.commands = None;
+        let thread = self
+            .thread
+            .take()
+            .ok_or_else(|| anyhow!("the recording's writer has stopped"))?;
+        thread
+            .join()
+            .map_err(|_| anyhow!("the recording's writer thread panicked"))?
+    }
+}
