@@ -913,7 +913,7 @@ class Metrics(Message):
 
 
 class Hello(Message):
-    """``caravan::lockstep::Hello``: 4184 bytes, aligned to 8."""
+    """``caravan::lockstep::Hello``: 12400 bytes, aligned to 8."""
 
     _fields_ = [
         ("node_len", ctypes.c_uint32),
@@ -921,10 +921,28 @@ class Hello(Message):
         ("period_ns", ctypes.c_uint64),
         ("triggers_len", ctypes.c_uint32),
         ("triggers", ctypes.c_uint64 * 512),
+        ("inputs_len", ctypes.c_uint32),
+        ("inputs", ctypes.c_uint64 * 512),
+        ("outputs_len", ctypes.c_uint32),
+        ("outputs", ctypes.c_uint64 * 512),
+        ("declared", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
     ]
-    SIZE = 4184
+    SIZE = 12400
     ALIGN = 8
-    OFFSETS = {"node_len": 0, "node": 4, "period_ns": 72, "triggers_len": 80, "triggers": 88}
+    OFFSETS = {
+        "node_len": 0,
+        "node": 4,
+        "period_ns": 72,
+        "triggers_len": 80,
+        "triggers": 88,
+        "inputs_len": 4184,
+        "inputs": 4192,
+        "outputs_len": 8288,
+        "outputs": 8296,
+        "declared": 12392,
+        "_reserved": 12396,
+    }
 
     @classmethod
     def type_name(cls) -> str:
@@ -952,7 +970,7 @@ class Grant(Message):
 
 
 class Done(Message):
-    """``caravan::lockstep::Done``: 4128 bytes, aligned to 8."""
+    """``caravan::lockstep::Done``: 4136 bytes, aligned to 8."""
 
     _fields_ = [
         ("node_hash", ctypes.c_uint64),
@@ -960,10 +978,20 @@ class Done(Message):
         ("wake_ns", ctypes.c_uint64),
         ("published_len", ctypes.c_uint32),
         ("published", ctypes.c_uint64 * 512),
+        ("undeclared", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
     ]
-    SIZE = 4128
+    SIZE = 4136
     ALIGN = 8
-    OFFSETS = {"node_hash": 0, "now_ns": 8, "wake_ns": 16, "published_len": 24, "published": 32}
+    OFFSETS = {
+        "node_hash": 0,
+        "now_ns": 8,
+        "wake_ns": 16,
+        "published_len": 24,
+        "published": 32,
+        "undeclared": 4128,
+        "_reserved": 4132,
+    }
 
     @classmethod
     def type_name(cls) -> str:

@@ -97,7 +97,11 @@ impl Node {
                 .and_then(|n| NodeNet::new(n, &identity.name, &identity.host)),
             next_arrival_ns: Cell::new(u64::MAX),
             step_started: Cell::new(None),
+            ports: RefCell::new(Default::default()),
         });
+        // Emulated links hold messages past the tick and a CPU slowdown stamps them late:
+        // the scheduler must not overlap such a node.
+        shared.ports.borrow_mut().undeclared = shared.net.is_some();
         let status = Publisher::new(shared.clone(), &caravan_schemas::topics::status())?;
         let epoch_offset_ns = identity
             .epoch_ns
@@ -143,7 +147,11 @@ impl Node {
 
     /// Opens publishers of topics whose type is known only by name, fed JSON: what a player
     /// of recordings publishes with. The opener can be moved into the step function.
+    ///
+    /// A node with injectors may publish to any topic at any time, so the lockstep scheduler
+    /// never steps it beside another node.
     pub fn injectors(&self) -> crate::inject::Injectors {
+        self.shared.ports.borrow_mut().undeclared = true;
         crate::inject::Injectors {
             shared: self.shared.clone(),
         }

@@ -39,6 +39,7 @@ impl<T: Message> Publisher<T> {
             .max_loaned_samples(2)
             .create()
             .map_err(|e| Error::topic(topic.name(), format!("cannot create publisher: {e:?}")))?;
+        shared.ports.borrow_mut().output(topic.name_hash());
         let notifier = transport::notifier(&shared.iox, topic.name())?;
         Ok(Self {
             topic: topic.name().to_string(),

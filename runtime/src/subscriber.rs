@@ -83,6 +83,7 @@ impl<T: Message> Subscriber<T> {
             .buffer_size(topic.delivery().depth())
             .create()
             .map_err(|e| Error::topic(topic.name(), format!("cannot create subscriber: {e:?}")))?;
+        shared.ports.borrow_mut().input(topic.name_hash());
         if !shared.lockstep {
             // Realtime steps wake on these; in lockstep the scheduler wakes nodes instead, and
             // an unused listener would only cost every publish a system call.

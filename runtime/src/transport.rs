@@ -33,6 +33,45 @@ pub(crate) struct Shared {
     pub next_arrival_ns: Cell<u64>,
     /// When the current step started (wall clock), for compute budgets.
     pub step_started: Cell<Option<std::time::Instant>>,
+    /// What the node told the lockstep scheduler it touches (see [`Ports`]).
+    pub ports: RefCell<Ports>,
+}
+
+/// The topics a node reads and publishes, as the lockstep scheduler learns them: it steps
+/// a node early, beside nodes finishing an earlier time, only when they share no topic.
+#[derive(Default)]
+pub(crate) struct Ports {
+    pub inputs: Vec<u64>,
+    pub outputs: Vec<u64>,
+    /// The node joined the schedule: a port opened from now on breaks its declaration.
+    pub joined: bool,
+    /// The lists are not the whole truth: a port opened after joining, an injector (it may
+    /// publish anywhere), emulated links (messages wake it between ticks) or a CPU slowdown
+    /// (messages stamped after the granted time).
+    pub undeclared: bool,
+}
+
+impl Ports {
+    fn add(list: &mut Vec<u64>, topic_hash: u64) {
+        if !list.contains(&topic_hash) {
+            list.push(topic_hash);
+        }
+    }
+
+    pub fn input(&mut self, topic_hash: u64) {
+        self.undeclared |= self.joined && !self.inputs.contains(&topic_hash);
+        Self::add(&mut self.inputs, topic_hash);
+    }
+
+    pub fn output(&mut self, topic_hash: u64) {
+        // Every node publishes its status; the recorder keeps it out of the file and the
+        // report reads only the latest, so it does not order nodes.
+        if topic_hash == caravan_schemas::topics::status().name_hash() {
+            return;
+        }
+        self.undeclared |= self.joined && !self.outputs.contains(&topic_hash);
+        Self::add(&mut self.outputs, topic_hash);
+    }
 }
 
 impl Shared {

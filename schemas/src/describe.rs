@@ -302,9 +302,9 @@ describe! {
     NamedValue { name, value }
     EpisodeEnd { episode, steps, _reserved, outcome, total_reward, metrics }
     Metrics { values }
-    Hello { node, period_ns, triggers }
+    Hello { node, period_ns, triggers, inputs, outputs, declared, _reserved }
     Grant { now_ns, tick_ns, stop, _reserved }
-    Done { node_hash, now_ns, wake_ns, published }
+    Done { node_hash, now_ns, wake_ns, published, undeclared, _reserved }
 }
 
 /// Erases the message types of [`crate::topics`] helpers, keeping how they name topics, and

@@ -43,6 +43,15 @@ pub struct Hello {
     pub period_ns: u64,
     /// Hashes of the topics whose messages wake this node.
     pub triggers: FixedVec<u64, MAX_TOPICS>,
+    /// Hashes of every topic the node reads (with `declared`).
+    pub inputs: FixedVec<u64, MAX_TOPICS>,
+    /// Hashes of every topic the node publishes to (with `declared`).
+    pub outputs: FixedVec<u64, MAX_TOPICS>,
+    /// 1: `inputs` and `outputs` are all the topics the node will ever touch, and its
+    /// messages are stamped with the granted time; the scheduler may then step it while
+    /// nodes it shares no topic with finish an earlier time. 0 (unknown): never overlapped.
+    pub declared: u32,
+    pub _reserved: u32,
 }
 
 /// Permission to step once at simulated time `now_ns`.
@@ -93,4 +102,8 @@ pub struct Done {
     pub wake_ns: u64,
     /// Hashes of the topics this step published to.
     pub published: FixedVec<u64, MAX_TOPICS>,
+    /// 1: the node's `Hello` declaration no longer holds (it opened a port after joining);
+    /// the scheduler stops overlapping it.
+    pub undeclared: u32,
+    pub _reserved: u32,
 }

@@ -80,6 +80,8 @@ pub struct Recorder {
     /// Every topic is tapped for the live view, recorded or not.
     serving: bool,
     writer: WriterThread,
+    /// Messages of a later time drained early (see [`Self::drain_through`]), with tap ids.
+    held: Vec<(usize, Tapped)>,
     node_status: BTreeMap<String, Value>,
     status_series: BTreeMap<String, Vec<(u64, u64)>>,
     /// When each running node's status last arrived (wall clock).
@@ -109,6 +111,7 @@ impl Recorder {
             services_changed: None,
             serving: false,
             writer: WriterThread::start(path, lockstep, meta)?,
+            held: Vec::new(),
             node_status: BTreeMap::new(),
             status_series: BTreeMap::new(),
             status_heard: BTreeMap::new(),
@@ -124,6 +127,11 @@ impl Recorder {
     /// Whether `topic` goes into the file.
     fn is_recorded(&self, topic: &str) -> bool {
         self.patterns.iter().any(|p| glob_match(p, topic))
+    }
+
+    /// Hashes of every topic discovery has looked at, recorded or not.
+    pub fn seen(&self) -> impl Iterator<Item = u64> + '_ {
+        self.seen.iter().copied()
     }
 
     /// Whether any of `published` (topic hashes) was never looked at by discovery.
@@ -208,17 +216,44 @@ impl Recorder {
 
     /// Reads every waiting message and hands them to the writer.
     pub fn drain(&mut self) -> Result<()> {
+        self.drain_through(u64::MAX, &[])
+    }
+
+    /// Reads every waiting message and hands those of simulated times up to `now_ns` to the
+    /// writer. Messages of `later` nodes (already stepping at a later time) stamped after
+    /// `now_ns` wait for that time's batch, so each batch holds exactly one time's messages.
+    pub fn drain_through(&mut self, now_ns: u64, later: &[u64]) -> Result<()> {
         let now_wall = caravan::wall_clock_ns();
         let mut batch = Vec::new();
         let mut messages = Vec::new();
-        for (rank, (id, tap)) in self.taps.iter().enumerate() {
-            tap.drain(&mut batch)?;
-            messages.extend(batch.drain(..).map(|message| Drained {
-                rank,
-                id: *id,
-                message,
-            }));
+        let mut ranks = vec![0; self.taps.len()];
+        for (rank, (id, _)) in self.taps.iter().enumerate() {
+            ranks[*id] = rank;
         }
+        let mut held = Vec::new();
+        for (id, message) in std::mem::take(&mut self.held).into_iter().chain(
+            self.taps
+                .iter()
+                .map(|(id, tap)| {
+                    tap.drain(&mut batch)?;
+                    Ok(batch.drain(..).map(|m| (*id, m)).collect::<Vec<_>>())
+                })
+                .collect::<Result<Vec<_>>>()?
+                .into_iter()
+                .flatten(),
+        ) {
+            let h = &message.header;
+            if h.stamp_ns > now_ns && later.contains(&h.source_id) {
+                held.push((id, message));
+            } else {
+                messages.push(Drained {
+                    rank: ranks[id],
+                    id,
+                    message,
+                });
+            }
+        }
+        self.held = held;
         if let Some(tap) = &self.status_tap {
             tap.drain(&mut batch)?;
         }

@@ -152,6 +152,8 @@ fn run_lockstep(
             watchdog(missing)
         })?;
         recorder.discover()?;
+        scheduler.know_topics(recorder.seen());
+        scheduler.overlap_until(end_ns.unwrap_or(u64::MAX));
         while let Some(next) = scheduler.next_time_ns() {
             if end_ns.is_some_and(|end| next > end) {
                 break;
@@ -178,8 +180,9 @@ fn run_lockstep(
             now_ns = advance.now_ns;
             if recorder.has_unseen(&advance.published) {
                 recorder.discover()?;
+                scheduler.know_topics(recorder.seen());
             }
-            recorder.drain()?;
+            recorder.drain_through(advance.now_ns, &advance.overlapping)?;
         }
         Ok(())
     })();

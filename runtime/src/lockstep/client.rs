@@ -1,0 +1,179 @@
+//! The node side of the protocol.
+
+use super::{publisher, send, subscriber};
+use crate::Error;
+use crate::transport::{self, Shared};
+use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
+use caravan_schemas::{FixedString, FixedVec};
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::prelude::*;
+use iceoryx2::waitset::WaitSetRunResult;
+use std::rc::Rc;
+use std::time::Duration;
+
+type Pub<T> = super::Pub<T>;
+type Sub<T> = super::Sub<T>;
+
+/// What a node waiting for a grant learns.
+pub enum GrantOutcome {
+    Step(Grant),
+    Stop,
+    /// SIGTERM or SIGINT arrived while waiting.
+    Terminated,
+}
+
+/// The node side of the protocol.
+pub struct Client {
+    node_hash: u64,
+    grants: Sub<Grant>,
+    grant_listener: Listener<ipc::Service>,
+    done: Pub<Done>,
+    done_notifier: Notifier<ipc::Service>,
+    /// Kept open: a sample whose publisher is gone before the subscriber attached is lost.
+    _hello: Pub<Hello>,
+    hello_notifier: Notifier<ipc::Service>,
+    hello: Hello,
+    /// The last report, repeated if the scheduler grants the same step again.
+    last_done: std::cell::RefCell<Option<Done>>,
+    shared: Rc<Shared>,
+}
+
+impl Client {
+    pub fn connect(
+        shared: Rc<Shared>,
+        node: &str,
+        period: Option<Duration>,
+        triggers: &[&str],
+    ) -> Result<Self, Error> {
+        let iox = &shared.iox;
+        let grant_name = proto::grant_service(node);
+        let mut hello = Hello {
+            node: FixedString::new(node),
+            period_ns: period.map_or(0, |p| p.as_nanos() as u64),
+            triggers: FixedVec::new(),
+            inputs: FixedVec::new(),
+            outputs: FixedVec::new(),
+            declared: 0,
+            _reserved: 0,
+        };
+        for topic in triggers {
+            hello.triggers.push(proto::name_hash(topic)).map_err(|_| {
+                Error::Lockstep(format!("node '{node}' triggers on too many topics"))
+            })?;
+        }
+        {
+            let mut ports = shared.ports.borrow_mut();
+            ports.joined = true;
+            // A self-scheduled node asks for times between ticks.
+            let mut declared = !ports.undeclared && (period.is_some() || !triggers.is_empty());
+            for (list, out) in [
+                (&ports.inputs, &mut hello.inputs),
+                (&ports.outputs, &mut hello.outputs),
+            ] {
+                for &topic in list {
+                    declared &= out.push(topic).is_ok();
+                }
+            }
+            hello.declared = declared as u32;
+        }
+        let client = Self {
+            node_hash: shared.node_hash,
+            grants: subscriber::<Grant>(iox, &grant_name)?,
+            grant_listener: transport::listener(iox, &grant_name)?,
+            done: publisher::<Done>(iox, proto::DONE)?,
+            done_notifier: transport::notifier(iox, proto::DONE)?,
+            _hello: publisher::<Hello>(iox, proto::HELLO)?,
+            hello_notifier: transport::notifier(iox, proto::HELLO)?,
+            hello,
+            last_done: std::cell::RefCell::new(None),
+            shared: shared.clone(),
+        };
+        client.say_hello()?;
+        Ok(client)
+    }
+
+    /// Blocks (event-driven) until the scheduler grants a new step or stops the run.
+    ///
+    /// iceoryx2 can, rarely, fail to connect a new publisher to a subscriber, losing a
+    /// sample; the protocol therefore tolerates repeats: until the first grant the hello is
+    /// sent again every second, and a repeated grant for the step already done is answered by
+    /// repeating its report (the scheduler re-grants when a report is overdue).
+    pub fn wait_for_grant(&self, waitset: &WaitSet<ipc::Service>) -> Result<GrantOutcome, Error> {
+        let _guard = waitset
+            .attach_notification(&self.grant_listener)
+            .map_err(|e| Error::transport("lockstep grant wait", e))?;
+        loop {
+            while let Some(sample) = self
+                .grants
+                .receive()
+                .map_err(|e| Error::transport("grant", e))?
+            {
+                let grant = *sample.payload();
+                if grant.stop != 0 {
+                    return Ok(GrantOutcome::Stop);
+                }
+                match *self.last_done.borrow() {
+                    Some(done) if grant.now_ns == done.now_ns => self.send_done(done)?,
+                    Some(done) if grant.now_ns < done.now_ns => {}
+                    _ => return Ok(GrantOutcome::Step(grant)),
+                }
+            }
+            let result = waitset
+                .wait_and_process_once_with_timeout(
+                    |_| CallbackProgression::Continue,
+                    Duration::from_secs(1),
+                )
+                .map_err(|e| Error::transport("lockstep grant wait", e))?;
+            self.grant_listener
+                .try_wait(|_| {})
+                .map_err(|e| Error::transport("grant", e))?;
+            if matches!(
+                result,
+                WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
+            ) {
+                return Ok(GrantOutcome::Terminated);
+            }
+            if self.last_done.borrow().is_none() {
+                self.say_hello()?;
+            }
+        }
+    }
+
+    fn say_hello(&self) -> Result<(), Error> {
+        send(&self._hello, self.hello, proto::HELLO)?;
+        self.hello_notifier
+            .notify()
+            .map_err(|e| Error::transport(proto::HELLO, e))?;
+        Ok(())
+    }
+
+    /// Reports the step at `now_ns` finished, with the topics it published to.
+    /// `wake_ns` (0 for none) asks for another step when a held message becomes visible.
+    pub fn report_done(&self, now_ns: u64, wake_ns: u64) -> Result<(), Error> {
+        let mut done = Done {
+            node_hash: self.node_hash,
+            now_ns,
+            wake_ns,
+            published: FixedVec::new(),
+            undeclared: self.shared.ports.borrow().undeclared as u32,
+            _reserved: 0,
+        };
+        for topic in self.shared.published.borrow_mut().drain(..) {
+            // More topics than fit cannot be scheduled precisely; the node is still woken by
+            // its period, so truncation only delays subscribers.
+            let _ = done.published.push(topic);
+        }
+        *self.last_done.borrow_mut() = Some(done);
+        self.send_done(done)
+    }
+
+    fn send_done(&self, done: Done) -> Result<(), Error> {
+        send(&self.done, done, proto::DONE)?;
+        self.done_notifier
+            .notify()
+            .map_err(|e| Error::transport(proto::DONE, e))?;
+        Ok(())
+    }
+}
+

@@ -1,0 +1,71 @@
+//! The lockstep protocol: simulated time granted step by step.
+//!
+//! Each node announces itself ([`Hello`]: its period, the topics that wake it), then repeats:
+//! wait for a [`Grant`] of simulated time t, step at t, report [`Done`] with the topics it
+//! published. The [`Scheduler`] owns time: at each event time it grants every due node at once
+//! and waits until all reported done. A message published at t wakes its triggered
+//! subscribers at t + tick and is invisible to them before, so runs are deterministic whatever
+//! the machine's load.
+//!
+//! Overlap: nodes due one tick later may start while an earlier time is still running, if they
+//! share no topic with the nodes still running there ([`overlap`]). Nothing they could see
+//! differs, so recordings stay the same bytes; the two cores are kept busy instead of waiting
+//! for the slowest node of every time (typically the physics) before anything else starts.
+
+mod client;
+mod overlap;
+mod scheduler;
+
+pub(crate) use client::{Client, GrantOutcome};
+pub use scheduler::{Advance, Scheduler, Watchdog};
+
+use crate::Error;
+use crate::transport;
+use caravan_schemas::Header;
+use iceoryx2::prelude::*;
+
+type Pub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>;
+type Sub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>;
+
+fn control_topic<T: caravan_schemas::Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, Header>,
+    Error,
+> {
+    // Control messages must never be lost; queues are deep enough that nobody waits in practice.
+    transport::open_pubsub::<T>(iox, name, crate::Delivery::Lossless { depth: 256 })
+}
+
+fn publisher<T: caravan_schemas::Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<Pub<T>, Error> {
+    control_topic::<T>(iox, name)?
+        .publisher_builder()
+        .backpressure_strategy(BackpressureStrategy::RetryUntilDelivered)
+        .create()
+        .map_err(|e| Error::transport(name, e))
+}
+
+fn subscriber<T: caravan_schemas::Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<Sub<T>, Error> {
+    control_topic::<T>(iox, name)?
+        .subscriber_builder()
+        .buffer_size(256)
+        .create()
+        .map_err(|e| Error::transport(name, e))
+}
+
+fn send<T: caravan_schemas::Message>(port: &Pub<T>, value: T, name: &str) -> Result<(), Error> {
+    let sample = port.loan_uninit().map_err(|e| Error::transport(name, e))?;
+    sample
+        .write_payload(value)
+        .send()
+        .map_err(|e| Error::transport(name, e))?;
+    Ok(())
+}
+

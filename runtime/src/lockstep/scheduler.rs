@@ -1,0 +1,565 @@
+//! The scheduler: owns simulated time, grants steps and collects their reports.
+
+use super::overlap::{self, Footprint};
+use super::{Pub, Sub, publisher, send, subscriber};
+use crate::Error;
+use crate::transport;
+use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::prelude::*;
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::time::{Duration, Instant};
+
+/// How long a node may take to report a step before its grant is repeated.
+const REGRANT_AFTER: Duration = Duration::from_secs(1);
+
+struct Member {
+    name: String,
+    hash: u64,
+    /// False after the process died, until it says hello again (a restart).
+    active: bool,
+    period_ns: u64,
+    /// Whether it steps when it joins: it has a period, or (neither a period nor triggers)
+    /// it is scheduled by its own wake-ups and steps once to ask for the first.
+    steps_on_joining: bool,
+    /// The topics it touches, for overlapping it with nodes of another time.
+    footprint: Footprint,
+    /// Steps reported since it joined: a node overlaps only after its first, in which many
+    /// nodes still open ports.
+    steps: u64,
+    /// A node of a later time started while this one stepped.
+    overlapped: bool,
+    /// When it was last granted a step (wall clock).
+    granted_at: Instant,
+    /// Wall time from its last grant to its report: the longest-running nodes are granted
+    /// first, so the step that bounds the advance starts soonest.
+    last_step: Duration,
+    grant: Pub<Grant>,
+    grant_notifier: Notifier<ipc::Service>,
+}
+
+/// One time being stepped.
+struct Flight {
+    now_ns: u64,
+    /// Every node stepping at this time.
+    due: BTreeSet<usize>,
+    /// Due, not granted yet: waiting for nodes of the earlier time it shares topics with.
+    held: BTreeSet<usize>,
+    /// Granted, report not in yet.
+    waiting: BTreeSet<usize>,
+    published: BTreeSet<u64>,
+    /// Last (re)grant of the waiting nodes, for repeating lost grants.
+    granted_at: Instant,
+}
+
+/// One advance of simulated time.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Advance {
+    pub now_ns: u64,
+    /// Names of the nodes that stepped, sorted.
+    pub stepped: Vec<String>,
+    /// Hashes of the topics published in this step, sorted.
+    pub published: Vec<u64>,
+    /// Hashes of the nodes already stepping at the next time (see [`Scheduler::overlap_until`]):
+    /// what they publish is stamped later than `now_ns` and belongs to that time.
+    pub overlapping: Vec<u64>,
+}
+
+/// Consulted while the scheduler waits, with the names of the nodes it waits for: returns the
+/// names of nodes whose process died since the last call, or `Err` to abort the run.
+pub trait Watchdog: FnMut(&[&str]) -> Result<Vec<String>, String> {}
+impl<F: FnMut(&[&str]) -> Result<Vec<String>, String>> Watchdog for F {}
+
+/// Owns simulated time for a group. The launcher runs one; tests can run one directly.
+pub struct Scheduler {
+    iox: iceoryx2::node::Node<ipc::Service>,
+    tick_ns: u64,
+    hello: Sub<Hello>,
+    hello_listener: Listener<ipc::Service>,
+    done: Sub<Done>,
+    done_listener: Listener<ipc::Service>,
+    members: Vec<Member>,
+    by_hash: BTreeMap<u64, usize>,
+    /// topic hash → members it wakes
+    subscribers: BTreeMap<u64, Vec<usize>>,
+    /// event time → members due then, for times not being stepped yet
+    queue: BTreeMap<u64, BTreeSet<usize>>,
+    /// Times being stepped, oldest first: one, or two when the next overlaps.
+    flights: VecDeque<Flight>,
+    /// Latest time that may start before the one before it has finished; `None`: none.
+    overlap_until: Option<u64>,
+    /// Topics a node may publish to while an earlier time runs (see [`Self::know_topics`]).
+    known_topics: BTreeSet<u64>,
+    /// How long one wait may last before `watchdog` is consulted.
+    poll: Duration,
+    now_ns: u64,
+}
+
+impl Scheduler {
+    /// A scheduler on the group of `config`, with minimum message delay `tick`.
+    pub fn new(config: &iceoryx2::config::Config, tick: Duration) -> Result<Self, Error> {
+        crate::log::init("caravan");
+        let iox = NodeBuilder::new()
+            .config(config)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<ipc::Service>()
+            .map_err(|e| Error::transport("scheduler node", e))?;
+        Ok(Self {
+            hello: subscriber::<Hello>(&iox, proto::HELLO)?,
+            hello_listener: transport::listener(&iox, proto::HELLO)?,
+            done: subscriber::<Done>(&iox, proto::DONE)?,
+            done_listener: transport::listener(&iox, proto::DONE)?,
+            tick_ns: tick.as_nanos().max(1) as u64,
+            iox,
+            members: Vec::new(),
+            by_hash: BTreeMap::new(),
+            subscribers: BTreeMap::new(),
+            queue: BTreeMap::new(),
+            flights: VecDeque::new(),
+            overlap_until: None,
+            known_topics: BTreeSet::new(),
+            poll: Duration::from_millis(100),
+            now_ns: 0,
+        })
+    }
+
+    pub fn tick_ns(&self) -> u64 {
+        self.tick_ns
+    }
+
+    /// Lets nodes due at a time ≤ `end_ns` start while the time one tick earlier still runs,
+    /// when they share no topic with its unfinished nodes ([`overlap`]). The caller then
+    /// advances until [`Self::next_time_ns`] is past `end_ns`: a time that started early
+    /// is finished by a later [`Self::advance`].
+    pub fn overlap_until(&mut self, end_ns: u64) {
+        self.overlap_until = Some(end_ns);
+    }
+
+    /// Topics whose messages the caller is ready for (the recorder has looked at them): an
+    /// overlapping node publishes only to these, so that a topic new to the recorder gets
+    /// its tap while no later time runs.
+    pub fn know_topics(&mut self, topics: impl IntoIterator<Item = u64>) {
+        self.known_topics.extend(topics);
+    }
+
+    /// Waits until every node in `expected` said hello. `watchdog` runs between waits; an `Err`
+    /// from it (a member died, a timeout) aborts the wait.
+    pub fn wait_for_nodes(
+        &mut self,
+        expected: &[String],
+        mut watchdog: impl Watchdog,
+    ) -> Result<(), Error> {
+        let mut expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
+        loop {
+            self.admit_new()?;
+            let joined: BTreeSet<&str> = self.members.iter().map(|m| m.name.as_str()).collect();
+            if expected.is_subset(&joined) {
+                return Ok(());
+            }
+            let missing: Vec<&str> = expected.difference(&joined).copied().collect();
+            let dead = watchdog(&missing).map_err(|why| {
+                Error::Lockstep(format!(
+                    "waiting for {} to start: {why}",
+                    missing.join(", ")
+                ))
+            })?;
+            // A process that died before joining is the supervisor's business (restart,
+            // or stop the group if it was required); a restarted one joins later.
+            for name in &dead {
+                expected.remove(name.as_str());
+            }
+            self.wait_on(true)?;
+        }
+    }
+
+    fn admit_new(&mut self) -> Result<(), Error> {
+        while let Some(sample) = self
+            .hello
+            .receive()
+            .map_err(|e| Error::transport("hello", e))?
+        {
+            self.admit(sample.payload())?;
+        }
+        Ok(())
+    }
+
+    fn footprint(&self, hello: &Hello) -> Footprint {
+        // A period shorter than the tick would put an event between two overlapping times.
+        let declared = hello.declared != 0
+            && (hello.period_ns == 0 || hello.period_ns >= self.tick_ns)
+            && hello
+                .triggers
+                .as_slice()
+                .iter()
+                .all(|t| hello.inputs.as_slice().contains(t));
+        Footprint::new(
+            declared,
+            hello.inputs.as_slice(),
+            hello.outputs.as_slice(),
+        )
+    }
+
+    fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
+        let name = hello.node.as_str().to_string();
+        let hash = proto::name_hash(&name);
+        if let Some(&i) = self.by_hash.get(&hash) {
+            // A restarted process rejoins at the next tick.
+            if !self.members[i].active {
+                let footprint = self.footprint(hello);
+                let member = &mut self.members[i];
+                member.active = true;
+                member.footprint = footprint;
+                member.steps = 0;
+                if member.steps_on_joining {
+                    self.insert(self.now_ns + self.tick_ns, i)?;
+                }
+            }
+            return Ok(());
+        }
+        let index = self.members.len();
+        let grant_name = proto::grant_service(&name);
+        self.members.push(Member {
+            active: true,
+            hash,
+            grant: publisher::<Grant>(&self.iox, &grant_name)?,
+            grant_notifier: transport::notifier(&self.iox, &grant_name)?,
+            period_ns: hello.period_ns,
+            steps_on_joining: hello.period_ns > 0 || hello.triggers.as_slice().is_empty(),
+            footprint: self.footprint(hello),
+            steps: 0,
+            overlapped: false,
+            granted_at: Instant::now(),
+            last_step: Duration::ZERO,
+            name,
+        });
+        self.by_hash.insert(hash, index);
+        for topic in hello.triggers.as_slice() {
+            self.subscribers.entry(*topic).or_default().push(index);
+        }
+        if self.members[index].steps_on_joining {
+            // A node joining mid-run steps at the latest time being stepped.
+            let at = self.flights.back().map_or(self.now_ns, |f| f.now_ns);
+            self.insert(at, index)?;
+        }
+        Ok(())
+    }
+
+    /// Time of the next event, if any node is due at all: the oldest time being stepped, or
+    /// the next one queued.
+    pub fn next_time_ns(&self) -> Option<u64> {
+        self.flights
+            .front()
+            .map(|f| f.now_ns)
+            .or_else(|| self.queue.keys().next().copied())
+    }
+
+    /// Steps the next event time: grants every node due then and waits until all are done.
+    /// Nodes of the time after may start meanwhile (see [`Self::overlap_until`]). Returns
+    /// `None` when no node will ever be due again.
+    pub fn advance(&mut self, mut watchdog: impl Watchdog) -> Result<Option<Advance>, Error> {
+        if self.flights.is_empty() {
+            let Some((now_ns, due)) = self.queue.pop_first() else {
+                return Ok(None);
+            };
+            self.open_flight(now_ns, due);
+        }
+        self.now_ns = self.flights[0].now_ns;
+        self.grant_ready()?;
+        loop {
+            self.receive_reports()?;
+            self.grant_ready()?;
+            let oldest = &self.flights[0];
+            if oldest.waiting.is_empty() && oldest.held.is_empty() {
+                break;
+            }
+            let waiting: Vec<usize> = self
+                .flights
+                .iter()
+                .flat_map(|f| f.waiting.iter().copied())
+                .collect();
+            let names: Vec<&str> = waiting
+                .iter()
+                .map(|&i| self.members[i].name.as_str())
+                .collect();
+            let now_ns = self.now_ns;
+            let dead = watchdog(&names).map_err(|why| {
+                Error::Lockstep(format!(
+                    "waiting for {} to finish step at {now_ns} ns: {why}",
+                    names.join(", ")
+                ))
+            })?;
+            self.mark_dead(&dead);
+            self.admit_new()?;
+            self.regrant_overdue()?;
+            self.wait_on(false)?;
+        }
+        let finished = self.flights.pop_front().expect("a time is being stepped");
+        // Nodes of the next time that waited only for this one start now.
+        self.grant_ready()?;
+        let mut stepped: Vec<String> = finished
+            .due
+            .iter()
+            .map(|&i| self.members[i].name.clone())
+            .collect();
+        stepped.sort();
+        let overlapping = self
+            .flights
+            .front()
+            .map(|f| f.due.iter().map(|&i| self.members[i].hash).collect())
+            .unwrap_or_default();
+        Ok(Some(Advance {
+            now_ns: finished.now_ns,
+            stepped,
+            published: finished.published.into_iter().collect(),
+            overlapping,
+        }))
+    }
+
+    fn open_flight(&mut self, now_ns: u64, due: BTreeSet<usize>) {
+        let due: BTreeSet<usize> = due
+            .into_iter()
+            .filter(|&i| self.members[i].active)
+            .collect();
+        self.flights.push_back(Flight {
+            now_ns,
+            held: due.clone(),
+            due,
+            waiting: BTreeSet::new(),
+            published: BTreeSet::new(),
+            granted_at: Instant::now(),
+        });
+    }
+
+    /// Grants what may step now: every node of the oldest time, and nodes of the next time
+    /// that share no topic with the oldest's unfinished nodes.
+    fn grant_ready(&mut self) -> Result<(), Error> {
+        let Some(oldest) = self.flights.front_mut() else {
+            return Ok(());
+        };
+        let ready: Vec<usize> = std::mem::take(&mut oldest.held).into_iter().collect();
+        self.grant_all(0, ready)?;
+        let oldest = &self.flights[0];
+        let next_time = oldest.now_ns + self.tick_ns;
+        if self.flights.len() == 1
+            && self.overlap_until.is_some_and(|end| next_time <= end)
+            && self.queue.keys().next() == Some(&next_time)
+            && !oldest.waiting.is_empty()
+        {
+            let due = self.queue.remove(&next_time).unwrap_or_default();
+            self.open_flight(next_time, due);
+        }
+        let [oldest, next] = match self.flights.as_slices() {
+            ([a, b], _) => [a, b],
+            ([a], [b]) => [a, b],
+            _ => return Ok(()),
+        };
+        if oldest.waiting.iter().any(|&i| self.members[i].steps == 0) {
+            // A node in its first step may still open ports.
+            return Ok(());
+        }
+        let running: Vec<&Footprint> = oldest
+            .waiting
+            .iter()
+            .map(|&i| &self.members[i].footprint)
+            .collect();
+        let ready: Vec<usize> = next
+            .held
+            .iter()
+            .copied()
+            .filter(|&n| {
+                let member = &self.members[n];
+                member.steps > 0
+                    && !oldest.waiting.contains(&n)
+                    && overlap::may_start(
+                        &member.footprint,
+                        running.iter().copied(),
+                        &oldest.published,
+                        &self.known_topics,
+                    )
+            })
+            .collect();
+        if ready.is_empty() {
+            return Ok(());
+        }
+        let waiting: Vec<usize> = oldest.waiting.iter().copied().collect();
+        for i in waiting {
+            self.members[i].overlapped = true;
+        }
+        for &n in &ready {
+            self.members[n].overlapped = true;
+            self.flights[1].held.remove(&n);
+        }
+        self.grant_all(1, ready)
+    }
+
+    /// Grants flight `f`'s time to `nodes`, the longest-running first.
+    fn grant_all(&mut self, f: usize, mut nodes: Vec<usize>) -> Result<(), Error> {
+        // Which order nodes are granted in changes nothing they see (a message is visible one
+        // tick after it was sent), only how soon the slowest one starts.
+        nodes.sort_by_key(|&i| std::cmp::Reverse(self.members[i].last_step));
+        let now_ns = self.flights[f].now_ns;
+        for i in nodes {
+            self.grant(i, Grant::step(now_ns, self.tick_ns))?;
+            self.flights[f].waiting.insert(i);
+        }
+        Ok(())
+    }
+
+    fn receive_reports(&mut self) -> Result<(), Error> {
+        while let Some(sample) = self
+            .done
+            .receive()
+            .map_err(|e| Error::transport("done", e))?
+        {
+            let done = *sample.payload();
+            let Some(&i) = self.by_hash.get(&done.node_hash) else {
+                continue;
+            };
+            let newest = self.flights.back().map_or(self.now_ns, |f| f.now_ns);
+            if done.now_ns > newest {
+                return Err(Error::Lockstep(format!(
+                    "node '{}' reported a step at {} ns, but time is {} ns",
+                    self.members[i].name, done.now_ns, newest
+                )));
+            }
+            // Repeats of reports (answers to repeated grants) are expected; skip them.
+            let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == done.now_ns) else {
+                continue;
+            };
+            if !f.waiting.remove(&i) {
+                continue;
+            }
+            f.published.extend(done.published.as_slice().iter().copied());
+            let now_ns = f.now_ns;
+            let member = &mut self.members[i];
+            member.last_step = member.granted_at.elapsed();
+            member.steps += 1;
+            if done.undeclared != 0 && member.footprint.declared {
+                member.footprint.declared = false;
+                if member.overlapped {
+                    return Err(Error::Lockstep(format!(
+                        "node '{}' opened a topic in its step at {now_ns} ns, after it joined \
+                         the schedule, while nodes of another time stepped beside it: a rerun \
+                         could differ. Open a node's publishers and subscribers before its step \
+                         loop",
+                        member.name
+                    )));
+                }
+            }
+            member.overlapped = false;
+            self.schedule_after(i, now_ns, done.published.as_slice())?;
+            if done.wake_ns > now_ns {
+                self.insert(done.wake_ns, i)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Queues `i` at `time_ns`, or adds it to that time if it is being stepped.
+    fn insert(&mut self, time_ns: u64, i: usize) -> Result<(), Error> {
+        if let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == time_ns) {
+            if f.due.insert(i) {
+                f.held.insert(i);
+            }
+            return Ok(());
+        }
+        if let Some(newest) = self.flights.back()
+            && self.flights.len() > 1
+            && time_ns < newest.now_ns
+        {
+            // The overlap rule admits only nodes whose events fall on the tick; say so loudly
+            // rather than step out of order.
+            return Err(Error::Lockstep(format!(
+                "node '{}' is due at {time_ns} ns, after {} ns started",
+                self.members[i].name, newest.now_ns
+            )));
+        }
+        self.queue.entry(time_ns).or_default().insert(i);
+        Ok(())
+    }
+
+    /// Stops waiting for nodes whose process died; they rejoin when they say hello again.
+    fn mark_dead(&mut self, dead: &[String]) {
+        for name in dead {
+            if let Some(&i) = self.by_hash.get(&proto::name_hash(name)) {
+                self.members[i].active = false;
+                for f in &mut self.flights {
+                    f.waiting.remove(&i);
+                    f.held.remove(&i);
+                }
+            }
+        }
+    }
+
+    /// A grant (or its report) may have been lost; nodes answer repeats safely.
+    fn regrant_overdue(&mut self) -> Result<(), Error> {
+        for f in 0..self.flights.len() {
+            if self.flights[f].granted_at.elapsed() <= REGRANT_AFTER {
+                continue;
+            }
+            let now_ns = self.flights[f].now_ns;
+            let waiting: Vec<usize> = self.flights[f].waiting.iter().copied().collect();
+            for i in waiting {
+                self.grant(i, Grant::step(now_ns, self.tick_ns))?;
+            }
+            self.flights[f].granted_at = Instant::now();
+        }
+        Ok(())
+    }
+
+    /// Between advances: notes deaths and restarts reported by the watchdog.
+    pub fn poll_members(&mut self, mut watchdog: impl Watchdog) -> Result<(), Error> {
+        let dead = watchdog(&[]).map_err(Error::Lockstep)?;
+        self.mark_dead(&dead);
+        self.admit_new()
+    }
+
+    fn schedule_after(&mut self, i: usize, now_ns: u64, published: &[u64]) -> Result<(), Error> {
+        let period = self.members[i].period_ns;
+        if period > 0 {
+            self.insert(now_ns + period, i)?;
+        }
+        for topic in published {
+            let woken = self.subscribers.get(topic).cloned().unwrap_or_default();
+            for j in woken {
+                self.insert(now_ns + self.tick_ns, j)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn grant(&mut self, i: usize, grant: Grant) -> Result<(), Error> {
+        let member = &mut self.members[i];
+        member.granted_at = Instant::now();
+        send(&member.grant, grant, &member.name)?;
+        member
+            .grant_notifier
+            .notify()
+            .map_err(|e| Error::transport(&member.name, e))?;
+        Ok(())
+    }
+
+    /// Tells every node the run is over.
+    pub fn stop_all(&mut self) -> Result<(), Error> {
+        let now_ns = self.flights.back().map_or(self.now_ns, |f| f.now_ns);
+        for i in 0..self.members.len() {
+            if self.members[i].active {
+                self.grant(i, Grant::stop(now_ns, self.tick_ns))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn wait_on(&self, hello: bool) -> Result<(), Error> {
+        let listener = if hello {
+            &self.hello_listener
+        } else {
+            &self.done_listener
+        };
+        listener
+            .timed_wait(|_| {}, self.poll)
+            .map_err(|e| Error::transport("scheduler wait", e))?;
+        Ok(())
+    }
+}
