@@ -227,6 +227,9 @@ impl Executor<'_> {
             Trigger::Every(_) | Trigger::Scheduled => vec![],
         };
         let client = Client::connect(self.shared.clone(), self.name, trigger.period(), &triggers)?;
+        let _grants = ws
+            .attach_notification(client.grant_listener())
+            .map_err(|e| Error::transport("lockstep grant wait", e))?;
         let mut stats = StepStats::new(trigger.period());
         let mut state = Step::new();
         let mut next_status_ns = 0;

@@ -99,10 +99,10 @@ impl Client {
     /// sample; the protocol therefore tolerates repeats: until the first grant the hello is
     /// sent again every second, and a repeated grant for the step already done is answered by
     /// repeating its report (the scheduler re-grants when a report is overdue).
+    ///
+    /// `waitset` must have [`Self::grant_listener`] attached (once: attaching costs system
+    /// calls, and every step waits here).
     pub fn wait_for_grant(&self, waitset: &WaitSet<ipc::Service>) -> Result<GrantOutcome, Error> {
-        let _guard = waitset
-            .attach_notification(&self.grant_listener)
-            .map_err(|e| Error::transport("lockstep grant wait", e))?;
         loop {
             while let Some(sample) = self
                 .grants
@@ -138,6 +138,11 @@ impl Client {
                 self.say_hello()?;
             }
         }
+    }
+
+    /// The listener a grant wakes.
+    pub fn grant_listener(&self) -> &Listener<ipc::Service> {
+        &self.grant_listener
     }
 
     fn say_hello(&self) -> Result<(), Error> {
