@@ -7,6 +7,12 @@ use caravan_tests::{assert_convoy_succeeded, run_convoy};
 fn lockstep_convoy_reaches_every_goal_without_collision() {
     let run = run_convoy("convoy.toml");
     assert_convoy_succeeded(&run.report["convoy"]);
+    // Odometry (one tick after the sensors) starts while physics still steps.
+    let schedule = &run.report["run"]["schedule"];
+    assert!(
+        schedule["overlapped_steps"].as_u64().unwrap() > 0,
+        "{schedule}"
+    );
     let trajectories = std::fs::read_to_string(run.dir.join("trajectories.svg")).unwrap();
     assert!(trajectories.contains(">1 m</text>"), "a metre scale bar");
     // The gaps and cross-track errors against time, one line per follower in each panel.

@@ -124,6 +124,9 @@ pub struct RunFacts {
     /// nothing arrived), one sentence each.
     #[serde(default)]
     pub warnings: Vec<String>,
+    /// Lockstep: what the scheduler did.
+    #[serde(default)]
+    pub schedule: Option<caravan::lockstep::ScheduleStats>,
 }
 
 impl RunFacts {

@@ -17,7 +17,7 @@ mod overlap;
 mod scheduler;
 
 pub(crate) use client::{Client, GrantOutcome};
-pub use scheduler::{Advance, Scheduler, Watchdog};
+pub use scheduler::{Advance, ScheduleStats, Scheduler, Watchdog};
 
 use crate::Error;
 use crate::transport;
@@ -68,4 +68,3 @@ fn send<T: caravan_schemas::Message>(port: &Pub<T>, value: T, name: &str) -> Res
         .map_err(|e| Error::transport(name, e))?;
     Ok(())
 }
-

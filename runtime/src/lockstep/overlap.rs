@@ -62,7 +62,10 @@ pub fn may_start<'a>(
     known: &BTreeSet<u64>,
 ) -> bool {
     node.declared
-        && node.outputs.iter().all(|t| known.contains(t) && !published.contains(t))
+        && node
+            .outputs
+            .iter()
+            .all(|t| known.contains(t) && !published.contains(t))
         && running.all(|m| {
             m.declared
                 && disjoint(&m.outputs, &node.inputs)
@@ -88,14 +91,24 @@ mod tests {
         // physics reads set-points (1), publishes poses (2); odometry reads encoders (3).
         let physics = fp(&[1], &[2]);
         let odometry = fp(&[3], &[4]);
-        assert!(may_start(&odometry, [&physics].into_iter(), &BTreeSet::new(), &known()));
+        assert!(may_start(
+            &odometry,
+            [&physics].into_iter(),
+            &BTreeSet::new(),
+            &known()
+        ));
     }
 
     #[test]
     fn a_reader_of_a_running_node_waits() {
         let physics = fp(&[1], &[2]);
         let monitor = fp(&[2], &[5]);
-        assert!(!may_start(&monitor, [&physics].into_iter(), &BTreeSet::new(), &known()));
+        assert!(!may_start(
+            &monitor,
+            [&physics].into_iter(),
+            &BTreeSet::new(),
+            &known()
+        ));
     }
 
     #[test]
@@ -103,7 +116,12 @@ mod tests {
         // The agent's new set-point would overwrite the one physics is about to read.
         let physics = fp(&[1], &[2]);
         let agent = fp(&[4], &[1]);
-        assert!(!may_start(&agent, [&physics].into_iter(), &BTreeSet::new(), &known()));
+        assert!(!may_start(
+            &agent,
+            [&physics].into_iter(),
+            &BTreeSet::new(),
+            &known()
+        ));
     }
 
     #[test]
@@ -118,21 +136,41 @@ mod tests {
         let b = fp(&[], &[7]);
         let published = BTreeSet::from([7]);
         assert!(!may_start(&b, std::iter::empty(), &published, &known()));
-        assert!(may_start(&b, std::iter::empty(), &BTreeSet::new(), &known()));
+        assert!(may_start(
+            &b,
+            std::iter::empty(),
+            &BTreeSet::new(),
+            &known()
+        ));
     }
 
     #[test]
     fn undeclared_nodes_never_overlap() {
         let unknown = Footprint::new(false, &[], &[]);
         let plain = fp(&[3], &[4]);
-        assert!(!may_start(&unknown, std::iter::empty(), &BTreeSet::new(), &known()));
-        assert!(!may_start(&plain, [&unknown].into_iter(), &BTreeSet::new(), &known()));
+        assert!(!may_start(
+            &unknown,
+            std::iter::empty(),
+            &BTreeSet::new(),
+            &known()
+        ));
+        assert!(!may_start(
+            &plain,
+            [&unknown].into_iter(),
+            &BTreeSet::new(),
+            &known()
+        ));
     }
 
     #[test]
     fn a_topic_the_recorder_has_not_seen_waits() {
         let b = fp(&[], &[700]);
-        assert!(!may_start(&b, std::iter::empty(), &BTreeSet::new(), &known()));
+        assert!(!may_start(
+            &b,
+            std::iter::empty(),
+            &BTreeSet::new(),
+            &known()
+        ));
     }
 
     #[test]

@@ -66,6 +66,17 @@ pub struct Advance {
     pub overlapping: Vec<u64>,
 }
 
+/// What the scheduler did over a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ScheduleStats {
+    /// Times of simulated time stepped.
+    pub advances: u64,
+    /// Steps granted (all nodes, all times).
+    pub steps: u64,
+    /// Steps granted while the time before was still running ([`Scheduler::overlap_until`]).
+    pub overlapped_steps: u64,
+}
+
 /// Consulted while the scheduler waits, with the names of the nodes it waits for: returns the
 /// names of nodes whose process died since the last call, or `Err` to abort the run.
 pub trait Watchdog: FnMut(&[&str]) -> Result<Vec<String>, String> {}
@@ -94,6 +105,7 @@ pub struct Scheduler {
     /// How long one wait may last before `watchdog` is consulted.
     poll: Duration,
     now_ns: u64,
+    stats: ScheduleStats,
 }
 
 impl Scheduler {
@@ -121,11 +133,17 @@ impl Scheduler {
             known_topics: BTreeSet::new(),
             poll: Duration::from_millis(100),
             now_ns: 0,
+            stats: ScheduleStats::default(),
         })
     }
 
     pub fn tick_ns(&self) -> u64 {
         self.tick_ns
+    }
+
+    /// Counts so far.
+    pub fn stats(&self) -> ScheduleStats {
+        self.stats
     }
 
     /// Lets nodes due at a time ≤ `end_ns` start while the time one tick earlier still runs,
@@ -193,11 +211,7 @@ impl Scheduler {
                 .as_slice()
                 .iter()
                 .all(|t| hello.inputs.as_slice().contains(t));
-        Footprint::new(
-            declared,
-            hello.inputs.as_slice(),
-            hello.outputs.as_slice(),
-        )
+        Footprint::new(declared, hello.inputs.as_slice(), hello.outputs.as_slice())
     }
 
     fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
@@ -295,6 +309,7 @@ impl Scheduler {
             self.wait_on(false)?;
         }
         let finished = self.flights.pop_front().expect("a time is being stepped");
+        self.stats.advances += 1;
         // Nodes of the next time that waited only for this one start now.
         self.grant_ready()?;
         let mut stepped: Vec<String> = finished
@@ -390,6 +405,7 @@ impl Scheduler {
             self.members[n].overlapped = true;
             self.flights[1].held.remove(&n);
         }
+        self.stats.overlapped_steps += ready.len() as u64;
         self.grant_all(1, ready)
     }
 
@@ -402,6 +418,7 @@ impl Scheduler {
         for i in nodes {
             self.grant(i, Grant::step(now_ns, self.tick_ns))?;
             self.flights[f].waiting.insert(i);
+            self.stats.steps += 1;
         }
         Ok(())
     }
@@ -430,7 +447,8 @@ impl Scheduler {
             if !f.waiting.remove(&i) {
                 continue;
             }
-            f.published.extend(done.published.as_slice().iter().copied());
+            f.published
+                .extend(done.published.as_slice().iter().copied());
             let now_ns = f.now_ns;
             let member = &mut self.members[i];
             member.last_step = member.granted_at.elapsed();

@@ -38,6 +38,10 @@ pub struct GroupSpec {
     pub seed: u64,
     /// The base tick of simulated time.
     pub tick: Duration,
+    /// Lockstep: nodes due one tick later may start while the earlier time still runs, when
+    /// they share no topic with its unfinished nodes (`caravan::lockstep`). Off, every time
+    /// waits for the one before; recordings are the same bytes either way.
+    pub overlap: bool,
     /// Topic patterns to record (see [`glob_match`]).
     pub record: Vec<String>,
     /// Time between SIGTERM and SIGKILL when stopping a process.

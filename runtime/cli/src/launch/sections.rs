@@ -21,6 +21,7 @@ const GROUP_KEYS: &[&str] = &[
     "duration",
     "seed",
     "tick",
+    "overlap",
     "record",
     "grace",
     "step_timeout",
@@ -63,6 +64,7 @@ impl Checker<'_> {
             duration: None,
             seed: 0,
             tick: GroupSpec::DEFAULT_TICK,
+            overlap: true,
             record: Vec::new(),
             grace: GroupSpec::DEFAULT_GRACE,
             step_timeout: GroupSpec::DEFAULT_STEP_TIMEOUT,
@@ -88,6 +90,7 @@ impl Checker<'_> {
         group.tick = self
             .get(&s, "tick", positive_duration)
             .unwrap_or(GroupSpec::DEFAULT_TICK);
+        group.overlap = self.get(&s, "overlap", boolean).unwrap_or(true);
         group.record = self.get(&s, "record", patterns).unwrap_or_default();
         group.grace = self
             .get(&s, "grace", duration)

@@ -33,6 +33,18 @@ pub fn render(r: &Value) -> String {
         num(&run["wall_time_s"], 2),
         num(&run["real_time_factor"], 2)
     );
+    let schedule = &run["schedule"];
+    if let (Some(advances), Some(steps), Some(overlapped)) = (
+        schedule["advances"].as_u64(),
+        schedule["steps"].as_u64(),
+        schedule["overlapped_steps"].as_u64(),
+    ) {
+        let _ = writeln!(
+            md,
+            "Lockstep: {advances} advances of simulated time, {steps} node steps, {overlapped} of \
+             them started while the tick before was still running.\n"
+        );
+    }
     md.push_str("## Nodes\n\n| node | host | steps | rate Hz | deadline misses | jitter p50/p99/max ms | compute mean/p99/max ms | missed msgs | CPU s | peak MiB | restarts | exit |\n|---|---|---:|---:|---:|---|---|---:|---:|---:|---:|---|\n");
     for n in r["nodes"].as_array().into_iter().flatten() {
         let _ = writeln!(

@@ -9,7 +9,8 @@
 //! - `group`: `{name, clock, seed, launch_file}`
 //! - `run`: `{outcome ("completed" | "degraded" | "interrupted" | "failed"), failure (string
 //!   or null; for "degraded", which processes were restarted),
-//!   sim_time_s, wall_time_s, real_time_factor, warnings (sentences; suspicious but legal)}`
+//!   sim_time_s, wall_time_s, real_time_factor, warnings (sentences; suspicious but legal),
+//!   schedule (lockstep, else null): {advances, steps, overlapped_steps}}`
 //! - `nodes[]`: `{name, host, required, restarts, exit_status, period_ms (null when stepped by
 //!   messages), steps, rate_hz, deadline_misses, jitter_p50_ms, jitter_p99_ms, jitter_max_ms,
 //!   compute_mean_ms, compute_p99_ms, compute_max_ms, messages_missed, cpu_s (CPU time of the
@@ -126,6 +127,7 @@ fn generic(facts: &RunFacts, messages: &[RecordedMessage], run_dir: &Path) -> Va
             "wall_time_s": facts.wall_time_s,
             "real_time_factor": facts.real_time_factor(),
             "warnings": facts.warnings,
+            "schedule": facts.schedule,
         },
         "nodes": nodes(facts),
         "topics": topics(facts, messages),

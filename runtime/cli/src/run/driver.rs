@@ -28,6 +28,8 @@ pub struct DriverConfig {
     pub record_path: PathBuf,
     pub patterns: Vec<String>,
     pub tick: Duration,
+    /// Lockstep: let the next tick's nodes overlap the current one's (see `GroupSpec`).
+    pub overlap: bool,
     pub duration: Option<Duration>,
     /// Processes that must join the lockstep schedule.
     pub expected: Vec<String>,
@@ -48,6 +50,8 @@ pub struct DriverConfig {
 pub struct DriverOutcome {
     pub recording: Recording,
     pub sim_time_ns: u64,
+    /// Lockstep: what the scheduler did.
+    pub schedule: Option<caravan::lockstep::ScheduleStats>,
 }
 
 /// Runs the driver on its own thread (iceoryx2 ports stay on the thread that made them).
@@ -73,8 +77,9 @@ pub fn spawn(
         }
         // The recorder's node made the group's global files; keep them to this user.
         caravan::group::make_private(&cfg.group);
-        let sim_time_ns = if lockstep {
-            run_lockstep(&cfg, &mut recorder, &control, &events, &finish)?
+        let (sim_time_ns, schedule) = if lockstep {
+            let (end, stats) = run_lockstep(&cfg, &mut recorder, &control, &events, &finish)?;
+            (end, Some(stats))
         } else {
             let started = Instant::now();
             let mut reported = BTreeSet::new();
@@ -114,11 +119,12 @@ pub fn spawn(
                     finish.try_recv().is_ok()
                 },
             )?;
-            started.elapsed().as_nanos() as u64
+            (started.elapsed().as_nanos() as u64, None)
         };
         Ok(DriverOutcome {
             recording: recorder.finish()?,
             sim_time_ns,
+            schedule,
         })
     })
 }
@@ -129,7 +135,7 @@ fn run_lockstep(
     control: &Control,
     events: &Sender<Event>,
     finish: &Receiver<()>,
-) -> Result<u64> {
+) -> Result<(u64, caravan::lockstep::ScheduleStats)> {
     let mut scheduler = Scheduler::new(&cfg.iceoryx, cfg.tick)?;
     let watchdog = |_: &[&str]| {
         if control.stop.load(Ordering::Relaxed) {
@@ -153,7 +159,9 @@ fn run_lockstep(
         })?;
         recorder.discover()?;
         scheduler.know_topics(recorder.seen());
-        scheduler.overlap_until(end_ns.unwrap_or(u64::MAX));
+        if cfg.overlap {
+            scheduler.overlap_until(end_ns.unwrap_or(u64::MAX));
+        }
         while let Some(next) = scheduler.next_time_ns() {
             if end_ns.is_some_and(|end| next > end) {
                 break;
@@ -199,7 +207,7 @@ fn run_lockstep(
     ));
     scheduler.stop_all()?;
     let _ = finish.recv();
-    Ok(now_ns)
+    Ok((now_ns, scheduler.stats()))
 }
 
 /// Records as messages arrive, woken by the topics' listeners, until `done()` or (with

@@ -69,6 +69,7 @@ pub fn collect(
             .collect(),
         reports: Vec::new(),
         warnings,
+        schedule: driven.schedule,
         trends: recording
             .status_series
             .iter()

@@ -94,6 +94,7 @@ pub fn run_group(
             record_path: dir.join(caravan_report::RECORDING_FILE),
             patterns: lf.group.record.clone(),
             tick: lf.group.tick,
+            overlap: lf.group.overlap,
             duration: lf.group.duration,
             expected: sup.names(),
             step_timeout: lf.group.step_timeout,

@@ -1,0 +1,56 @@
+//! Lockstep overlap: nodes of the next tick that share no topic with the unfinished nodes of
+//! the current one start early. Nothing a node sees changes, so a run records the same
+//! messages with overlap on (the default) and off.
+
+use caravan_tests::{PINGPONG, Scenario, recording};
+use serde_json::Value;
+
+/// Every recorded demo topic's messages, in file order.
+fn demo_messages(s: &Scenario) -> Vec<(String, Vec<Vec<u8>>)> {
+    let dir = s.run_dirs().pop().expect("a run directory");
+    let bytes = recording::read(&dir.join("record.mcap"));
+    ["demo/ping", "demo/pong", "demo/sum", "demo/noise"]
+        .iter()
+        .map(|t| (t.to_string(), recording::messages(&bytes, t)))
+        .collect()
+}
+
+fn run(tag: &str, extra: &[&str]) -> (Scenario, Value) {
+    let s = Scenario::new(tag, PINGPONG);
+    let out = s.run(extra);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let schedule = s.report()["run"]["schedule"].clone();
+    (s, schedule)
+}
+
+#[test]
+fn overlapping_ticks_records_the_same_messages_as_one_tick_at_a_time() {
+    let (on, with) = run("overlap-on", &[]);
+    let (off, without) = run("overlap-off", &["--set", "group.overlap=false"]);
+    for ((topic, with_overlap), (_, without_overlap)) in
+        demo_messages(&on).into_iter().zip(demo_messages(&off))
+    {
+        assert!(!with_overlap.is_empty(), "{topic}: nothing recorded");
+        assert!(with_overlap == without_overlap, "{topic} differs");
+    }
+    // The same advances and steps; only the run with overlap may start a step early.
+    assert_eq!(with["advances"], without["advances"], "{with} {without}");
+    assert_eq!(with["steps"], without["steps"], "{with} {without}");
+    assert!(with["steps"].as_u64().unwrap() > 100, "{with}");
+    assert_eq!(without["overlapped_steps"], 0, "{without}");
+    assert!(with["overlapped_steps"].is_u64(), "{with}");
+}
+
+#[test]
+fn overlap_must_be_a_boolean() {
+    let s = Scenario::new("overlap-bad", &format!("overlap = \"yes\"\n{PINGPONG}"));
+    let out = s.run(&[]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("overlap"), "{err}");
+    assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
+}
