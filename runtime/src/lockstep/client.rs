@@ -1,6 +1,6 @@
 //! The node side of the protocol.
 
-use super::{publisher, send, subscriber};
+use super::{Pub, Sub, publisher, send, subscriber};
 use crate::Error;
 use crate::transport::{self, Shared};
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
@@ -11,9 +11,6 @@ use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
 use std::rc::Rc;
 use std::time::Duration;
-
-type Pub<T> = super::Pub<T>;
-type Sub<T> = super::Sub<T>;
 
 /// What a node waiting for a grant learns.
 pub enum GrantOutcome {
