@@ -59,6 +59,8 @@ impl Ports {
     }
 
     pub fn input(&mut self, topic_hash: u64) {
+        // Every node publishes its status, so a reader of it shares a topic with all of them.
+        self.undeclared |= topic_hash == caravan_schemas::topics::status().name_hash();
         self.undeclared |= self.joined && !self.inputs.contains(&topic_hash);
         Self::add(&mut self.inputs, topic_hash);
     }

@@ -163,8 +163,12 @@ impl Client {
         };
         for topic in self.shared.published.borrow_mut().drain(..) {
             // More topics than fit cannot be scheduled precisely; the node is still woken by
-            // its period, so truncation only delays subscribers.
-            let _ = done.published.push(topic);
+            // its period, so truncation only delays subscribers. The scheduler no longer
+            // knows what it published: it is not overlapped from then on.
+            if done.published.push(topic).is_err() {
+                self.shared.ports.borrow_mut().undeclared = true;
+                done.undeclared = 1;
+            }
         }
         *self.last_done.borrow_mut() = Some(done);
         self.send_done(done)

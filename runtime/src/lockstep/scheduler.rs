@@ -16,7 +16,6 @@ const REGRANT_AFTER: Duration = Duration::from_secs(1);
 
 struct Member {
     name: String,
-    hash: u64,
     /// False after the process died, until it says hello again (a restart).
     active: bool,
     period_ns: u64,
@@ -61,8 +60,9 @@ pub struct Advance {
     pub stepped: Vec<String>,
     /// Hashes of the topics published in this step, sorted.
     pub published: Vec<u64>,
-    /// Hashes of the nodes already stepping at the next time (see [`Scheduler::overlap_until`]):
-    /// what they publish is stamped later than `now_ns` and belongs to that time.
+    /// Topics (hashes) published by nodes already stepping at the next time (see
+    /// [`Scheduler::overlap_until`]): none of their messages belongs to `now_ns`, and the
+    /// caller must leave them to that time.
     pub overlapping: Vec<u64>,
 }
 
@@ -105,6 +105,8 @@ pub struct Scheduler {
     /// How long one wait may last before `watchdog` is consulted.
     poll: Duration,
     now_ns: u64,
+    /// The last time that finished.
+    last_finished_ns: Option<u64>,
     stats: ScheduleStats,
 }
 
@@ -133,6 +135,7 @@ impl Scheduler {
             known_topics: BTreeSet::new(),
             poll: Duration::from_millis(100),
             now_ns: 0,
+            last_finished_ns: None,
             stats: ScheduleStats::default(),
         })
     }
@@ -203,9 +206,9 @@ impl Scheduler {
     }
 
     fn footprint(&self, hello: &Hello) -> Footprint {
-        // A period shorter than the tick would put an event between two overlapping times.
+        // A period off the tick would put an event between two overlapping times.
         let declared = hello.declared != 0
-            && (hello.period_ns == 0 || hello.period_ns >= self.tick_ns)
+            && hello.period_ns.is_multiple_of(self.tick_ns)
             && hello
                 .triggers
                 .as_slice()
@@ -225,6 +228,7 @@ impl Scheduler {
                 member.active = true;
                 member.footprint = footprint;
                 member.steps = 0;
+                member.overlapped = false;
                 if member.steps_on_joining {
                     self.insert(self.now_ns + self.tick_ns, i)?;
                 }
@@ -235,7 +239,6 @@ impl Scheduler {
         let grant_name = proto::grant_service(&name);
         self.members.push(Member {
             active: true,
-            hash,
             grant: publisher::<Grant>(&self.iox, &grant_name)?,
             grant_notifier: transport::notifier(&self.iox, &grant_name)?,
             period_ns: hello.period_ns,
@@ -310,8 +313,9 @@ impl Scheduler {
         }
         let finished = self.flights.pop_front().expect("a time is being stepped");
         self.stats.advances += 1;
-        // Nodes of the next time that waited only for this one start now.
-        self.grant_ready()?;
+        self.last_finished_ns = Some(finished.now_ns);
+        // The next time's other nodes are granted by the next call, after the caller has
+        // looked at what this time published (its recorder finds new topics first).
         let mut stepped: Vec<String> = finished
             .due
             .iter()
@@ -321,7 +325,14 @@ impl Scheduler {
         let overlapping = self
             .flights
             .front()
-            .map(|f| f.due.iter().map(|&i| self.members[i].hash).collect())
+            .map(|f| {
+                f.due
+                    .difference(&f.held)
+                    .flat_map(|&i| self.members[i].footprint.outputs.iter().copied())
+                    .collect::<BTreeSet<u64>>()
+                    .into_iter()
+                    .collect()
+            })
             .unwrap_or_default();
         Ok(Some(Advance {
             now_ns: finished.now_ns,
@@ -355,11 +366,21 @@ impl Scheduler {
         let ready: Vec<usize> = std::mem::take(&mut oldest.held).into_iter().collect();
         self.grant_all(0, ready)?;
         let oldest = &self.flights[0];
+        // Only nodes of known habits may still run: a node in its first step may open ports,
+        // and an undeclared one may ask for a time between this one and the next.
+        if !oldest.waiting.iter().all(|&i| self.eligible(i)) {
+            return Ok(());
+        }
         let next_time = oldest.now_ns + self.tick_ns;
         if self.flights.len() == 1
             && self.overlap_until.is_some_and(|end| next_time <= end)
             && self.queue.keys().next() == Some(&next_time)
             && !oldest.waiting.is_empty()
+            // A message stamped between the last time and this one could wake a node
+            // between this time and the next.
+            && self
+                .last_finished_ns
+                .is_none_or(|last| last + self.tick_ns <= oldest.now_ns)
         {
             let due = self.queue.remove(&next_time).unwrap_or_default();
             self.open_flight(next_time, due);
@@ -369,10 +390,6 @@ impl Scheduler {
             ([a], [b]) => [a, b],
             _ => return Ok(()),
         };
-        if oldest.waiting.iter().any(|&i| self.members[i].steps == 0) {
-            // A node in its first step may still open ports.
-            return Ok(());
-        }
         let running: Vec<&Footprint> = oldest
             .waiting
             .iter()
@@ -384,7 +401,7 @@ impl Scheduler {
             .copied()
             .filter(|&n| {
                 let member = &self.members[n];
-                member.steps > 0
+                self.eligible(n)
                     && !oldest.waiting.contains(&n)
                     && overlap::may_start(
                         &member.footprint,
@@ -409,12 +426,21 @@ impl Scheduler {
         self.grant_all(1, ready)
     }
 
+    /// Whether node `i` may overlap another time: it declared its topics and has stepped once.
+    fn eligible(&self, i: usize) -> bool {
+        let m = &self.members[i];
+        m.steps > 0 && m.footprint.declared
+    }
+
     /// Grants flight `f`'s time to `nodes`, the longest-running first.
     fn grant_all(&mut self, f: usize, mut nodes: Vec<usize>) -> Result<(), Error> {
         // Which order nodes are granted in changes nothing they see (a message is visible one
         // tick after it was sent), only how soon the slowest one starts.
         nodes.sort_by_key(|&i| std::cmp::Reverse(self.members[i].last_step));
         let now_ns = self.flights[f].now_ns;
+        if !nodes.is_empty() {
+            self.flights[f].granted_at = Instant::now();
+        }
         for i in nodes {
             self.grant(i, Grant::step(now_ns, self.tick_ns))?;
             self.flights[f].waiting.insert(i);
@@ -486,12 +512,21 @@ impl Scheduler {
             && self.flights.len() > 1
             && time_ns < newest.now_ns
         {
-            // The overlap rule admits only nodes whose events fall on the tick; say so loudly
-            // rather than step out of order.
-            return Err(Error::Lockstep(format!(
-                "node '{}' is due at {time_ns} ns, after {} ns started",
-                self.members[i].name, newest.now_ns
-            )));
+            if newest.waiting.is_empty() && newest.due == newest.held {
+                // Nothing of the next time started yet: it goes back to the queue.
+                let newest = self.flights.pop_back().expect("two times");
+                self.queue
+                    .entry(newest.now_ns)
+                    .or_default()
+                    .extend(newest.due);
+            } else {
+                // The overlap rule admits only nodes whose events fall on the tick; say so
+                // loudly rather than step out of order.
+                return Err(Error::Lockstep(format!(
+                    "node '{}' is due at {time_ns} ns, after {} ns started",
+                    self.members[i].name, newest.now_ns
+                )));
+            }
         }
         self.queue.entry(time_ns).or_default().insert(i);
         Ok(())
@@ -502,9 +537,12 @@ impl Scheduler {
         for name in dead {
             if let Some(&i) = self.by_hash.get(&proto::name_hash(name)) {
                 self.members[i].active = false;
+                self.members[i].overlapped = false;
                 for f in &mut self.flights {
-                    f.waiting.remove(&i);
-                    f.held.remove(&i);
+                    // Not stepped at that time after all: a restart may be due there again.
+                    if f.waiting.remove(&i) | f.held.remove(&i) {
+                        f.due.remove(&i);
+                    }
                 }
             }
         }

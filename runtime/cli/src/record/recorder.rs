@@ -80,8 +80,6 @@ pub struct Recorder {
     /// Every topic is tapped for the live view, recorded or not.
     serving: bool,
     writer: WriterThread,
-    /// Messages of a later time drained early (see [`Self::drain_through`]), with tap ids.
-    held: Vec<(usize, Tapped)>,
     node_status: BTreeMap<String, Value>,
     status_series: BTreeMap<String, Vec<(u64, u64)>>,
     /// When each running node's status last arrived (wall clock).
@@ -111,7 +109,6 @@ impl Recorder {
             services_changed: None,
             serving: false,
             writer: WriterThread::start(path, lockstep, meta)?,
-            held: Vec::new(),
             node_status: BTreeMap::new(),
             status_series: BTreeMap::new(),
             status_heard: BTreeMap::new(),
@@ -216,44 +213,30 @@ impl Recorder {
 
     /// Reads every waiting message and hands them to the writer.
     pub fn drain(&mut self) -> Result<()> {
-        self.drain_through(u64::MAX, &[])
+        self.drain_except(&[])
     }
 
-    /// Reads every waiting message and hands those of simulated times up to `now_ns` to the
-    /// writer. Messages of `later` nodes (already stepping at a later time) stamped after
-    /// `now_ns` wait for that time's batch, so each batch holds exactly one time's messages.
-    pub fn drain_through(&mut self, now_ns: u64, later: &[u64]) -> Result<()> {
+    /// Reads every waiting message, except on `later` topics (hashes), and hands them to the
+    /// writer. In lockstep, `later` are the topics of nodes already stepping at the next time
+    /// ([`caravan::lockstep::Advance::overlapping`]): nothing on them belongs to the time
+    /// that ended, and they are drained once theirs ends, so each batch holds one time.
+    pub fn drain_except(&mut self, later: &[u64]) -> Result<()> {
         let now_wall = caravan::wall_clock_ns();
         let mut batch = Vec::new();
         let mut messages = Vec::new();
-        let mut ranks = vec![0; self.taps.len()];
-        for (rank, (id, _)) in self.taps.iter().enumerate() {
-            ranks[*id] = rank;
-        }
-        let mut held = Vec::new();
-        for (id, message) in std::mem::take(&mut self.held).into_iter().chain(
-            self.taps
-                .iter()
-                .map(|(id, tap)| {
-                    tap.drain(&mut batch)?;
-                    Ok(batch.drain(..).map(|m| (*id, m)).collect::<Vec<_>>())
-                })
-                .collect::<Result<Vec<_>>>()?
-                .into_iter()
-                .flatten(),
-        ) {
-            let h = &message.header;
-            if h.stamp_ns > now_ns && later.contains(&h.source_id) {
-                held.push((id, message));
-            } else {
-                messages.push(Drained {
-                    rank: ranks[id],
-                    id,
-                    message,
-                });
+        for (rank, (id, tap)) in self.taps.iter().enumerate() {
+            if !later.is_empty()
+                && later.contains(&caravan_schemas::lockstep::name_hash(tap.topic()))
+            {
+                continue;
             }
+            tap.drain(&mut batch)?;
+            messages.extend(batch.drain(..).map(|message| Drained {
+                rank,
+                id: *id,
+                message,
+            }));
         }
-        self.held = held;
         if let Some(tap) = &self.status_tap {
             tap.drain(&mut batch)?;
         }
