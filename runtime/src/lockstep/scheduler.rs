@@ -490,6 +490,11 @@ impl Scheduler {
                         member.name
                     )));
                 }
+                tracing::warn!(
+                    "node '{}' opened a topic in its step at {now_ns} ns, after it joined the \
+                     schedule: it is no longer stepped beside other ticks",
+                    member.name
+                );
             }
             member.overlapped = false;
             self.schedule_after(i, now_ns, done.published.as_slice())?;
