@@ -1,23 +1,29 @@
 //! The lockstep protocol: simulated time granted step by step.
 //!
-//! Each node announces itself ([`Hello`]: its period, the topics that wake it), then repeats:
-//! wait for a [`Grant`] of simulated time t, step at t, report [`Done`] with the topics it
-//! published. The [`Scheduler`] owns time: at each event time it grants every due node at once
-//! and waits until all reported done. A message published at t wakes its triggered
-//! subscribers at t + tick and is invisible to them before, so runs are deterministic whatever
-//! the machine's load.
+//! Each node announces itself ([`Hello`]: its period, the topics that wake it, the topics it
+//! reads and publishes), then repeats: wait for a [`Grant`] of simulated time t, step at t,
+//! report [`Done`] with the topics it published. The [`Scheduler`] owns time: at each event
+//! time it grants every due node at once and waits until all reported done. A message
+//! published at t wakes its triggered subscribers at t + tick and is invisible to them before,
+//! so runs are deterministic whatever the machine's load.
 //!
 //! Overlap: nodes due one tick later may start while an earlier time is still running, if they
-//! share no topic with the nodes still running there ([`overlap`]). Nothing they could see
+//! share no topic with the nodes still running there (`overlap.rs`). Nothing they could see
 //! differs, so recordings stay the same bytes; the two cores are kept busy instead of waiting
 //! for the slowest node of every time (typically the physics) before anything else starts.
+//!
+//! [`Hello`]: caravan_schemas::lockstep::Hello
+//! [`Grant`]: caravan_schemas::lockstep::Grant
+//! [`Done`]: caravan_schemas::lockstep::Done
 
+mod advance;
 mod client;
 mod overlap;
 mod scheduler;
 
+pub use advance::{Advance, ScheduleStats, Watchdog};
 pub(crate) use client::{Client, GrantOutcome};
-pub use scheduler::{Advance, ScheduleStats, Scheduler, Watchdog};
+pub use scheduler::Scheduler;
 
 use crate::Error;
 use crate::transport;

@@ -1,5 +1,6 @@
 //! The scheduler: owns simulated time, grants steps and collects their reports.
 
+use super::advance::{Advance, ScheduleStats, Watchdog};
 use super::overlap::{self, Footprint};
 use super::{Pub, Sub, publisher, send, subscriber};
 use crate::Error;
@@ -51,36 +52,6 @@ struct Flight {
     /// Last (re)grant of the waiting nodes, for repeating lost grants.
     granted_at: Instant,
 }
-
-/// One advance of simulated time.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Advance {
-    pub now_ns: u64,
-    /// Names of the nodes that stepped, sorted.
-    pub stepped: Vec<String>,
-    /// Hashes of the topics published in this step, sorted.
-    pub published: Vec<u64>,
-    /// Topics (hashes) published by nodes already stepping at the next time (see
-    /// [`Scheduler::overlap_until`]): none of their messages belongs to `now_ns`, and the
-    /// caller must leave them to that time.
-    pub overlapping: Vec<u64>,
-}
-
-/// What the scheduler did over a run.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct ScheduleStats {
-    /// Times of simulated time stepped.
-    pub advances: u64,
-    /// Steps granted (all nodes, all times).
-    pub steps: u64,
-    /// Steps granted while the time before was still running ([`Scheduler::overlap_until`]).
-    pub overlapped_steps: u64,
-}
-
-/// Consulted while the scheduler waits, with the names of the nodes it waits for: returns the
-/// names of nodes whose process died since the last call, or `Err` to abort the run.
-pub trait Watchdog: FnMut(&[&str]) -> Result<Vec<String>, String> {}
-impl<F: FnMut(&[&str]) -> Result<Vec<String>, String>> Watchdog for F {}
 
 /// Owns simulated time for a group. The launcher runs one; tests can run one directly.
 pub struct Scheduler {
@@ -150,7 +121,7 @@ impl Scheduler {
     }
 
     /// Lets nodes due at a time ≤ `end_ns` start while the time one tick earlier still runs,
-    /// when they share no topic with its unfinished nodes ([`overlap`]). The caller then
+    /// when they share no topic with its unfinished nodes (`lockstep/overlap.rs`). The caller then
     /// advances until [`Self::next_time_ns`] is past `end_ns`: a time that started early
     /// is finished by a later [`Self::advance`].
     pub fn overlap_until(&mut self, end_ns: u64) {

@@ -1,0 +1,32 @@
+//! What the scheduler reports: each advance of simulated time and the run's counts, and the
+//! watchdog it consults while it waits.
+
+/// One advance of simulated time.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Advance {
+    pub now_ns: u64,
+    /// Names of the nodes that stepped, sorted.
+    pub stepped: Vec<String>,
+    /// Hashes of the topics published in this step, sorted.
+    pub published: Vec<u64>,
+    /// Topics (hashes) published by nodes already stepping at the next time (see
+    /// [`super::Scheduler::overlap_until`]): none of their messages belongs to `now_ns`, and the
+    /// caller must leave them to that time.
+    pub overlapping: Vec<u64>,
+}
+
+/// What the scheduler did over a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ScheduleStats {
+    /// Times of simulated time stepped.
+    pub advances: u64,
+    /// Steps granted (all nodes, all times).
+    pub steps: u64,
+    /// Steps granted while the time before was still running ([`super::Scheduler::overlap_until`]).
+    pub overlapped_steps: u64,
+}
+
+/// Consulted while the scheduler waits, with the names of the nodes it waits for: returns the
+/// names of nodes whose process died since the last call, or `Err` to abort the run.
+pub trait Watchdog: FnMut(&[&str]) -> Result<Vec<String>, String> {}
+impl<F: FnMut(&[&str]) -> Result<Vec<String>, String>> Watchdog for F {}
