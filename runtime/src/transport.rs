@@ -60,7 +60,7 @@ impl Ports {
 
     pub fn input(&mut self, topic_hash: u64) {
         // Every node publishes its status, so a reader of it shares a topic with all of them.
-        self.undeclared |= topic_hash == caravan_schemas::topics::status().name_hash();
+        self.undeclared |= is_status(topic_hash);
         self.undeclared |= self.joined && !self.inputs.contains(&topic_hash);
         Self::add(&mut self.inputs, topic_hash);
     }
@@ -68,12 +68,17 @@ impl Ports {
     pub fn output(&mut self, topic_hash: u64) {
         // Every node publishes its status; the recorder keeps it out of the file and the
         // report reads only the latest, so it does not order nodes.
-        if topic_hash == caravan_schemas::topics::status().name_hash() {
+        if is_status(topic_hash) {
             return;
         }
         self.undeclared |= self.joined && !self.outputs.contains(&topic_hash);
         Self::add(&mut self.outputs, topic_hash);
     }
+}
+
+/// Whether `topic_hash` names the `status` topic every node publishes.
+fn is_status(topic_hash: u64) -> bool {
+    topic_hash == caravan_schemas::topics::status().name_hash()
 }
 
 impl Shared {

@@ -68,8 +68,9 @@ pub struct Recorder {
     iox: iceoryx2::node::Node<ipc::Service>,
     config: iceoryx2::config::Config,
     patterns: Vec<String>,
-    /// Taps sorted by topic, each with its id (the order it was discovered in).
-    taps: Vec<(usize, Box<dyn DynTap>)>,
+    /// Taps sorted by topic, each with its id (the order it was discovered in) and its
+    /// topic's hash.
+    taps: Vec<(usize, u64, Box<dyn DynTap>)>,
     status_tap: Option<Box<dyn DynTap>>,
     /// Topic hashes discovery already looked at, recorded or not.
     seen: BTreeSet<u64>,
@@ -195,9 +196,10 @@ impl Recorder {
                 type_name: tap.type_name(),
                 recorded: self.is_recorded(tap.topic()),
             });
-            self.taps.push((id, tap));
+            let hash = caravan_schemas::lockstep::name_hash(tap.topic());
+            self.taps.push((id, hash, tap));
         }
-        self.taps.sort_by(|a, b| a.1.topic().cmp(b.1.topic()));
+        self.taps.sort_by(|a, b| a.2.topic().cmp(b.2.topic()));
         if !topics.is_empty() {
             self.writer.send(Command::Topics(topics))?;
         }
@@ -207,7 +209,7 @@ impl Recorder {
     pub fn taps(&self) -> impl Iterator<Item = &dyn DynTap> {
         self.taps
             .iter()
-            .map(|(_, t)| t.as_ref())
+            .map(|(_, _, t)| t.as_ref())
             .chain(self.status_tap.as_deref())
     }
 
@@ -224,10 +226,8 @@ impl Recorder {
         let now_wall = caravan::wall_clock_ns();
         let mut batch = Vec::new();
         let mut messages = Vec::new();
-        for (rank, (id, tap)) in self.taps.iter().enumerate() {
-            if !later.is_empty()
-                && later.contains(&caravan_schemas::lockstep::name_hash(tap.topic()))
-            {
+        for (rank, (id, hash, tap)) in self.taps.iter().enumerate() {
+            if later.contains(hash) {
                 continue;
             }
             tap.drain(&mut batch)?;
@@ -299,7 +299,7 @@ impl Recorder {
     pub fn finish(mut self) -> Result<Recording> {
         self.drain()?;
         let mut topics = self.writer.finish()?;
-        for (_, tap) in &self.taps {
+        for (_, _, tap) in &self.taps {
             if let Some(s) = topics.get_mut(tap.topic()) {
                 s.missed = tap.missed();
             }

@@ -122,12 +122,13 @@ struct Writer {
     path: PathBuf,
     lockstep: bool,
     /// (topic, type name) by [`NewTopic::id`].
-    topics: Vec<(String, &'static str)>,
+    topics: Vec<(std::sync::Arc<str>, &'static str)>,
+    /// Statistics by [`NewTopic::id`], for topics with messages.
+    stats: Vec<Option<TopicStats>>,
     channels: BTreeMap<String, u16>,
     /// Schema ids by name.
     schemas: BTreeMap<String, u16>,
     sequences: BTreeMap<u16, u32>,
-    stats: BTreeMap<String, TopicStats>,
     live: Option<super::live::LiveView>,
 }
 
@@ -168,7 +169,7 @@ impl Writer {
             channels: BTreeMap::new(),
             schemas: BTreeMap::new(),
             sequences: BTreeMap::new(),
-            stats: BTreeMap::new(),
+            stats: Vec::new(),
             live: None,
         })
     }
@@ -213,9 +214,10 @@ impl Writer {
 
     fn add_topic(&mut self, new: NewTopic) -> Result<()> {
         if self.topics.len() <= new.id {
-            self.topics.resize(new.id + 1, (String::new(), ""));
+            self.topics.resize(new.id + 1, ("".into(), ""));
+            self.stats.resize_with(new.id + 1, || None);
         }
-        self.topics[new.id] = (new.topic.clone(), new.type_name);
+        self.topics[new.id] = (new.topic.as_str().into(), new.type_name);
         if new.recorded {
             self.channel(&new.topic, new.type_name)?;
         }
@@ -308,7 +310,7 @@ impl Writer {
             }
         }
         // Discovery gave every recorded topic its channel; the others are served live only.
-        let Some(&channel) = self.channels.get(&topic) else {
+        let Some(&channel) = self.channels.get(&*topic) else {
             return Ok(());
         };
         self.write_message(channel, stamp_ns, &bytes)?;
@@ -316,7 +318,7 @@ impl Writer {
             let channel = self.scene_channel(&view.topic, view.schema)?;
             self.write_message(channel, stamp_ns, &view.bytes)?;
         }
-        let stats = self.stats.entry(topic).or_insert_with(|| TopicStats {
+        let stats = self.stats[drained.id].get_or_insert_with(|| TopicStats {
             type_name: type_name.to_string(),
             messages: 0,
             missed: 0,
@@ -331,6 +333,7 @@ impl Writer {
 
     /// Writes the summary and flushes the file.
     fn finish(mut self) -> Result<BTreeMap<String, TopicStats>> {
+        let stats = std::mem::take(&mut self.stats);
         with_writer(&mut self.writer, &self.path, |w| w.finish().map(|_| ()))?;
         if let Some(w) = self.writer.take() {
             // The last bytes leave the buffer here; a full disk must not pass unseen.
@@ -339,7 +342,12 @@ impl Writer {
                 .flush()
                 .with_context(|| cannot_write(&self.path))?;
         }
-        Ok(self.stats)
+        Ok(self
+            .topics
+            .iter()
+            .zip(stats)
+            .filter_map(|((topic, _), s)| Some((topic.to_string(), s?)))
+            .collect())
     }
 }
 
