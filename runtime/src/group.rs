@@ -147,6 +147,41 @@ pub fn make_private(group: &str) -> usize {
     changed
 }
 
+/// Removes the service descriptions of `config`'s group that a process left half-written,
+/// and returns how many. iceoryx2 0.10 writes a service's description with mode 0600 and
+/// makes it 0400 once the service is complete; a process killed in between (a SIGKILL while
+/// it starts) leaves the service "hanging in creation" for good, and every later open of it
+/// fails (fixed after 0.10, iceoryx2#1584). Only files older than the creation timeout are
+/// taken: iceoryx2 itself gives up on a creation after that long.
+pub fn remove_hung_services(config: &Config) -> usize {
+    use std::os::unix::fs::PermissionsExt;
+    let global = &config.global;
+    let prefix = global.prefix.to_string();
+    let suffix = global.service.static_config_storage_suffix.to_string();
+    let Ok(entries) = std::fs::read_dir(global.service_dir().to_string()) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if !name.starts_with(&prefix) || !name.ends_with(&suffix) {
+            continue;
+        }
+        let hung = entry.metadata().is_ok_and(|m| {
+            m.is_file()
+                && m.permissions().mode() & 0o777 == 0o600
+                && m.modified()
+                    .ok()
+                    .and_then(|t| t.elapsed().ok())
+                    .is_some_and(|age| age > global.creation_timeout)
+        });
+        if hung && std::fs::remove_file(entry.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
 /// Deletes files under `dir` (recursively) whose name starts with `prefix`, and directories
 /// left empty by that.
 fn remove_prefixed(dir: &StdPath, prefix: &str) -> usize {

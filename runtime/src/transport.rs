@@ -121,11 +121,19 @@ pub(crate) fn open_existing<T: Message>(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
 ) -> Result<PubSubFactory<ipc::Service, T, Header>, Error> {
-    iox.service_builder(&service_name(topic)?)
-        .publish_subscribe::<T>()
-        .user_header::<Header>()
-        .open()
-        .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))
+    use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError as Open;
+    let name = service_name(topic)?;
+    repairing_hung(
+        iox,
+        || {
+            iox.service_builder(&name)
+                .publish_subscribe::<T>()
+                .user_header::<Header>()
+                .open()
+        },
+        |e| matches!(e, Open::HangsInCreation),
+    )
+    .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))
 }
 
 /// A publisher's behaviour when a subscriber's buffer is full: wait on a lossless topic,
@@ -144,36 +152,66 @@ pub(crate) fn open_pubsub<T: Message>(
     topic: &str,
     delivery: crate::Delivery,
 ) -> Result<PubSubFactory<ipc::Service, T, Header>, Error> {
+    use iceoryx2::service::builder::publish_subscribe::{
+        PublishSubscribeOpenError as Open, PublishSubscribeOpenOrCreateError as Either,
+    };
     let depth = delivery.depth();
-    iox.service_builder(&service_name(topic)?)
-        .publish_subscribe::<T>()
-        .user_header::<Header>()
-        .enable_safe_overflow(!delivery.is_lossless())
-        .subscriber_max_buffer_size(depth)
-        .subscriber_max_borrowed_samples(depth.max(8))
-        .history_size(0)
-        .open_or_create()
-        .map_err(|e| {
-            Error::topic(
-                topic,
-                format!(
-                    "cannot open as {} ({:?}); another process uses this topic with a different \
+    let name = service_name(topic)?;
+    repairing_hung(
+        iox,
+        || {
+            iox.service_builder(&name)
+                .publish_subscribe::<T>()
+                .user_header::<Header>()
+                .enable_safe_overflow(!delivery.is_lossless())
+                .subscriber_max_buffer_size(depth)
+                .subscriber_max_borrowed_samples(depth.max(8))
+                .history_size(0)
+                .open_or_create()
+        },
+        |e| matches!(e, Either::PublishSubscribeOpenError(Open::HangsInCreation)),
+    )
+    .map_err(|e| {
+        Error::topic(
+            topic,
+            format!(
+                "cannot open as {} ({:?}); another process uses this topic with a different \
                      message type or delivery contract",
-                    caravan_schemas::type_name::<T>(),
-                    e
-                ),
-            )
-        })
+                caravan_schemas::type_name::<T>(),
+                e
+            ),
+        )
+    })
 }
 
 fn open_event(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
 ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
-    iox.service_builder(&service_name(topic)?)
-        .event()
-        .open_or_create()
-        .map_err(|e| Error::topic(topic, format!("cannot open its event service: {e:?}")))
+    use iceoryx2::service::builder::event::{
+        EventOpenError as Open, EventOpenOrCreateError as Either,
+    };
+    let name = service_name(topic)?;
+    repairing_hung(
+        iox,
+        || iox.service_builder(&name).event().open_or_create(),
+        |e| matches!(e, Either::EventOpenError(Open::HangsInCreation)),
+    )
+    .map_err(|e| Error::topic(topic, format!("cannot open its event service: {e:?}")))
+}
+
+/// Runs `open`, and once more if it failed because a killed process left the service half
+/// made (see [`crate::group::remove_hung_services`]); a restarted node then starts instead of
+/// failing again on what its killed predecessor left.
+fn repairing_hung<T, E>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    open: impl Fn() -> Result<T, E>,
+    hung: impl Fn(&E) -> bool,
+) -> Result<T, E> {
+    match open() {
+        Err(e) if hung(&e) && crate::group::remove_hung_services(iox.config()) > 0 => open(),
+        result => result,
+    }
 }
 
 /// The notifier that wakes a topic's event-driven subscribers.
@@ -202,4 +240,69 @@ pub(crate) fn listener(
 /// next event; the message itself is delivered.
 pub(crate) fn wake(notifier: &Notifier<ipc::Service>) {
     let _ = notifier.notify();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeSet;
+    use std::path::PathBuf;
+
+    #[test]
+    fn a_service_a_killed_process_left_half_made_is_made_again() {
+        let group = format!("hung-{}", std::process::id());
+        let config = crate::group::config(&group).unwrap();
+        let iox = NodeBuilder::new()
+            .config(&config)
+            .create::<ipc::Service>()
+            .unwrap();
+        let prefix = crate::group::prefix(&group);
+        let dir = PathBuf::from(config.global.service_dir().to_string());
+        let files = || -> BTreeSet<PathBuf> {
+            std::fs::read_dir(&dir)
+                .into_iter()
+                .flatten()
+                .flatten()
+                .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+                .map(|e| e.path())
+                .collect()
+        };
+        // Made and dropped, the service leaves nothing; its description's name is kept.
+        let before = files();
+        let made = open_event(&iox, "t/hung").unwrap();
+        let description = files().difference(&before).next().unwrap().clone();
+        drop(made);
+        assert!(!description.exists());
+        // What a SIGKILL during the creation leaves: the description, still writable (0600),
+        // older than the creation timeout.
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let file = std::fs::File::create(&description).unwrap();
+            file.set_permissions(std::fs::Permissions::from_mode(0o600))
+                .unwrap();
+            file.set_modified(std::time::SystemTime::now() - std::time::Duration::from_secs(60))
+                .unwrap();
+        }
+        let plain = iox
+            .service_builder(&service_name("t/hung").unwrap())
+            .event()
+            .open_or_create();
+        assert!(
+            matches!(
+                plain,
+                Err(
+                    iceoryx2::service::builder::event::EventOpenOrCreateError::EventOpenError(
+                        iceoryx2::service::builder::event::EventOpenError::HangsInCreation
+                    )
+                )
+            ),
+            "{:?}",
+            plain.err()
+        );
+        let notifier = notifier(&iox, "t/hung");
+        assert!(notifier.is_ok(), "{:?}", notifier.err());
+        drop(notifier);
+        drop(iox);
+        crate::group::remove_resources(&group).unwrap();
+    }
 }

@@ -317,7 +317,12 @@ fn chaos_kills_of_restartable_followers_are_survived_and_reported() {
             .iter()
             .find(|n| n["name"] == f)
             .unwrap();
-        assert_eq!(node["restarts"], times as u64, "{f}: {killed:?}");
+        assert_eq!(
+            node["restarts"],
+            times as u64,
+            "{f}: {killed:?}\n{node}\n{}",
+            stderr(&out)
+        );
     }
     assert_eq!(report["run"]["sim_time_s"], 40.0);
     assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
