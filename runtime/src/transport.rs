@@ -209,7 +209,16 @@ fn repairing_hung<T, E>(
     hung: impl Fn(&E) -> bool,
 ) -> Result<T, E> {
     match open() {
-        Err(e) if hung(&e) && crate::group::remove_hung_services(iox.config()) > 0 => open(),
+        Err(e) if hung(&e) => {
+            let removed = crate::group::remove_hung_services(iox.config());
+            if removed == 0 {
+                return Err(e);
+            }
+            tracing::warn!(
+                "removed {removed} service(s) that a killed process left half made; opening again"
+            );
+            open()
+        }
         result => result,
     }
 }
