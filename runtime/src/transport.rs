@@ -125,15 +125,20 @@ pub(crate) fn open_existing<T: Message>(
     let name = service_name(topic)?;
     repairing_hung(
         iox,
-        || {
-            iox.service_builder(&name)
-                .publish_subscribe::<T>()
-                .user_header::<Header>()
-                .open()
-        },
+        || pubsub_builder::<T>(iox, &name).open(),
         |e| matches!(e, Open::HangsInCreation),
     )
     .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))
+}
+
+/// The builder of a topic's publish-subscribe service: its payload and Caravan's header.
+fn pubsub_builder<T: Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &ServiceName,
+) -> iceoryx2::service::builder::publish_subscribe::Builder<T, Header, ipc::Service> {
+    iox.service_builder(name)
+        .publish_subscribe::<T>()
+        .user_header::<Header>()
 }
 
 /// A publisher's behaviour when a subscriber's buffer is full: wait on a lossless topic,
@@ -160,9 +165,7 @@ pub(crate) fn open_pubsub<T: Message>(
     repairing_hung(
         iox,
         || {
-            iox.service_builder(&name)
-                .publish_subscribe::<T>()
-                .user_header::<Header>()
+            pubsub_builder::<T>(iox, &name)
                 .enable_safe_overflow(!delivery.is_lossless())
                 .subscriber_max_buffer_size(depth)
                 .subscriber_max_borrowed_samples(depth.max(8))
