@@ -126,18 +126,12 @@ pub fn remove_resources(group: &str) -> Result<usize, Error> {
 /// else needs access. Returns how many files were changed.
 pub fn make_private(group: &str) -> usize {
     use std::os::unix::fs::PermissionsExt;
-    let prefix = prefix(group);
-    let Ok(entries) = std::fs::read_dir("/dev/shm") else {
-        return 0;
-    };
     let mut changed = 0;
-    for entry in entries.flatten() {
-        let ours = entry.file_name().to_string_lossy().starts_with(&prefix);
+    for entry in entries_named(StdPath::new("/dev/shm"), &prefix(group), "") {
         let open = entry
             .metadata()
             .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o077 != 0);
-        if ours
-            && open
+        if open
             && std::fs::set_permissions(entry.path(), std::fs::Permissions::from_mode(0o600))
                 .is_ok()
         {
@@ -156,17 +150,12 @@ pub fn make_private(group: &str) -> usize {
 pub fn remove_hung_services(config: &Config) -> usize {
     use std::os::unix::fs::PermissionsExt;
     let global = &config.global;
-    let prefix = global.prefix.to_string();
-    let suffix = global.service.static_config_storage_suffix.to_string();
-    let Ok(entries) = std::fs::read_dir(global.service_dir().to_string()) else {
-        return 0;
-    };
     let mut removed = 0;
-    for entry in entries.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if !name.starts_with(&prefix) || !name.ends_with(&suffix) {
-            continue;
-        }
+    for entry in entries_named(
+        StdPath::new(&global.service_dir().to_string()),
+        &global.prefix.to_string(),
+        &global.service.static_config_storage_suffix.to_string(),
+    ) {
         let hung = entry.metadata().is_ok_and(|m| {
             m.is_file()
                 && m.permissions().mode() & 0o777 == 0o600
@@ -180,6 +169,24 @@ pub fn remove_hung_services(config: &Config) -> usize {
         }
     }
     removed
+}
+
+/// The entries of `dir` whose names start with `prefix` and end with `suffix`.
+fn entries_named(
+    dir: &StdPath,
+    prefix: &str,
+    suffix: &str,
+) -> impl Iterator<Item = std::fs::DirEntry> {
+    let (prefix, suffix) = (prefix.to_string(), suffix.to_string());
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(move |e| {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            name.starts_with(&prefix) && name.ends_with(&suffix)
+        })
 }
 
 /// Deletes files under `dir` (recursively) whose name starts with `prefix`, and directories

@@ -253,7 +253,6 @@ impl Scheduler {
             self.open_flight(now_ns, due);
         }
         self.now_ns = self.flights[0].now_ns;
-        self.grant_ready()?;
         loop {
             self.receive_reports()?;
             self.grant_ready()?;
