@@ -34,6 +34,7 @@ mod params;
 pub mod pattern;
 mod publisher;
 mod rate;
+pub mod relay;
 mod stats;
 mod subscriber;
 pub mod tap;

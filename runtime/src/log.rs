@@ -3,7 +3,7 @@
 //! process and library it came from.
 //!
 //! The level comes from `CARAVAN_LOG` (`error`, `warn`, `info`, `debug`, `trace`, or a
-//! `tracing` filter such as `warn,iceoryx2=error`); the default is `warn`. Lines go to standard
+//! `tracing` filter such as `warn,iceoryx2=error`); the default is `warn,zenoh=error`. Lines go to standard
 //! error, which the launcher keeps in the run directory's logs.
 
 use iceoryx2::prelude::LogLevel;
@@ -46,19 +46,23 @@ fn iceoryx_level(filter: &tracing_subscriber::EnvFilter) -> LogLevel {
     }
 }
 
+/// Warnings and worse; zenoh's only when they are errors (its warnings are about its own
+/// start-up, such as a host not reachable yet, which the launcher reports itself).
+const DEFAULT_FILTER: &str = "warn,zenoh=error";
+
 /// Installs the logger once per process, naming the process in each line (`name`, e.g. the
 /// node's or `caravan`). A bad `CARAVAN_LOG` falls back to `warn` with a warning.
 pub fn init(name: &str) {
     INIT.call_once(|| {
         let text = std::env::var(LEVEL_VAR).unwrap_or_default();
         let parsed = if text.trim().is_empty() {
-            Ok(tracing_subscriber::EnvFilter::new("warn"))
+            Ok(tracing_subscriber::EnvFilter::new(DEFAULT_FILTER))
         } else {
             tracing_subscriber::EnvFilter::try_new(text.trim())
         };
         let (filter, bad) = match parsed {
             Ok(f) => (f, None),
-            Err(e) => (tracing_subscriber::EnvFilter::new("warn"), Some(e)),
+            Err(e) => (tracing_subscriber::EnvFilter::new(DEFAULT_FILTER), Some(e)),
         };
         iceoryx2::prelude::set_log_level(iceoryx_level(&filter));
         iceoryx2::prelude::set_logger(&ICEORYX_TO_TRACING);

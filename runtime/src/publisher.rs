@@ -18,6 +18,8 @@ type IoxPublisher<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, Hea
 pub struct Publisher<T: Message> {
     topic: String,
     topic_hash: u64,
+    service:
+        iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, Header>,
     port: IoxPublisher<T>,
     notifier: Notifier<ipc::Service>,
     seq: Cell<u64>,
@@ -44,6 +46,7 @@ impl<T: Message> Publisher<T> {
         Ok(Self {
             topic: topic.name().to_string(),
             topic_hash: topic.name_hash(),
+            service,
             port,
             notifier,
             seq: Cell::new(0),
@@ -53,6 +56,13 @@ impl<T: Message> Publisher<T> {
 
     pub fn topic(&self) -> &str {
         &self.topic
+    }
+
+    /// How many subscribers the topic has on this host now (on a group across hosts, the
+    /// bridge counts as one for each host that reads the topic). A lossless stream that must
+    /// not start before its reader can wait for one, as with ROS 2's subscription count.
+    pub fn subscribers(&self) -> usize {
+        self.service.dynamic_config().number_of_subscribers()
     }
 
     /// Messages published so far.

@@ -24,6 +24,7 @@ mod sensors;
 mod status;
 mod topic;
 pub mod topics;
+pub mod wire;
 
 pub use articulated::{
     Contact, ContactEstimate, Contacts, ForceTorque, ForceTorques, JointCommand, JointState,

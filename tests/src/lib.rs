@@ -1,5 +1,6 @@
 //! Helpers for Caravan's multi-process integration tests.
 
+pub mod hosts;
 pub mod node;
 pub mod recording;
 

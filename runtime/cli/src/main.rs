@@ -1,6 +1,7 @@
 //! The `caravan` command.
 
 mod bench;
+mod bridge;
 mod clean;
 mod graph;
 mod inject;

@@ -66,6 +66,7 @@ pub fn resim(args: &ResimArgs) -> Result<u8> {
             under_test: Some(args.node.clone()),
         }),
         only: vec![args.node.clone()],
+        host: None,
     };
     let Launched { code, dir } = start(lf, &options)?;
     let Some(dir) = dir else {

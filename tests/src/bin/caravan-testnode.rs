@@ -2,6 +2,8 @@
 //! environment as for any node.
 //!
 //! - `publish`: publishes `count` messages carrying `value` on `topic`, lossless.
+//! - `stream`: once `topic` has a subscriber, publishes `count` messages carrying `value` on
+//!   it, lossless, one per step at the launch rate (default 100 Hz), then exits 0.
 //! - `subscribe`: receives `count` messages from `topic`, checks values and sequence numbers,
 //!   prints `ready` once subscribed.
 //! - `idle`: steps at the launch rate doing nothing.
@@ -82,6 +84,26 @@ fn run(mode: &str) -> Result<(), Error> {
                     theta: 0.0,
                 })?;
             }
+        }
+        "stream" => {
+            let publisher = node.publisher(&Topic::<Pose2D>::lossless(&p.topic))?;
+            let count = p.count;
+            node.run(node.trigger(Trigger::every_hz(100.0))?, |step| {
+                // A lossless stream needs its reader first: what is sent to nobody is gone.
+                if publisher.subscribers() == 0 {
+                    return Ok(());
+                }
+                let seq = publisher.sequence() + 1;
+                publisher.publish(&Pose2D {
+                    x: p.value,
+                    y: seq as f64,
+                    theta: 0.0,
+                })?;
+                if seq >= count {
+                    step.stop();
+                }
+                Ok(())
+            })?;
         }
         "subscribe" => subscribe(&mut node, &p)?,
         "idle" => {

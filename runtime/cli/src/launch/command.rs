@@ -47,6 +47,11 @@ pub struct LaunchArgs {
     /// the others)
     #[arg(long, value_name = "PROCESS", num_args = 1..)]
     pub only: Vec<String>,
+    /// Run the part of the group on this host of `[hosts]`: start its processes only, and
+    /// join the other hosts' launchers over zenoh (at the `listen` / `connect` endpoints of
+    /// `[hosts]`); topics cross between hosts
+    #[arg(long, value_name = "HOST")]
+    pub host: Option<String>,
 }
 
 /// How to run a loaded launch file: the command line's options besides the file.
@@ -56,6 +61,8 @@ pub struct RunOptions {
     pub foxglove: Option<u16>,
     pub play: Option<crate::play::InGroup>,
     pub only: Vec<String>,
+    /// Run only this host's part, joined to the other hosts over zenoh.
+    pub host: Option<String>,
 }
 
 /// How a launch ended: the exit code, and the run directory if the group started.
@@ -125,6 +132,7 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
             under_test: None,
         }),
         only: args.only.clone(),
+        host: args.host.clone(),
     };
     start(lf, &options).map(|l| l.code)
 }
@@ -132,6 +140,14 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
 /// Leaves out the processes `only` does not name and adds the player of `play`; an error
 /// names what the launch file lacks or the recording cannot give.
 fn reshape(lf: &mut LaunchFile, options: &RunOptions) -> Result<()> {
+    if let Some(host) = &options.host {
+        crate::bridge::check_host(lf, host)?;
+        let (kept, left): (Vec<_>, Vec<_>) = std::mem::take(&mut lf.processes)
+            .into_iter()
+            .partition(|p| &p.host == host);
+        lf.processes = kept;
+        lf.left_out = left.into_iter().map(|p| (p.name, p.host)).collect();
+    }
     if !options.only.is_empty() {
         let names: Vec<&str> = lf.processes.iter().map(|p| p.name.as_str()).collect();
         for name in &options.only {
@@ -147,7 +163,8 @@ fn reshape(lf: &mut LaunchFile, options: &RunOptions) -> Result<()> {
             .into_iter()
             .partition(|p| options.only.contains(&p.name));
         lf.processes = kept;
-        lf.left_out = left.into_iter().map(|p| (p.name, p.host)).collect();
+        lf.left_out
+            .extend(left.into_iter().map(|p| (p.name, p.host)));
     }
     if let Some(play) = &options.play {
         let player = play.process(lf)?;
@@ -198,6 +215,20 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
         return already();
     }
     crate::clean::remove_stale(&group)?;
+    // On several machines: nothing starts before every required host has joined.
+    let mut bridge = match &options.host {
+        Some(host) => {
+            let bridge = crate::bridge::Bridge::open(&lf, host)?;
+            console.say(&format!("host '{host}' of group '{group}' is up"));
+            if let Err(e) = bridge.wait_for_hosts(lf.group.join_timeout, |m| console.say(m)) {
+                eprintln!("caravan: {e:#}");
+                bridge.close();
+                return Ok(Launched { code: 1, dir: None });
+            }
+            Some(bridge)
+        }
+        None => None,
+    };
     let dir = run_dir(&options.runs_dir, &group)?;
     let resolved = dir.join("launch.toml");
     std::fs::write(&resolved, &lf.resolved_toml)
@@ -220,10 +251,15 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
             live.port()
         ));
     }
-    let result = run::run_group(&lf, &dir, &config_path, &console, live).map(|mut facts| {
-        facts.reports = reports;
-        facts
-    });
+    let result = run::run_group(&lf, &dir, &config_path, &console, live, bridge.as_mut()).map(
+        |mut facts| {
+            facts.reports = reports;
+            facts
+        },
+    );
+    if let Some(bridge) = bridge {
+        bridge.close();
+    }
     // Whatever happened, leave no shared memory of the group behind.
     let _ = caravan::group::remove_resources(&group);
     let facts = result?;

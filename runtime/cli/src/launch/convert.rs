@@ -262,3 +262,38 @@ pub fn is_executable(path: &Path) -> bool {
     path.metadata()
         .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
 }
+
+/// The transports this build of Caravan can reach other hosts over.
+pub const ENDPOINT_PROTOCOLS: &[&str] = &["tcp"];
+
+/// A list of zenoh endpoints, each `PROTOCOL/HOST:PORT` (e.g. `tcp/192.168.1.10:7447`).
+pub fn endpoints(item: &Item) -> Result<Vec<String>, String> {
+    let list = strings(item)
+        .map_err(|_| expected("an array of endpoints like \"tcp/192.168.1.10:7447\"", item))?;
+    for e in &list {
+        endpoint(e)?;
+    }
+    Ok(list)
+}
+
+fn endpoint(text: &str) -> Result<(), String> {
+    let parsed: zenoh::config::EndPoint = text
+        .parse()
+        .map_err(|e| format!("'{text}' is not an endpoint ({e}); write it as \"tcp/HOST:PORT\""))?;
+    let protocol = parsed.protocol();
+    let protocol = protocol.as_str();
+    if !ENDPOINT_PROTOCOLS.contains(&protocol) {
+        return Err(format!(
+            "'{text}': protocol '{protocol}' is not available; use {}",
+            ENDPOINT_PROTOCOLS.join(", ")
+        ));
+    }
+    let address = parsed.address();
+    let port = address.as_str().rsplit_once(':').map(|(_, p)| p);
+    match port.map(str::parse::<u16>) {
+        Some(Ok(_)) => Ok(()),
+        _ => Err(format!(
+            "'{text}' has no port; write it as \"{protocol}/HOST:PORT\""
+        )),
+    }
+}

@@ -61,12 +61,31 @@ impl GroupSpec {
 }
 
 /// One entry of `[hosts]`.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct HostSpec {
     /// How many times slower than this machine the host's CPU is (1.0 = as fast). When set,
     /// lockstep delays each output of the host's nodes by their compute time times it; when
     /// absent, computing takes no simulated time.
     pub cpu_slowdown: Option<f64>,
+    /// Zenoh endpoints (`tcp/ADDRESS:PORT`) this host's launcher listens on when the group
+    /// runs on several machines (`caravan launch --host`); other hosts connect to them.
+    pub listen: Vec<String>,
+    /// Zenoh endpoints this host's launcher dials: other hosts' `listen` endpoints.
+    pub connect: Vec<String>,
+    /// Across machines: the group starts only once this host joined, and stops when it
+    /// leaves. A host that is not required may join late or leave; the others go on.
+    pub required: bool,
+}
+
+impl Default for HostSpec {
+    fn default() -> Self {
+        Self {
+            cpu_slowdown: None,
+            listen: Vec::new(),
+            connect: Vec::new(),
+            required: true,
+        }
+    }
 }
 
 /// One `[[links]]` entry: the network between two sets of hosts.

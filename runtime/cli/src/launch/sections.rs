@@ -27,7 +27,7 @@ const GROUP_KEYS: &[&str] = &[
     "step_timeout",
     "join_timeout",
 ];
-const HOST_KEYS: &[&str] = &["cpu_slowdown"];
+const HOST_KEYS: &[&str] = &["cpu_slowdown", "listen", "connect", "required"];
 const LINK_KEYS: &[&str] = &[
     "between",
     "latency",
@@ -132,7 +132,18 @@ impl Checker<'_> {
                     ))
                 }
             });
-            hosts.insert(name.to_string(), HostSpec { cpu_slowdown });
+            let listen = self.get(&h, "listen", endpoints).unwrap_or_default();
+            let connect = self.get(&h, "connect", endpoints).unwrap_or_default();
+            let required = self.get(&h, "required", boolean).unwrap_or(true);
+            hosts.insert(
+                name.to_string(),
+                HostSpec {
+                    cpu_slowdown,
+                    listen,
+                    connect,
+                    required,
+                },
+            );
         }
         hosts
     }

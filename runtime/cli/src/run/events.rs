@@ -5,6 +5,7 @@
 use super::driver::Control;
 use super::output::Console;
 use super::supervisor::{Event, Supervisor};
+use crate::bridge::{Bridge, FleetEvent};
 use crate::launch::model::LaunchFile;
 use anyhow::Result;
 use crossbeam::channel::{Receiver, RecvTimeoutError};
@@ -17,7 +18,9 @@ pub struct Ending {
     pub failure: Option<String>,
 }
 
-/// Supervises the started group until all its processes have exited.
+/// Supervises the started group until all its processes have exited. On several machines
+/// (`fleet`), a host whose processes have all exited waits for the other hosts' to, and a stop
+/// on one host stops every host.
 pub fn supervise(
     lf: &LaunchFile,
     sup: &mut Supervisor,
@@ -25,6 +28,7 @@ pub fn supervise(
     control: &Control,
     console: &Console,
     started: Instant,
+    fleet: Option<&Bridge>,
 ) -> Result<Ending> {
     let lockstep = lf.group.clock == caravan::ClockMode::Lockstep;
     let wall_deadline = if lockstep {
@@ -44,7 +48,20 @@ pub fn supervise(
             *kill_at = Some(Instant::now() + lf.group.grace);
         }
     };
+    // Whether the other hosts know why this one stops (they stopped it, or all are done).
+    let mut told = fleet.is_none();
+    let mut said_done = false;
     loop {
+        if let Some(fleet) = fleet {
+            if stopping && !told {
+                fleet.stop(outcome, failure.as_deref());
+                told = true;
+            }
+            if !stopping && !said_done && sup.all_done() {
+                fleet.local_done();
+                said_done = true;
+            }
+        }
         if stopping && !sup.any_alive() {
             break;
         }
@@ -83,7 +100,8 @@ pub fn supervise(
                     }
                     begin_stop(sup, &mut stopping, &mut kill_at);
                 }
-                if !stopping && sup.all_done() {
+                // On several machines the group ends when every host's processes have.
+                if !stopping && sup.all_done() && fleet.is_none() {
                     begin_stop(sup, &mut stopping, &mut kill_at);
                 }
             }
@@ -124,6 +142,49 @@ pub fn supervise(
                 if let Err(why) = result {
                     console.say(&why);
                     (outcome, failure) = ("failed", Some(why));
+                }
+                begin_stop(sup, &mut stopping, &mut kill_at);
+            }
+            Ok(Event::Fleet(event)) => {
+                if stopping {
+                    continue;
+                }
+                match event {
+                    FleetEvent::Stopped(notice) => {
+                        told = true;
+                        let why = notice.failure.as_deref().unwrap_or("");
+                        console.say(&format!(
+                            "host '{}' stopped the group ({}{}{why})",
+                            notice.host,
+                            notice.outcome,
+                            if why.is_empty() { "" } else { ": " }
+                        ));
+                        outcome = match notice.outcome.as_str() {
+                            "failed" => "failed",
+                            "interrupted" => "interrupted",
+                            _ => "completed",
+                        };
+                        failure = notice
+                            .failure
+                            .map(|f| format!("host '{}': {f}", notice.host));
+                    }
+                    FleetEvent::Left { host, required } => {
+                        if !required {
+                            console.say(&format!(
+                                "host '{host}' left the group; going on without it (required = false)"
+                            ));
+                            continue;
+                        }
+                        let why =
+                            format!("host '{host}' left the group before its processes finished");
+                        console.say(&why);
+                        (outcome, failure) = ("failed", Some(why));
+                    }
+                    FleetEvent::AllDone => told = true,
+                    FleetEvent::Failed(why) => {
+                        console.say(&why);
+                        (outcome, failure) = ("failed", Some(why));
+                    }
                 }
                 begin_stop(sup, &mut stopping, &mut kill_at);
             }

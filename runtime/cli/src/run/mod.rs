@@ -64,9 +64,11 @@ pub fn run_group(
     config_path: &Path,
     console: &Console,
     live: Option<crate::record::live::LiveView>,
+    mut bridge: Option<&mut crate::bridge::Bridge>,
 ) -> Result<RunFacts> {
     let lockstep = lf.group.clock == ClockMode::Lockstep;
     let (events_tx, events) = unbounded();
+    let events_tx_for_bridge = events_tx.clone();
     let (finish_tx, finish_rx) = unbounded();
     let control = Arc::new(Control::default());
     let signals_tx = events_tx.clone();
@@ -124,9 +126,24 @@ pub fn run_group(
         events_tx,
         finish_rx,
     );
+    if let Some(bridge) = bridge.as_deref_mut() {
+        bridge.attach(
+            events_tx_for_bridge,
+            &caravan::group::load_config(config_path)?,
+            crate::bridge::remote_nodes(lf),
+        )?;
+    }
     let started = Instant::now();
     sup.start_all()?;
-    let ending = events::supervise(lf, &mut sup, &events, &control, console, started);
+    let ending = events::supervise(
+        lf,
+        &mut sup,
+        &events,
+        &control,
+        console,
+        started,
+        bridge.as_deref(),
+    );
     sup.kill_leftovers();
     let ending = ending?;
     let wall_time_s = started.elapsed().as_secs_f64();

@@ -38,6 +38,8 @@ pub enum Event {
     },
     /// The lockstep schedule or the realtime recorder finished (or failed).
     DriverDone(Result<(), String>),
+    /// The other hosts of a group on several machines did something.
+    Fleet(crate::bridge::FleetEvent),
 }
 
 /// Resources a process used, from the kernel's accounting at exit (wait4).

@@ -395,6 +395,7 @@ fn validate(plan: &Plan) -> Vec<String> {
             play: None,
             play_topics: Vec::new(),
             only: Vec::new(),
+            host: None,
         };
         match crate::launch::command::load(&args) {
             Ok(_) => {}

@@ -1,0 +1,312 @@
+//! One group on many machines: each machine runs `caravan launch FILE --host NAME`, which
+//! starts that host's processes and joins the other hosts' launchers over zenoh.
+//!
+//! Each launcher opens one zenoh peer session at its host's `listen` / `connect` endpoints
+//! (multicast scouting off; gossip on, so hosts that connected to one hub also find each
+//! other). Over it the launchers
+//! - say who is up and who has finished ([`presence`]): the group starts once every required
+//!   host joined, ends when every host's processes have exited, and stops everywhere when one
+//!   host stops it or a required host leaves;
+//! - carry topics between hosts ([`relay`]): a topic read on one host and published on
+//!   another is an iceoryx2 zero-copy topic on each, and crosses between them over zenoh with
+//!   its header.
+//!
+//! Everything is said under the group's own keys ([`keys`]).
+
+pub mod keys;
+pub mod presence;
+pub mod relay;
+
+use crate::launch::model::{HostSpec, LaunchFile};
+use crate::run::supervisor::Event;
+use anyhow::{Result, anyhow, bail};
+use crossbeam::channel::Sender;
+use keys::StopNotice;
+use presence::{Change, Presence};
+use std::collections::BTreeSet;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+use zenoh::Wait;
+use zenoh::sample::SampleKind;
+
+/// What the other hosts tell the launcher while the group runs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FleetEvent {
+    /// A host left before its processes finished.
+    Left { host: String, required: bool },
+    /// Another host stopped the group.
+    Stopped(StopNotice),
+    /// Every host's processes have exited.
+    AllDone,
+    /// Topics could not cross between hosts.
+    Failed(String),
+}
+
+/// zenoh's errors are boxed trait objects; make them anyhow errors.
+pub fn z<T>(r: zenoh::Result<T>) -> Result<T> {
+    r.map_err(|e| anyhow!("zenoh: {e}"))
+}
+
+/// Checks that the group can run its part on `host`: the host is declared, and it can reach
+/// the others.
+pub fn check_host(lf: &LaunchFile, host: &str) -> Result<()> {
+    let file = lf.path.display();
+    if !lf.hosts.contains_key(host) {
+        let names: Vec<&str> = lf.hosts.keys().map(String::as_str).collect();
+        if names.is_empty() {
+            bail!("--host {host}: {file} has no [hosts] table; declare the hosts there");
+        }
+        let hint = crate::launch::suggest::hint(host, &names);
+        bail!("--host {host}: {file} declares no host '{host}' under [hosts]{hint}");
+    }
+    if lf.group.clock == caravan::ClockMode::Lockstep {
+        bail!(
+            "--host {host}: {file} runs in lockstep, which does not span hosts yet; run it with --clock realtime, or on one machine without --host"
+        );
+    }
+    let reachable = lf.hosts.values().any(|h| !h.listen.is_empty());
+    if lf.hosts.len() > 1 && !reachable {
+        bail!(
+            "--host {host}: no host of {file} has `listen` endpoints, so the hosts cannot find each other; give one host listen = [\"tcp/ADDRESS:PORT\"] and the others connect = [the same]"
+        );
+    }
+    Ok(())
+}
+
+fn session_config(spec: &HostSpec) -> Result<zenoh::Config> {
+    let list = |v: &[String]| serde_json::to_string(v).expect("strings serialise");
+    let mut c = zenoh::Config::default();
+    let mut set = |key: &str, value: &str| z(c.insert_json5(key, value));
+    set("mode", r#""peer""#)?;
+    // Only the endpoints of the launch file, and hosts those tell of (gossip).
+    set("scouting/multicast/enabled", "false")?;
+    set(
+        "scouting/gossip/autoconnect_strategy",
+        r#"{ peer: { to_router: "always", to_peer: "greater-zid" } }"#,
+    )?;
+    if !spec.listen.is_empty() {
+        set("listen/endpoints", &list(&spec.listen))?;
+    }
+    set("connect/endpoints", &list(&spec.connect))?;
+    // Bytes cross the network even between "hosts" on one machine.
+    set("transport/shared_memory/enabled", "false")?;
+    // A host gone without closing its connections (power, cable) is noticed within 1 s.
+    set("transport/link/tx/lease", "1000")?;
+    set("transport/link/tx/keep_alive", "4")?;
+    Ok(c)
+}
+
+/// What the zenoh callbacks and the launcher share.
+struct Shared {
+    presence: Mutex<Presence>,
+    changed: Condvar,
+    /// Where events go once the group runs.
+    events: Mutex<Option<Sender<Event>>>,
+}
+
+impl Shared {
+    fn tell(&self, event: FleetEvent) {
+        if let Some(tx) = self.events.lock().unwrap().as_ref() {
+            let _ = tx.send(Event::Fleet(event));
+        }
+    }
+
+    fn apply(&self, change: Option<Change>) {
+        self.changed.notify_all();
+        match change {
+            Some(Change::Left { host, required }) => self.tell(FleetEvent::Left { host, required }),
+            Some(Change::AllDone) => self.tell(FleetEvent::AllDone),
+            None => {}
+        }
+    }
+}
+
+/// This host's link to the rest of the group.
+pub struct Bridge {
+    group: String,
+    host: String,
+    session: zenoh::Session,
+    shared: Arc<Shared>,
+    _watchers: Vec<zenoh::pubsub::Subscriber<()>>,
+    _token: zenoh::liveliness::LivelinessToken,
+    done_token: Mutex<Option<zenoh::liveliness::LivelinessToken>>,
+    relay: Option<relay::Relay>,
+}
+
+impl Bridge {
+    /// Opens this host's session and says it is up.
+    pub fn open(lf: &LaunchFile, host: &str) -> Result<Self> {
+        let group = lf.group.name.clone();
+        let spec = &lf.hosts[host];
+        let session = z(zenoh::open(session_config(spec)?).wait())
+            .map_err(|e| anyhow!("host '{host}': cannot open its zenoh session: {e}"))?;
+        let shared = Arc::new(Shared {
+            presence: Mutex::new(Presence::new(
+                lf.hosts
+                    .iter()
+                    .map(|(name, h)| (name.clone(), h.required))
+                    .collect(),
+            )),
+            changed: Condvar::new(),
+            events: Mutex::new(None),
+        });
+        shared.presence.lock().unwrap().joined(host);
+        let watch = |kind: &'static str| -> Result<zenoh::pubsub::Subscriber<()>> {
+            let shared = shared.clone();
+            let me = host.to_string();
+            z(session
+                .liveliness()
+                .declare_subscriber(format!("{}/{kind}/*", keys::root(&group)))
+                .history(true)
+                .callback(move |sample| {
+                    let h = keys::last(sample.key_expr().as_str());
+                    let mut p = shared.presence.lock().unwrap();
+                    if h == me || !p.knows(h) {
+                        return;
+                    }
+                    let change = match (kind, sample.kind()) {
+                        ("host", SampleKind::Put) => p.joined(h),
+                        ("host", SampleKind::Delete) => p.gone(h),
+                        ("done", SampleKind::Put) => p.finished(h),
+                        _ => None,
+                    };
+                    drop(p);
+                    shared.apply(change);
+                })
+                .wait())
+        };
+        let mut watchers = vec![watch("host")?, watch("done")?];
+        let stops = {
+            let shared = shared.clone();
+            let me = host.to_string();
+            z(session
+                .declare_subscriber(keys::stop(&group))
+                .callback(move |sample| {
+                    let notice = serde_json::from_slice::<StopNotice>(&sample.payload().to_bytes());
+                    if let Ok(notice) = notice
+                        && notice.host != me
+                    {
+                        shared.tell(FleetEvent::Stopped(notice));
+                    }
+                })
+                .wait())?
+        };
+        watchers.push(stops);
+        let token = z(session
+            .liveliness()
+            .declare_token(keys::host(&group, host))
+            .wait())?;
+        Ok(Self {
+            group,
+            host: host.to_string(),
+            session,
+            shared,
+            _watchers: watchers,
+            _token: token,
+            done_token: Mutex::new(None),
+            relay: None,
+        })
+    }
+
+    /// Waits until every required host has joined; an error names those that did not.
+    pub fn wait_for_hosts(&self, timeout: Duration, say: impl Fn(&str)) -> Result<()> {
+        let deadline = Instant::now() + timeout;
+        let mut presence = self.shared.presence.lock().unwrap();
+        let mut said = false;
+        loop {
+            let missing = presence.missing();
+            if missing.is_empty() {
+                return Ok(());
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                bail!(
+                    "host(s) {} did not join within {timeout:?} (group.join_timeout): start `caravan launch FILE --host NAME` on each, and check their [hosts] listen / connect endpoints",
+                    quoted(&missing)
+                );
+            }
+            if !said {
+                say(&format!("waiting for host(s) {} to join", quoted(&missing)));
+                said = true;
+            }
+            presence = self
+                .shared
+                .changed
+                .wait_timeout(presence, deadline - now)
+                .unwrap()
+                .0;
+        }
+    }
+
+    /// From now on, reports what the other hosts do to `events`, and carries topics between
+    /// this host's processes (group config `iceoryx`) and the other hosts'.
+    pub fn attach(
+        &mut self,
+        events: Sender<Event>,
+        iceoryx: &iceoryx2::config::Config,
+        remote_nodes: BTreeSet<u64>,
+    ) -> Result<()> {
+        *self.shared.events.lock().unwrap() = Some(events);
+        let shared = self.shared.clone();
+        self.relay = Some(relay::Relay::start(
+            self.session.clone(),
+            &self.group,
+            &self.host,
+            iceoryx,
+            remote_nodes,
+            move |why| shared.tell(FleetEvent::Failed(why)),
+        )?);
+        Ok(())
+    }
+
+    /// Every process of this host has exited: the group ends once every host's have.
+    pub fn local_done(&self) {
+        let mut token = self.done_token.lock().unwrap();
+        if token.is_none() {
+            *token = z(self
+                .session
+                .liveliness()
+                .declare_token(keys::done(&self.group, &self.host))
+                .wait())
+            .ok();
+            let change = self.shared.presence.lock().unwrap().finished(&self.host);
+            self.shared.apply(change);
+        }
+    }
+
+    /// Tells the other hosts this host stopped the group, and why.
+    pub fn stop(&self, outcome: &str, failure: Option<&str>) {
+        let notice = StopNotice {
+            host: self.host.clone(),
+            outcome: outcome.to_string(),
+            failure: failure.map(str::to_string),
+        };
+        let payload = serde_json::to_vec(&notice).expect("a notice serialises");
+        let _ = self.session.put(keys::stop(&self.group), payload).wait();
+    }
+
+    /// Stops carrying topics and closes the session (others see this host leave).
+    pub fn close(mut self) {
+        if let Some(relay) = self.relay.take() {
+            relay.stop();
+        }
+        let _ = self.session.close().wait();
+    }
+}
+
+fn quoted(names: &[String]) -> String {
+    names
+        .iter()
+        .map(|n| format!("'{n}'"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The node ids (header `source_id`) of the processes other hosts run: their messages reach
+/// this host through the bridge and must not be sent back.
+pub fn remote_nodes(lf: &LaunchFile) -> BTreeSet<u64> {
+    lf.left_out
+        .keys()
+        .map(|name| caravan::schemas::lockstep::name_hash(name))
+        .collect()
+}

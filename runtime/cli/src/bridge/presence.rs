@@ -1,0 +1,151 @@
+//! Which hosts of the group are up, which have finished, and what that means for this host:
+//! the group starts once every required host joined, ends when every joined host finished,
+//! and stops when a required host leaves before finishing.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+/// What a change of presence tells the launcher.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Change {
+    /// A host left before it finished; `required` hosts stop the group.
+    Left { host: String, required: bool },
+    /// Every host that joined has finished, and every required one joined.
+    AllDone,
+}
+
+/// The hosts of the launch file and what is known of them.
+#[derive(Debug, Clone)]
+pub struct Presence {
+    /// Every host of `[hosts]`, with its `required` flag.
+    hosts: BTreeMap<String, bool>,
+    up: BTreeSet<String>,
+    done: BTreeSet<String>,
+    /// Hosts whose leaving was already reported.
+    left: BTreeSet<String>,
+    all_done_said: bool,
+}
+
+impl Presence {
+    pub fn new(hosts: BTreeMap<String, bool>) -> Self {
+        Self {
+            hosts,
+            up: BTreeSet::new(),
+            done: BTreeSet::new(),
+            left: BTreeSet::new(),
+            all_done_said: false,
+        }
+    }
+
+    /// Required hosts that have not joined yet.
+    pub fn missing(&self) -> Vec<String> {
+        self.hosts
+            .iter()
+            .filter(|(h, required)| **required && !self.up.contains(*h) && !self.left.contains(*h))
+            .map(|(h, _)| h.clone())
+            .collect()
+    }
+
+    /// Whether `host` is one of the launch file's.
+    pub fn knows(&self, host: &str) -> bool {
+        self.hosts.contains_key(host)
+    }
+
+    pub fn joined(&mut self, host: &str) -> Option<Change> {
+        self.up.insert(host.to_string());
+        None
+    }
+
+    pub fn finished(&mut self, host: &str) -> Option<Change> {
+        self.done.insert(host.to_string());
+        self.all_done()
+    }
+
+    pub fn gone(&mut self, host: &str) -> Option<Change> {
+        if !self.up.remove(host) {
+            return None;
+        }
+        if self.done.contains(host) {
+            return self.all_done();
+        }
+        self.left.insert(host.to_string());
+        Some(Change::Left {
+            host: host.to_string(),
+            required: self.hosts.get(host).copied().unwrap_or(false),
+        })
+    }
+
+    fn all_done(&mut self) -> Option<Change> {
+        let unfinished = self.up.iter().any(|h| !self.done.contains(h));
+        if unfinished || !self.missing().is_empty() || self.all_done_said {
+            return None;
+        }
+        self.all_done_said = true;
+        Some(Change::AllDone)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fleet() -> Presence {
+        Presence::new(BTreeMap::from([
+            ("a".to_string(), true),
+            ("b".to_string(), true),
+            ("c".to_string(), false),
+        ]))
+    }
+
+    #[test]
+    fn the_group_waits_for_required_hosts_only() {
+        let mut p = fleet();
+        assert_eq!(p.missing(), ["a", "b"]);
+        p.joined("a");
+        p.joined("c");
+        assert_eq!(p.missing(), ["b"]);
+        p.joined("b");
+        assert!(p.missing().is_empty());
+    }
+
+    #[test]
+    fn the_group_is_done_when_every_joined_host_is() {
+        let mut p = fleet();
+        for h in ["a", "b", "c"] {
+            p.joined(h);
+        }
+        assert_eq!(p.finished("a"), None);
+        assert_eq!(p.finished("b"), None);
+        assert_eq!(p.finished("c"), Some(Change::AllDone));
+        // Said once; hosts leaving after finishing change nothing.
+        assert_eq!(p.gone("c"), None);
+        assert_eq!(p.gone("a"), None);
+    }
+
+    #[test]
+    fn leaving_early_is_reported_with_the_host_flag() {
+        let mut p = fleet();
+        for h in ["a", "b", "c"] {
+            p.joined(h);
+        }
+        assert_eq!(
+            p.gone("c"),
+            Some(Change::Left {
+                host: "c".into(),
+                required: false
+            })
+        );
+        // The rest may still finish without c.
+        p.finished("a");
+        assert_eq!(p.finished("b"), Some(Change::AllDone));
+        assert_eq!(fleet().gone("a"), None, "a host never seen cannot leave");
+        let mut p = fleet();
+        p.joined("a");
+        assert_eq!(
+            p.gone("a"),
+            Some(Change::Left {
+                host: "a".into(),
+                required: true
+            })
+        );
+    }
+}

@@ -1,0 +1,191 @@
+//! One group on three hosts (`caravan launch FILE --host NAME` per host), topics crossing
+//! between them over zenoh. The hosts are namespaces of this machine (see
+//! `caravan_tests::hosts`).
+
+use caravan_tests::hosts::Hosts;
+use caravan_tests::{Scenario, wait_until};
+use std::io::Read;
+use std::process::Child;
+use std::sync::{Arc, Mutex};
+
+/// A host's launcher, its standard error collected as it comes.
+struct Launcher {
+    child: Child,
+    err: Arc<Mutex<String>>,
+}
+
+impl Launcher {
+    fn start(hosts: &Hosts, host: &str, s: &Scenario) -> Self {
+        let mut child = hosts.launch(host, &s.file, &s.dir, &[]);
+        let err = Arc::new(Mutex::new(String::new()));
+        let mut pipe = child.stderr.take().unwrap();
+        let sink = err.clone();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while let Ok(n) = pipe.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                sink.lock()
+                    .unwrap()
+                    .push_str(&String::from_utf8_lossy(&buf[..n]));
+            }
+        });
+        Self { child, err }
+    }
+
+    fn stderr(&self) -> String {
+        self.err.lock().unwrap().clone()
+    }
+
+    /// Waits for the launcher (and its host's listing of /dev/shm) to end.
+    fn finish(mut self) -> (Option<i32>, String) {
+        let status = self.child.wait().unwrap();
+        // The reader thread ends with the pipe; give it the last lines.
+        wait_until("the launcher's output is read", || {
+            Arc::strong_count(&self.err) == 1
+        });
+        (status.code(), self.stderr())
+    }
+}
+
+fn pid_of(s: &Scenario, host: &str) -> i32 {
+    std::fs::read_to_string(s.dir.join(format!("pid-{host}.txt")))
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+fn shm_left(s: &Scenario, host: &str) -> String {
+    std::fs::read_to_string(s.dir.join(format!("shm-{host}.txt"))).unwrap_or_default()
+}
+
+fn hosts_table(hosts: &Hosts, c_required: bool) -> String {
+    format!(
+        r#"
+[hosts.a]
+listen = ["{a}"]
+
+[hosts.b]
+listen = ["{b}"]
+connect = ["{a}"]
+
+[hosts.c]
+connect = ["{a}"]
+required = {c_required}
+"#,
+        a = hosts.endpoint("a"),
+        b = hosts.endpoint("b"),
+    )
+}
+
+#[test]
+fn a_lossless_topic_crosses_hosts_whole_and_in_order() {
+    let hosts = Hosts::new("ll", &["a", "b", "c"]);
+    let count = 2000;
+    let s = Scenario::new(
+        "hosts-lossless",
+        &format!(
+            r#"clock = "realtime"
+duration = "5min"
+{}
+[[process]]
+name = "source"
+exec = "caravan-testnode stream"
+host = "a"
+rate = "400Hz"
+params = {{ topic = "bulk", count = {count}, value = 7.0 }}
+
+[[process]]
+name = "sink-b"
+exec = "caravan-testnode subscribe"
+host = "b"
+params = {{ topic = "bulk", count = {count}, value = 7.0 }}
+
+[[process]]
+name = "sink-c"
+exec = "caravan-testnode subscribe"
+host = "c"
+params = {{ topic = "bulk", count = {count}, value = 7.0 }}
+"#,
+            hosts_table(&hosts, true)
+        ),
+    );
+    let launchers: Vec<(&str, Launcher)> = ["a", "b", "c"]
+        .into_iter()
+        .map(|h| (h, Launcher::start(&hosts, h, &s)))
+        .collect();
+    for (host, launcher) in launchers {
+        let (code, err) = launcher.finish();
+        assert_eq!(code, Some(0), "host {host} ({:?}): {err}", hosts.how());
+        assert!(err.contains("completed"), "host {host}: {err}");
+        assert_eq!(shm_left(&s, host), "", "host {host} left shared memory");
+        let run = hosts.run_dir(host, &s.dir);
+        if host != "a" {
+            let log = std::fs::read_to_string(run.join(format!("logs/sink-{host}.log")))
+                .unwrap_or_default();
+            assert!(
+                log.contains(&format!("received {count} missed 0")),
+                "host {host}: {log}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_host_that_leaves_is_reported_and_stops_the_group_if_required() {
+    let hosts = Hosts::new("kill", &["a", "b", "c"]);
+    let s = Scenario::new(
+        "hosts-kill",
+        &format!(
+            r#"clock = "realtime"
+duration = "10min"
+{}
+[[process]]
+name = "idle-a"
+exec = "caravan-testnode idle"
+host = "a"
+
+[[process]]
+name = "idle-b"
+exec = "caravan-testnode idle"
+host = "b"
+
+[[process]]
+name = "idle-c"
+exec = "caravan-testnode idle"
+host = "c"
+"#,
+            hosts_table(&hosts, false)
+        ),
+    );
+    let a = Launcher::start(&hosts, "a", &s);
+    let b = Launcher::start(&hosts, "b", &s);
+    let c = Launcher::start(&hosts, "c", &s);
+    wait_until("every host runs its part", || {
+        [&a, &b, &c]
+            .iter()
+            .all(|l| l.stderr().contains("run directory"))
+    });
+    // c is not required: the others go on without it.
+    unsafe { libc::kill(pid_of(&s, "c"), libc::SIGKILL) };
+    c.finish();
+    for l in [&a, &b] {
+        wait_until("the others report c's leaving", || {
+            l.stderr()
+                .contains("host 'c' left the group; going on without it")
+        });
+    }
+    // b is: a stops, and says why.
+    unsafe { libc::kill(pid_of(&s, "b"), libc::SIGKILL) };
+    b.finish();
+    let (code, err) = a.finish();
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("host 'b' left the group before its processes finished"),
+        "{err}"
+    );
+    assert!(err.contains("failed"), "{err}");
+    assert_eq!(shm_left(&s, "a"), "", "host a left shared memory");
+}
