@@ -3,7 +3,7 @@
 //! `caravan_tests::hosts`).
 
 use caravan_tests::hosts::Hosts;
-use caravan_tests::{Scenario, wait_until};
+use caravan_tests::{Scenario, assert_refused, wait_until};
 use std::io::Read;
 use std::process::Child;
 use std::sync::{Arc, Mutex};
@@ -188,4 +188,155 @@ host = "c"
     );
     assert!(err.contains("failed"), "{err}");
     assert_eq!(shm_left(&s, "a"), "", "host a left shared memory");
+}
+
+/// Two hosts on loopback ports, `a` listening.
+fn two_hosts(clock: &str, extra: &str) -> String {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .unwrap()
+        .port();
+    format!(
+        r#"clock = "{clock}"
+duration = "1min"
+{extra}
+[hosts.a]
+listen = ["tcp/127.0.0.1:{port}"]
+
+[hosts.b]
+connect = ["tcp/127.0.0.1:{port}"]
+
+[[process]]
+name = "idle"
+exec = "caravan-testnode idle"
+host = "a"
+"#
+    )
+}
+
+#[test]
+fn bad_endpoints_are_refused_with_file_line_and_key() {
+    for (endpoint, expected) in [
+        (
+            "udp/127.0.0.1:7447",
+            "protocol 'udp' is not available; use tcp",
+        ),
+        ("tcp/127.0.0.1", "has no port"),
+        ("127.0.0.1:7447", "is not an endpoint"),
+    ] {
+        let s = Scenario::new(
+            "hosts-endpoint",
+            &two_hosts("realtime", "").replacen(
+                "listen = [\"tcp/127.0.0.1:",
+                &format!("listen = [\"{endpoint}\", \"tcp/127.0.0.1:"),
+                1,
+            ),
+        );
+        let out = s.run(&["--host", "a"]);
+        assert_refused(&s, &out, &[expected, "launch.toml:", "listen"]);
+    }
+    let s = Scenario::new(
+        "hosts-endpoint",
+        &two_hosts("realtime", "")
+            .replace("connect = [\"tcp/127.0.0.1:", "connect = \"tcp/127.0.0.1:"),
+    );
+    let out = s.run(&["--host", "a"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn a_host_the_file_lacks_or_cannot_run_is_refused() {
+    let s = Scenario::new("hosts-unknown", &two_hosts("realtime", ""));
+    let out = s.run(&["--host", "bb"]);
+    assert_refused(&s, &out, &["--host bb", "declares no host 'bb'", "'b'"]);
+    let s = Scenario::new("hosts-lockstep", &two_hosts("lockstep", ""));
+    let out = s.run(&["--host", "a"]);
+    assert_refused(&s, &out, &["lockstep", "does not span hosts"]);
+    let s = Scenario::new(
+        "hosts-unreachable",
+        &two_hosts("realtime", "").replace("listen = ", "connect = "),
+    );
+    let out = s.run(&["--host", "a"]);
+    assert_refused(&s, &out, &["no host of", "`listen` endpoints"]);
+}
+
+#[test]
+fn a_group_whose_required_host_never_joins_does_not_start() {
+    let s = Scenario::new(
+        "hosts-alone",
+        &two_hosts("realtime", "join_timeout = \"1s\""),
+    );
+    let out = s.run(&["--host", "a"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("host(s) 'b' did not join within 1s"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}
+
+/// Host a publishes `mix` as `WheelSetpoint` (after `publisher_ms`), host b reads it as
+/// `Pose2D` (after `reader_ms`): the group fails on every host, saying why.
+fn mismatch(publisher_ms: u64, reader_ms: u64, expected: &[&str]) {
+    let hosts = Hosts::new("mix", &["a", "b"]);
+    let s = Scenario::new(
+        "hosts-mix",
+        &format!(
+            r#"clock = "realtime"
+duration = "5min"
+
+[hosts.a]
+listen = ["{a}"]
+
+[hosts.b]
+connect = ["{a}"]
+
+[[process]]
+name = "writer"
+exec = "caravan-testnode wrong-type"
+host = "a"
+params = {{ topic = "mix", count = {publisher_ms} }}
+
+[[process]]
+name = "reader"
+exec = "caravan-testnode subscribe"
+host = "b"
+params = {{ topic = "mix", count = 10, value = 0.0, delay_ms = {reader_ms} }}
+"#,
+            a = hosts.endpoint("a"),
+        ),
+    );
+    let a = Launcher::start(&hosts, "a", &s);
+    let b = Launcher::start(&hosts, "b", &s);
+    let (code_a, err_a) = a.finish();
+    let (code_b, err_b) = b.finish();
+    let both = format!("host a:\n{err_a}\nhost b:\n{err_b}");
+    assert_eq!((code_a, code_b), (Some(1), Some(1)), "{both}");
+    for e in expected {
+        assert!(both.contains(e), "expected '{e}' in:\n{both}");
+    }
+    assert!(!both.contains("panicked"), "{both}");
+}
+
+#[test]
+fn a_topic_read_and_published_as_different_types_on_two_hosts_fails_the_group() {
+    // The reader first: the writer meets the topic as made for the reader, as on one host.
+    mismatch(
+        3000,
+        0,
+        &[
+            "'mix'",
+            "cannot open as caravan::WheelSetpoint",
+            "different message type",
+        ],
+    );
+    // The writer first: the writer's host cannot send the topic as the reader reads it.
+    mismatch(
+        0,
+        3000,
+        &[
+            "topic 'mix': host 'b' reads it as caravan::Pose2D",
+            "host 'a' stopped the group (failed",
+        ],
+    );
 }

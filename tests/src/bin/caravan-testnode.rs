@@ -4,8 +4,8 @@
 //! - `publish`: publishes `count` messages carrying `value` on `topic`, lossless.
 //! - `stream`: once `topic` has a subscriber, publishes `count` messages carrying `value` on
 //!   it, lossless, one per step at the launch rate (default 100 Hz), then exits 0.
-//! - `subscribe`: receives `count` messages from `topic`, checks values and sequence numbers,
-//!   prints `ready` once subscribed.
+//! - `subscribe`: after `delay_ms`, receives `count` messages from `topic`, checks values and
+//!   sequence numbers, prints `ready` once subscribed.
 //! - `idle`: steps at the launch rate doing nothing.
 //! - `steps`: steps `count` times at the launch rate, then exits 0.
 //! - `params`: only parses its params (`gain: f64`, `name: String`).
@@ -36,6 +36,8 @@ struct Params {
     name: String,
     /// `chaos`: the processes it may kill.
     victims: Vec<String>,
+    /// `subscribe`: how long to wait before subscribing, ms.
+    delay_ms: u64,
 }
 
 fn main() {
@@ -186,6 +188,7 @@ fn run(mode: &str) -> Result<(), Error> {
 }
 
 fn subscribe(node: &mut Node, p: &Params) -> Result<(), Error> {
+    std::thread::sleep(Duration::from_millis(p.delay_ms));
     let subscriber = node.subscriber(&Topic::<Pose2D>::lossless(&p.topic))?;
     let ack = node.publisher(&Topic::<Pose2D>::new(&format!("{}/ack", p.topic)))?;
     println!("ready");

@@ -61,7 +61,9 @@ type Body = Box<dyn FnOnce(&Ctx) -> Result<()> + Send>;
 /// The running relay of one host.
 pub struct Relay {
     ctx: Arc<Ctx>,
-    threads: Vec<std::thread::JoinHandle<()>>,
+    threads: usize,
+    /// One message per thread that ended.
+    ended: Receiver<()>,
 }
 
 impl Relay {
@@ -83,27 +85,38 @@ impl Relay {
             failed: Box::new(failed),
         });
         let (tx, rx) = unbounded();
+        let (ended_tx, ended) = unbounded();
         let spawn = |name: &str, body: Body| {
             let ctx = ctx.clone();
+            let ended = ended_tx.clone();
             std::thread::Builder::new()
                 .name(name.to_string())
                 .spawn(move || {
                     if let Err(e) = body(&ctx) {
                         (ctx.failed)(format!("bridge of host '{}': {e:#}", ctx.host));
                     }
+                    let _ = ended.send(());
                 })
         };
-        let threads = vec![
-            spawn("bridge-out", Box::new(move |ctx| outbound(ctx, tx)))?,
-            spawn("bridge-in", Box::new(move |ctx| inbound(ctx, rx)))?,
-        ];
-        Ok(Self { ctx, threads })
+        spawn("bridge-out", Box::new(move |ctx| outbound(ctx, tx)))?;
+        spawn("bridge-in", Box::new(move |ctx| inbound(ctx, rx)))?;
+        Ok(Self {
+            ctx,
+            threads: 2,
+            ended,
+        })
     }
 
+    /// Stops both threads. One may be held up publishing to a lossless topic whose reader
+    /// was killed; it is left behind after a few seconds rather than hanging the launcher.
     pub fn stop(self) {
         self.ctx.running.store(false, Ordering::Relaxed);
-        for t in self.threads {
-            let _ = t.join();
+        let deadline = Instant::now() + Duration::from_secs(3);
+        for _ in 0..self.threads {
+            if self.ended.recv_deadline(deadline).is_err() {
+                eprintln!("caravan: warning: a bridge thread did not stop within 3 s; leaving it");
+                return;
+            }
         }
     }
 }
