@@ -200,18 +200,19 @@ fn two_hosts(clock: &str, extra: &str) -> String {
         r#"clock = "{clock}"
 duration = "1min"
 {extra}
-[hosts.a]
-listen = ["tcp/127.0.0.1:{port}"]
-
-[hosts.b]
-connect = ["tcp/127.0.0.1:{port}"]
-
+{}
 [[process]]
 name = "idle"
 exec = "caravan-testnode idle"
 host = "a"
-"#
+"#,
+        pair(&format!("tcp/127.0.0.1:{port}"))
     )
+}
+
+/// Hosts a, listening at `endpoint`, and b, dialling it.
+fn pair(endpoint: &str) -> String {
+    format!("[hosts.a]\nlisten = [\"{endpoint}\"]\n\n[hosts.b]\nconnect = [\"{endpoint}\"]\n")
 }
 
 #[test]
@@ -285,12 +286,7 @@ fn mismatch(publisher_ms: u64, reader_ms: u64, expected: &[&str]) {
             r#"clock = "realtime"
 duration = "5min"
 
-[hosts.a]
-listen = ["{a}"]
-
-[hosts.b]
-connect = ["{a}"]
-
+{}
 [[process]]
 name = "writer"
 exec = "caravan-testnode wrong-type"
@@ -303,7 +299,7 @@ exec = "caravan-testnode subscribe"
 host = "b"
 params = {{ topic = "mix", count = 10, value = 0.0, delay_ms = {reader_ms} }}
 "#,
-            a = hosts.endpoint("a"),
+            pair(hosts.endpoint("a")),
         ),
     );
     let a = Launcher::start(&hosts, "a", &s);
