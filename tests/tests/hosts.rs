@@ -95,7 +95,7 @@ name = "source"
 exec = "caravan-testnode stream"
 host = "a"
 rate = "400Hz"
-params = {{ topic = "bulk", count = {count}, value = 7.0 }}
+params = {{ topic = "bulk", count = {count}, value = 7.0, readers = 2 }}
 
 [[process]]
 name = "sink-b"

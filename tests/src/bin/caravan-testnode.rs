@@ -2,7 +2,7 @@
 //! environment as for any node.
 //!
 //! - `publish`: publishes `count` messages carrying `value` on `topic`, lossless.
-//! - `stream`: once `topic` has a subscriber, publishes `count` messages carrying `value` on
+//! - `stream`: once `topic` has `readers` subscribers (default 1), publishes `count` messages carrying `value` on
 //!   it, lossless, one per step at the launch rate (default 100 Hz), then exits 0.
 //! - `subscribe`: after `delay_ms`, receives `count` messages from `topic`, checks values and
 //!   sequence numbers, prints `ready` once subscribed.
@@ -38,6 +38,8 @@ struct Params {
     victims: Vec<String>,
     /// `subscribe`: how long to wait before subscribing, ms.
     delay_ms: u64,
+    /// `stream`: the subscribers to wait for (0 counts as 1).
+    readers: usize,
 }
 
 fn main() {
@@ -92,7 +94,7 @@ fn run(mode: &str) -> Result<(), Error> {
             let count = p.count;
             node.run(node.trigger(Trigger::every_hz(100.0))?, |step| {
                 // A lossless stream needs its reader first: what is sent to nobody is gone.
-                if publisher.subscribers() == 0 {
+                if publisher.subscribers() < p.readers.max(1) {
                     return Ok(());
                 }
                 let seq = publisher.sequence() + 1;

@@ -6,7 +6,8 @@
 //! - `caravan/G/stop`: a put, a host stopped the group (JSON [`StopNotice`]);
 //! - `caravan/G/want/H/TYPE/CONTRACT/TOPIC`: liveliness token, a process of host H reads
 //!   TOPIC, of message type TYPE with delivery CONTRACT (`lossless-8`, `latest-1`);
-//! - `caravan/G/topic/TOPIC`: the messages of TOPIC, header and type in the attachment.
+//! - `caravan/G/topic/H/TOPIC`: the messages of TOPIC for host H, header, type and sending
+//!   host in the attachment.
 //!
 //! Group names, host names, topic names and type names (`caravan::Pose2D`) hold no character
 //! zenoh reserves (`*`, `$`, `#`, `?`), so keys need no escaping.
@@ -30,8 +31,10 @@ pub fn stop(group: &str) -> String {
     format!("caravan/{group}/stop")
 }
 
-pub fn topic(group: &str, topic: &str) -> String {
-    format!("caravan/{group}/topic/{topic}")
+/// The messages of `topic` sent to `host`: one stream per reading host, so each starts when
+/// that host's reader is known, as a subscriber on one host gets what is sent after it came.
+pub fn topic(group: &str, host: &str, topic: &str) -> String {
+    format!("caravan/{group}/topic/{host}/{topic}")
 }
 
 /// The last chunk of a key: the host of a `host/H` or `done/H` token.

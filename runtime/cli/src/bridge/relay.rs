@@ -4,6 +4,12 @@
 //! its publishers send from then on is missed) and puts each message on zenoh, where the
 //! reading host's bridge publishes it again, header untouched.
 //!
+//! The reading host's zenoh subscriber is declared before its `want`, and both travel in order
+//! over one connection, so a host's first forwarded message already finds it: a topic's
+//! messages reach a host from the moment its reader is known there (each reading host has a
+//! subscriber of its own on the sending host, and [`caravan::Publisher::subscribers`] counts
+//! it), as a subscriber on one host gets what is published after it came.
+//!
 //! Two threads per host, each with its own iceoryx2 node (ports stay on the thread that made
 //! them): `outbound` finds the topics read here, and sends what other hosts read; `inbound`
 //! publishes what arrives. A message whose source is a process of another host is never sent
@@ -129,14 +135,16 @@ fn iox_node(ctx: &Ctx) -> Result<iceoryx2::node::Node<ipc::Service>> {
         .map_err(|e| anyhow::anyhow!("bridge node: {e:?}"))
 }
 
-/// A topic another host reads, as this host sends it.
+/// A topic another host reads, as this host sends it to that host.
 struct Outgoing {
     outlet: Box<dyn Outlet>,
     listener: iceoryx2::port::listener::Listener<ipc::Service>,
     publisher: zenoh::pubsub::Publisher<'static>,
     type_name: String,
-    hosts: BTreeSet<String>,
 }
+
+/// Outgoing topics by (topic, reading host).
+type Sending = BTreeMap<(String, String), Outgoing>;
 
 /// A topic read here, as this host asks for it.
 struct Reading {
@@ -153,7 +161,7 @@ fn outbound(ctx: &Ctx, arrivals: Sender<Arrival>) -> Result<()> {
         .history(true)
         .with(FifoChannel::new(1024))
         .wait())?;
-    let mut sending: BTreeMap<String, Outgoing> = BTreeMap::new();
+    let mut sending = Sending::new();
     let mut reading: BTreeMap<String, Reading> = BTreeMap::new();
     let started = Instant::now();
     let mut pending = Vec::new();
@@ -205,7 +213,7 @@ fn outbound(ctx: &Ctx, arrivals: Sender<Arrival>) -> Result<()> {
 }
 
 /// Puts every waiting message of the topics other hosts read on zenoh.
-fn send(ctx: &Ctx, sending: &BTreeMap<String, Outgoing>) -> Result<()> {
+fn send(ctx: &Ctx, sending: &Sending) -> Result<()> {
     let remote = ctx.remote.lock().unwrap().clone();
     for o in sending.values() {
         let mut failure = None;
@@ -229,7 +237,7 @@ fn send(ctx: &Ctx, sending: &BTreeMap<String, Outgoing>) -> Result<()> {
 fn remote_want(
     ctx: &Ctx,
     iox: &iceoryx2::node::Node<ipc::Service>,
-    sending: &mut BTreeMap<String, Outgoing>,
+    sending: &mut Sending,
     sample: zenoh::sample::Sample,
 ) {
     let Some(want) = Want::parse(&ctx.group, sample.key_expr().as_str()) else {
@@ -238,23 +246,18 @@ fn remote_want(
     if want.host == ctx.host {
         return;
     }
+    let key = (want.topic.clone(), want.host.clone());
     if sample.kind() == SampleKind::Delete {
-        if let Some(o) = sending.get_mut(&want.topic) {
-            o.hosts.remove(&want.host);
-            if o.hosts.is_empty() {
-                // Unread, a lossless outlet would fill and hold up the publishers here.
-                sending.remove(&want.topic);
-            }
-        }
+        // Unread, a lossless outlet would fill and hold up the publishers here.
+        sending.remove(&key);
         return;
     }
-    if let Some(o) = sending.get_mut(&want.topic) {
-        o.hosts.insert(want.host.clone());
+    if sending.contains_key(&key) {
         return;
     }
     match outgoing(ctx, iox, &want) {
         Ok(o) => {
-            sending.insert(want.topic.clone(), o);
+            sending.insert(key, o);
         }
         Err(e) => (ctx.failed)(format!(
             "topic '{}': host '{}' reads it as {}, but host '{}' cannot send it so: {e:#}",
@@ -268,7 +271,7 @@ fn outgoing(ctx: &Ctx, iox: &iceoryx2::node::Node<ipc::Service>, want: &Want) ->
     let listener = caravan::tap::open_listener(iox, &want.topic)?;
     let publisher = z(ctx
         .session
-        .declare_publisher(keys::topic(&ctx.group, &want.topic))
+        .declare_publisher(keys::topic(&ctx.group, &want.host, &want.topic))
         .congestion_control(CongestionControl::Block)
         .express(true)
         .wait())?;
@@ -277,7 +280,6 @@ fn outgoing(ctx: &Ctx, iox: &iceoryx2::node::Node<ipc::Service>, want: &Want) ->
         listener,
         publisher,
         type_name: want.type_name.clone(),
-        hosts: BTreeSet::from([want.host.clone()]),
     })
 }
 
@@ -323,7 +325,7 @@ fn discover(
             let arrivals = arrivals.clone();
             z(ctx
                 .session
-                .declare_subscriber(keys::topic(&ctx.group, &topic.name))
+                .declare_subscriber(keys::topic(&ctx.group, &ctx.host, &topic.name))
                 .callback(move |sample| {
                     let Some(attachment) = sample.attachment().map(|a| a.to_bytes()) else {
                         return;
