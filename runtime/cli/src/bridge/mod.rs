@@ -100,23 +100,34 @@ fn session_config(spec: &HostSpec) -> Result<zenoh::Config> {
 struct Shared {
     presence: Mutex<Presence>,
     changed: Condvar,
-    /// Where events go once the group runs.
-    events: Mutex<Option<Sender<Event>>>,
+    /// Where events go once the group runs; until then they wait here.
+    events: Mutex<Outbox>,
+}
+
+#[derive(Default)]
+struct Outbox {
+    to: Option<Sender<Event>>,
+    waiting: Vec<FleetEvent>,
 }
 
 impl Shared {
     fn tell(&self, event: FleetEvent) {
-        if let Some(tx) = self.events.lock().unwrap().as_ref() {
-            let _ = tx.send(Event::Fleet(event));
+        let mut out = self.events.lock().unwrap();
+        match &out.to {
+            Some(tx) => {
+                let _ = tx.send(Event::Fleet(event));
+            }
+            None => out.waiting.push(event),
         }
     }
 
-    fn apply(&self, change: Option<Change>) {
+    fn apply(&self, changes: impl IntoIterator<Item = Change>) {
         self.changed.notify_all();
-        match change {
-            Some(Change::Left { host, required }) => self.tell(FleetEvent::Left { host, required }),
-            Some(Change::AllDone) => self.tell(FleetEvent::AllDone),
-            None => {}
+        for change in changes {
+            match change {
+                Change::Left { host, required } => self.tell(FleetEvent::Left { host, required }),
+                Change::AllDone => self.tell(FleetEvent::AllDone),
+            }
         }
     }
 }
@@ -148,7 +159,7 @@ impl Bridge {
                     .collect(),
             )),
             changed: Condvar::new(),
-            events: Mutex::new(None),
+            events: Mutex::new(Outbox::default()),
         });
         shared.presence.lock().unwrap().joined(host);
         let watch = |kind: &'static str| -> Result<zenoh::pubsub::Subscriber<()>> {
@@ -164,11 +175,11 @@ impl Bridge {
                     if h == me || !p.knows(h) {
                         return;
                     }
-                    let change = match (kind, sample.kind()) {
-                        ("host", SampleKind::Put) => p.joined(h),
+                    let change: Vec<Change> = match (kind, sample.kind()) {
+                        ("host", SampleKind::Put) => p.joined(h).into_iter().collect(),
                         ("host", SampleKind::Delete) => p.gone(h),
-                        ("done", SampleKind::Put) => p.finished(h),
-                        _ => None,
+                        ("done", SampleKind::Put) => p.finished(h).into_iter().collect(),
+                        _ => Vec::new(),
                     };
                     drop(p);
                     shared.apply(change);
@@ -214,6 +225,13 @@ impl Bridge {
         let mut presence = self.shared.presence.lock().unwrap();
         let mut said = false;
         loop {
+            let lost = presence.lost();
+            if !lost.is_empty() {
+                bail!(
+                    "required host(s) {} left before the group started",
+                    quoted(&lost)
+                );
+            }
             let missing = presence.missing();
             if missing.is_empty() {
                 return Ok(());
@@ -246,7 +264,13 @@ impl Bridge {
         iceoryx: &iceoryx2::config::Config,
         remote_nodes: BTreeSet<u64>,
     ) -> Result<()> {
-        *self.shared.events.lock().unwrap() = Some(events);
+        {
+            let mut out = self.shared.events.lock().unwrap();
+            for event in out.waiting.drain(..) {
+                let _ = events.send(Event::Fleet(event));
+            }
+            out.to = Some(events);
+        }
         let shared = self.shared.clone();
         self.relay = Some(relay::Relay::start(
             self.session.clone(),
@@ -282,7 +306,14 @@ impl Bridge {
             failure: failure.map(str::to_string),
         };
         let payload = serde_json::to_vec(&notice).expect("a notice serialises");
-        let _ = self.session.put(keys::stop(&self.group), payload).wait();
+        // Never dropped under congestion, and ahead of the topics' data (zenoh's default
+        // for a put is to drop it when the link is busy).
+        let _ = self
+            .session
+            .put(keys::stop(&self.group), payload)
+            .congestion_control(zenoh::qos::CongestionControl::Block)
+            .priority(zenoh::qos::Priority::RealTime)
+            .wait();
     }
 
     /// Stops carrying topics and closes the session (others see this host leave).

@@ -36,12 +36,22 @@ impl Presence {
         }
     }
 
-    /// Required hosts that have not joined yet.
+    /// Required hosts that are not up and have not finished: before the start, those to wait
+    /// for; after it, those the group cannot end without.
     pub fn missing(&self) -> Vec<String> {
         self.hosts
             .iter()
-            .filter(|(h, required)| **required && !self.up.contains(*h) && !self.left.contains(*h))
+            .filter(|(h, required)| **required && !self.up.contains(*h) && !self.done.contains(*h))
             .map(|(h, _)| h.clone())
+            .collect()
+    }
+
+    /// Required hosts that left before they finished.
+    pub fn lost(&self) -> Vec<String> {
+        self.left
+            .iter()
+            .filter(|h| self.hosts.get(*h).copied().unwrap_or(false))
+            .cloned()
             .collect()
     }
 
@@ -52,6 +62,7 @@ impl Presence {
 
     pub fn joined(&mut self, host: &str) -> Option<Change> {
         self.up.insert(host.to_string());
+        self.left.remove(host);
         None
     }
 
@@ -60,18 +71,21 @@ impl Presence {
         self.all_done()
     }
 
-    pub fn gone(&mut self, host: &str) -> Option<Change> {
+    /// A host went away: a finished one changes nothing (it stays finished); one that had
+    /// not finished has left, and the rest may now all be done.
+    pub fn gone(&mut self, host: &str) -> Vec<Change> {
         if !self.up.remove(host) {
-            return None;
+            return Vec::new();
         }
         if self.done.contains(host) {
-            return self.all_done();
+            return self.all_done().into_iter().collect();
         }
         self.left.insert(host.to_string());
-        Some(Change::Left {
+        let left = Change::Left {
             host: host.to_string(),
             required: self.hosts.get(host).copied().unwrap_or(false),
-        })
+        };
+        std::iter::once(left).chain(self.all_done()).collect()
     }
 
     fn all_done(&mut self) -> Option<Change> {
@@ -117,8 +131,8 @@ mod tests {
         assert_eq!(p.finished("b"), None);
         assert_eq!(p.finished("c"), Some(Change::AllDone));
         // Said once; hosts leaving after finishing change nothing.
-        assert_eq!(p.gone("c"), None);
-        assert_eq!(p.gone("a"), None);
+        assert_eq!(p.gone("c"), []);
+        assert_eq!(p.gone("a"), []);
     }
 
     #[test]
@@ -129,23 +143,59 @@ mod tests {
         }
         assert_eq!(
             p.gone("c"),
-            Some(Change::Left {
+            [Change::Left {
                 host: "c".into(),
                 required: false
-            })
+            }]
         );
         // The rest may still finish without c.
         p.finished("a");
         assert_eq!(p.finished("b"), Some(Change::AllDone));
-        assert_eq!(fleet().gone("a"), None, "a host never seen cannot leave");
+        assert_eq!(fleet().gone("a"), [], "a host never seen cannot leave");
         let mut p = fleet();
         p.joined("a");
         assert_eq!(
             p.gone("a"),
-            Some(Change::Left {
+            [Change::Left {
                 host: "a".into(),
                 required: true
-            })
+            }]
+        );
+        assert_eq!(p.lost(), ["a"]);
+        p.joined("a");
+        assert!(p.lost().is_empty(), "a host that comes back is not lost");
+    }
+
+    #[test]
+    fn a_host_that_finished_and_went_away_still_counts_as_finished() {
+        let mut p = fleet();
+        for h in ["a", "b", "c"] {
+            p.joined(h);
+        }
+        p.finished("b");
+        assert_eq!(p.gone("b"), []);
+        assert!(p.missing().is_empty());
+        p.finished("a");
+        assert_eq!(p.finished("c"), Some(Change::AllDone));
+    }
+
+    #[test]
+    fn an_optional_host_leaving_last_ends_the_group() {
+        let mut p = fleet();
+        for h in ["a", "b", "c"] {
+            p.joined(h);
+        }
+        p.finished("a");
+        p.finished("b");
+        assert_eq!(
+            p.gone("c"),
+            [
+                Change::Left {
+                    host: "c".into(),
+                    required: false
+                },
+                Change::AllDone
+            ]
         );
     }
 }

@@ -366,7 +366,7 @@ fn inbound(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
     let iox = iox_node(ctx)?;
     let mut inlets: BTreeMap<String, Box<dyn Inlet>> = BTreeMap::new();
     let mut refused = BTreeSet::new();
-    loop {
+    while ctx.running.load(Ordering::Relaxed) {
         let a = match arrivals.recv_timeout(POLL) {
             Ok(a) => a,
             Err(RecvTimeoutError::Timeout) if ctx.running.load(Ordering::Relaxed) => continue,
@@ -390,4 +390,5 @@ fn inbound(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
         }
         inlets[topic].publish(&a.header, &a.wire)?;
     }
+    Ok(())
 }
