@@ -27,6 +27,14 @@ pub struct Hosts {
     pub separation: Separation,
 }
 
+/// A loopback TCP port that was free a moment ago.
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port()
+}
+
 fn ip(args: &[&str]) -> bool {
     Command::new("ip")
         .args(args)
@@ -81,11 +89,9 @@ impl Hosts {
         } else {
             hosts.separation = Separation::Loopback;
             for _ in &names {
-                let port = std::net::TcpListener::bind("127.0.0.1:0")
-                    .and_then(|l| l.local_addr())
-                    .expect("a free port")
-                    .port();
-                hosts.endpoints.push(format!("tcp/127.0.0.1:{port}"));
+                hosts
+                    .endpoints
+                    .push(format!("tcp/127.0.0.1:{}", free_port()));
             }
         }
         eprintln!(

@@ -2,7 +2,7 @@
 //! between them over zenoh. The hosts are namespaces of this machine (see
 //! `caravan_tests::hosts`).
 
-use caravan_tests::hosts::Hosts;
+use caravan_tests::hosts::{Hosts, free_port};
 use caravan_tests::{Scenario, assert_refused, wait_until};
 use std::io::Read;
 use std::process::Child;
@@ -192,10 +192,7 @@ host = "c"
 
 /// Two hosts on loopback ports, `a` listening.
 fn two_hosts(clock: &str, extra: &str) -> String {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .unwrap()
-        .port();
+    let port = free_port();
     format!(
         r#"clock = "{clock}"
 duration = "1min"

@@ -22,6 +22,7 @@
 
 use super::keys::{self, Want};
 use super::z;
+use crate::run::driver::{discovery_interval, listen_until};
 use anyhow::Result;
 use caravan::Header;
 use caravan::relay::{Inlet, Outlet};
@@ -170,55 +171,30 @@ fn outbound(ctx: &Ctx, arrivals: Sender<Arrival>) -> Result<()> {
             remote_want(ctx, &iox, &mut sending, sample);
         }
         discover(ctx, &iox, &mut reading, &arrivals)?;
-        // Topics appear as processes start: look often at first, then every second.
-        let interval = if started.elapsed() < Duration::from_secs(3) {
-            Duration::from_millis(100)
-        } else {
-            Duration::from_secs(1)
-        };
-        let next_discovery = Instant::now() + interval;
-        let waitset = WaitSetBuilder::new()
-            .signal_handling_mode(SignalHandlingMode::Disabled)
-            .create::<ipc::Service>()
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        let _guards = sending
-            .values()
-            .map(|o| waitset.attach_notification(&o.listener))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        while Instant::now() < next_discovery && ctx.running.load(Ordering::Relaxed) {
-            let wait = next_discovery
-                .saturating_duration_since(Instant::now())
-                .min(POLL);
-            if sending.is_empty() {
-                std::thread::sleep(wait);
-            } else {
-                waitset
-                    .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, wait)
-                    .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-            }
-            for o in sending.values() {
-                let _ = o.listener.try_wait(|_| {});
-            }
-            send(ctx, &sending)?;
-            while let Ok(Some(sample)) = wants.try_recv() {
-                pending.push(sample);
-            }
-            if !pending.is_empty() {
-                break;
-            }
-        }
+        let next_discovery = Instant::now() + discovery_interval(started);
+        let listeners: Vec<_> = sending.values().map(|o| &o.listener).collect();
+        listen_until(
+            &listeners,
+            next_discovery,
+            SignalHandlingMode::Disabled,
+            || {
+                send(ctx, &sending)?;
+                while let Ok(Some(sample)) = wants.try_recv() {
+                    pending.push(sample);
+                }
+                Ok(!pending.is_empty() || !ctx.running.load(Ordering::Relaxed))
+            },
+        )?;
     }
     Ok(())
 }
 
 /// Puts every waiting message of the topics other hosts read on zenoh.
 fn send(ctx: &Ctx, sending: &Sending) -> Result<()> {
-    let remote = ctx.remote.lock().unwrap().clone();
     for o in sending.values() {
         let mut failure = None;
         o.outlet.drain(&mut |header, wire| {
-            if remote.contains(&header.source_id) || failure.is_some() {
+            if failure.is_some() || ctx.remote.lock().unwrap().contains(&header.source_id) {
                 return;
             }
             let attachment = keys::attachment(&header, &o.type_name, &ctx.host);

@@ -137,16 +137,22 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
     start(lf, &options).map(|l| l.code)
 }
 
-/// Leaves out the processes `only` does not name and adds the player of `play`; an error
+/// Leaves out the processes `keep` refuses, remembering where they would run.
+fn keep_only(lf: &mut LaunchFile, keep: impl Fn(&super::model::ProcessSpec) -> bool) {
+    let (kept, left): (Vec<_>, Vec<_>) = std::mem::take(&mut lf.processes)
+        .into_iter()
+        .partition(|p| keep(p));
+    lf.processes = kept;
+    lf.left_out
+        .extend(left.into_iter().map(|p| (p.name, p.host)));
+}
+
+/// Leaves out the processes `--host` and `only` do not name and adds the player of `play`; an error
 /// names what the launch file lacks or the recording cannot give.
 fn reshape(lf: &mut LaunchFile, options: &RunOptions) -> Result<()> {
     if let Some(host) = &options.host {
         crate::bridge::check_host(lf, host)?;
-        let (kept, left): (Vec<_>, Vec<_>) = std::mem::take(&mut lf.processes)
-            .into_iter()
-            .partition(|p| &p.host == host);
-        lf.processes = kept;
-        lf.left_out = left.into_iter().map(|p| (p.name, p.host)).collect();
+        keep_only(lf, |p| &p.host == host);
     }
     if !options.only.is_empty() {
         let names: Vec<&str> = lf.processes.iter().map(|p| p.name.as_str()).collect();
@@ -159,12 +165,7 @@ fn reshape(lf: &mut LaunchFile, options: &RunOptions) -> Result<()> {
                 );
             }
         }
-        let (kept, left): (Vec<_>, Vec<_>) = std::mem::take(&mut lf.processes)
-            .into_iter()
-            .partition(|p| options.only.contains(&p.name));
-        lf.processes = kept;
-        lf.left_out
-            .extend(left.into_iter().map(|p| (p.name, p.host)));
+        keep_only(lf, |p| options.only.contains(&p.name));
     }
     if let Some(play) = &options.play {
         let player = play.process(lf)?;

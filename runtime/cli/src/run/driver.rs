@@ -6,6 +6,7 @@ use crate::record::{Recorder, Recording, RecordingMeta};
 use anyhow::{Result, anyhow};
 use caravan::lockstep::Scheduler;
 use crossbeam::channel::{Receiver, Sender};
+use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -227,7 +228,6 @@ pub fn record_until(
     let mut listening = BTreeSet::new();
     let started = Instant::now();
     loop {
-        // Topics appear as processes start: look often at first, then every second.
         recorder.discover()?;
         for topic in recorder
             .taps()
@@ -238,46 +238,74 @@ pub fn record_until(
                 listeners.push(caravan::tap::open_listener(&iox, &topic)?);
             }
         }
-        let interval = if started.elapsed() < Duration::from_secs(3) {
-            100
-        } else {
-            1000
-        };
-        let next_discovery = Instant::now() + Duration::from_millis(interval);
-        let waitset = WaitSetBuilder::new()
-            .signal_handling_mode(signals)
-            .create::<ipc::Service>()
-            .map_err(|e| anyhow!("{e:?}"))?;
-        let _guards = listeners
-            .iter()
-            .map(|l| waitset.attach_notification(l))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| anyhow!("{e:?}"))?;
-        while Instant::now() < next_discovery {
-            // The timeout bounds how late the end is noticed; idle cost is 4 wake-ups/s.
-            let wait = next_discovery
-                .saturating_duration_since(Instant::now())
-                .min(Duration::from_millis(250));
-            let result = if listeners.is_empty() {
-                // Nothing to listen to yet (a WaitSet refuses to wait on nothing).
-                std::thread::sleep(wait);
-                iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
-            } else {
-                waitset
-                    .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, wait)
-                    .map_err(|e| anyhow!("{e:?}"))?
-            };
-            for l in &listeners {
-                let _ = l.try_wait(|_| {});
-            }
-            recorder.drain()?;
-            let interrupted = !matches!(
-                result,
-                iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
-            );
-            if interrupted || done(recorder) {
-                return Ok(());
-            }
+        let next_discovery = Instant::now() + discovery_interval(started);
+        let ended = listen_until(
+            &listeners.iter().collect::<Vec<_>>(),
+            next_discovery,
+            signals,
+            || {
+                recorder.drain()?;
+                Ok(done(recorder))
+            },
+        )?;
+        if ended {
+            return Ok(());
         }
     }
+}
+
+/// How long until the next look for new topics: they appear as processes start, so often at
+/// first (100 ms), then every second.
+pub fn discovery_interval(started: Instant) -> Duration {
+    if started.elapsed() < Duration::from_secs(3) {
+        Duration::from_millis(100)
+    } else {
+        Duration::from_secs(1)
+    }
+}
+
+/// Waits on `listeners` until `deadline`, calling `woken` after each wake-up and at least every
+/// 250 ms (which bounds how late a stop is noticed; idle cost is 4 wake-ups/s). Returns true
+/// when `woken` returned true or (with `signals` handling termination requests) on Ctrl-C,
+/// false at the deadline.
+pub fn listen_until(
+    listeners: &[&Listener<ipc::Service>],
+    deadline: Instant,
+    signals: SignalHandlingMode,
+    mut woken: impl FnMut() -> Result<bool>,
+) -> Result<bool> {
+    let waitset = WaitSetBuilder::new()
+        .signal_handling_mode(signals)
+        .create::<ipc::Service>()
+        .map_err(|e| anyhow!("{e:?}"))?;
+    let _guards = listeners
+        .iter()
+        .map(|l| waitset.attach_notification(*l))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| anyhow!("{e:?}"))?;
+    while Instant::now() < deadline {
+        let wait = deadline
+            .saturating_duration_since(Instant::now())
+            .min(Duration::from_millis(250));
+        let result = if listeners.is_empty() {
+            // Nothing to listen to yet (a WaitSet refuses to wait on nothing).
+            std::thread::sleep(wait);
+            iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
+        } else {
+            waitset
+                .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, wait)
+                .map_err(|e| anyhow!("{e:?}"))?
+        };
+        for l in listeners {
+            let _ = l.try_wait(|_| {});
+        }
+        let interrupted = !matches!(
+            result,
+            iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
+        );
+        if woken()? || interrupted {
+            return Ok(true);
+        }
+    }
+    Ok(false)
 }

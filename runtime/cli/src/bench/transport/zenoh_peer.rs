@@ -22,10 +22,7 @@ use zenoh::shm::{BlockOn, GarbageCollect, ShmProviderBuilder};
 const PING: &str = "caravan/bench/ping";
 const PONG: &str = "caravan/bench/pong";
 
-/// zenoh's errors are boxed trait objects; make them anyhow errors.
-fn z<T>(r: zenoh::Result<T>) -> Result<T> {
-    r.map_err(|e| anyhow!("zenoh: {e}"))
-}
+use crate::bridge::z;
 
 /// Removes zenoh shared-memory segments (`/dev/shm/*.zenoh`) whose processes are gone: the
 /// segments of a finished echoing process, and of earlier runs (zenoh 1.10 leaves a
