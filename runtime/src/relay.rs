@@ -108,7 +108,7 @@ pub fn open_outlet(
             port,
         }))
     }
-    caravan_schemas::with_message_type!(type_name, |T| open::<T>(iox, topic, delivery))
+    caravan_schemas::with_wire_type!(type_name, |T| open::<T>(iox, topic, delivery))
         .unwrap_or_else(|| Err(unknown(topic, type_name)))
 }
 
@@ -137,7 +137,7 @@ pub fn open_inlet(
             notifier: transport::notifier(iox, topic)?,
         }))
     }
-    caravan_schemas::with_message_type!(type_name, |T| open::<T>(iox, topic, delivery))
+    caravan_schemas::with_wire_type!(type_name, |T| open::<T>(iox, topic, delivery))
         .unwrap_or_else(|| Err(unknown(topic, type_name)))
 }
 

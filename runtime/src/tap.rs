@@ -224,12 +224,10 @@ pub fn topic_ports(
         });
         Ok(ports)
     }
-    caravan_schemas::with_message_type!(type_name, |T| ports::<T>(iox, topic)).unwrap_or_else(
-        || {
-            Err(Error::topic(
-                topic,
-                format!("unknown message type '{type_name}'"),
-            ))
-        },
-    )
+    caravan_schemas::with_wire_type!(type_name, |T| ports::<T>(iox, topic)).unwrap_or_else(|| {
+        Err(Error::topic(
+            topic,
+            format!("unknown message type '{type_name}'"),
+        ))
+    })
 }

@@ -27,6 +27,29 @@ macro_rules! with_message_type {
     }};
 }
 
+/// [`with_message_type!`], and the lockstep protocol's own messages (`caravan::lockstep::Hello`,
+/// `Grant`, `Done`), which cross between hosts like any topic.
+#[macro_export]
+macro_rules! with_wire_type {
+    ($name:expr, |$T:ident| $body:expr) => {{
+        let name: &str = $name;
+        $crate::with_message_type!(name, |$T| $body).or_else(|| {
+            if name == $crate::type_name::<$crate::lockstep::Hello>() {
+                type $T = $crate::lockstep::Hello;
+                Some($body)
+            } else if name == $crate::type_name::<$crate::lockstep::Grant>() {
+                type $T = $crate::lockstep::Grant;
+                Some($body)
+            } else if name == $crate::type_name::<$crate::lockstep::Done>() {
+                type $T = $crate::lockstep::Done;
+                Some($body)
+            } else {
+                None
+            }
+        })
+    }};
+}
+
 /// Names of all message types in the registry.
 pub fn message_type_names() -> Vec<&'static str> {
     macro_rules! names {

@@ -276,6 +276,30 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(*round_trip(&status), status);
+        // The lockstep protocol's messages cross hosts too.
+        let mut done = crate::boxed_placement_new::<crate::lockstep::Done>();
+        done.now_ns = 7;
+        done.published.push(42).unwrap();
+        let back = round_trip(done.as_ref());
+        assert_eq!((back.now_ns, back.published.as_slice()), (7, &[42][..]));
+        let grant = crate::lockstep::Grant::step(10, 1);
+        assert_eq!(round_trip(&grant).now_ns, 10);
+    }
+
+    #[test]
+    fn every_wire_type_is_known_by_name() {
+        for name in [
+            "caravan::Pose2D",
+            "caravan::lockstep::Hello",
+            "caravan::lockstep::Done",
+        ] {
+            let size = crate::with_wire_type!(name, |T| size_of::<T>());
+            assert_eq!(size, data_ranges(name).map(|_| size.unwrap()), "{name}");
+        }
+        assert_eq!(
+            crate::with_wire_type!("caravan::Nothing", |T| size_of::<T>()),
+            None
+        );
     }
 
     /// Fills every byte of a `T`, padding too, with 0xA5; checks that the wire holds the data

@@ -3,7 +3,7 @@
 //! `caravan_tests::hosts`).
 
 use caravan_tests::hosts::{Hosts, free_port};
-use caravan_tests::{Scenario, assert_refused, wait_until};
+use caravan_tests::{PINGPONG, Scenario, assert_refused, caravan, recording, wait_until};
 use std::io::Read;
 use std::process::Child;
 use std::sync::{Arc, Mutex};
@@ -134,6 +134,70 @@ params = {{ topic = "bulk", count = {count}, value = 7.0 }}
 }
 
 #[test]
+fn a_lockstep_group_across_hosts_records_the_bytes_of_one_host() {
+    let hosts = Hosts::new("ls", &["a", "b", "c"]);
+    // ping on a, pong and noise on b, sum on c: every message a node reads comes from another
+    // host, and a records them all.
+    let body = PINGPONG
+        .replace("rate = \"10Hz\"", "rate = \"10Hz\"\nhost = \"a\"")
+        .replace("on = \"demo/ping\"", "on = \"demo/ping\"\nhost = \"b\"")
+        .replace("rate = \"20Hz\"", "rate = \"20Hz\"\nhost = \"c\"")
+        .replace("rate = \"7Hz\"", "rate = \"7Hz\"\nhost = \"b\"");
+    let s = Scenario::new(
+        "hosts-lockstep",
+        &format!(
+            "{body}\n[hosts.a]\nlisten = [\"{a}\"]\nclock = true\n\n[hosts.b]\nconnect = [\"{a}\"]\n\n[hosts.c]\nconnect = [\"{a}\"]\n",
+            a = hosts.endpoint("a"),
+        ),
+    );
+    // The same file on one machine first, with the arguments a's launcher gets but --host
+    // (the recording says which command made it).
+    let runs = s.dir.join("runs-a");
+    let file = s.file.to_str().unwrap();
+    let out = caravan(&[
+        "launch",
+        file,
+        "--quiet",
+        "--runs-dir",
+        runs.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let one_dir = hosts.run_dir("a", &s.dir);
+    let one = std::fs::read(one_dir.join("record.mcap")).unwrap();
+    std::fs::remove_dir_all(one_dir).unwrap();
+    assert!(recording::channels(&one).contains_key("demo/sum"));
+    let launchers: Vec<(&str, Launcher)> = ["a", "b", "c"]
+        .into_iter()
+        .map(|h| (h, Launcher::start(&hosts, h, &s)))
+        .collect();
+    let ended: Vec<_> = launchers
+        .into_iter()
+        .map(|(host, l)| (host, l.finish()))
+        .collect();
+    for (host, (code, _)) in &ended {
+        assert_eq!(
+            *code,
+            Some(0),
+            "host {host} ({:?}): {ended:#?}",
+            hosts.how()
+        );
+        assert_eq!(shm_left(&s, host), "", "host {host} left shared memory");
+    }
+    let many = std::fs::read(hosts.run_dir("a", &s.dir).join("record.mcap")).unwrap();
+    assert!(
+        one == many,
+        "the recording across hosts differs from the one on one host ({:?}): {:?} vs {:?}",
+        hosts.how(),
+        recording::channels(&one),
+        recording::channels(&many)
+    );
+}
+
+#[test]
 fn a_host_that_leaves_is_reported_and_stops_the_group_if_required() {
     let hosts = Hosts::new("kill", &["a", "b", "c"]);
     let s = Scenario::new(
@@ -247,9 +311,27 @@ fn a_host_the_file_lacks_or_cannot_run_is_refused() {
     let s = Scenario::new("hosts-unknown", &two_hosts("realtime", ""));
     let out = s.run(&["--host", "bb"]);
     assert_refused(&s, &out, &["--host bb", "declares no host 'bb'", "'b'"]);
-    let s = Scenario::new("hosts-lockstep", &two_hosts("lockstep", ""));
+    // Two hosts listen and none says it owns the clock.
+    let s = Scenario::new(
+        "hosts-lockstep",
+        &two_hosts("lockstep", "")
+            .replace("connect = ", "listen = [\"tcp/127.0.0.1:1\"]\nconnect = "),
+    );
     let out = s.run(&["--host", "a"]);
-    assert_refused(&s, &out, &["lockstep", "does not span hosts"]);
+    assert_refused(&s, &out, &["lockstep group across hosts", "clock = true"]);
+    let s = Scenario::new(
+        "hosts-two-clocks",
+        &two_hosts("lockstep", "").replace(
+            "]\n\n[hosts.b]",
+            "]\nclock = true\n\n[hosts.b]\nclock = true",
+        ),
+    );
+    let out = s.run(&["--host", "a"]);
+    assert_refused(
+        &s,
+        &out,
+        &["launch.toml:", "clock", "host 'a' already has clock = true"],
+    );
     let s = Scenario::new(
         "hosts-unreachable",
         &two_hosts("realtime", "").replace("listen = ", "connect = "),

@@ -6,12 +6,15 @@
 //! - `caravan/G/stop`: a put, a host stopped the group (JSON [`StopNotice`]);
 //! - `caravan/G/want/H/TYPE/CONTRACT/TOPIC`: liveliness token, a process of host H reads
 //!   TOPIC, of message type TYPE with delivery CONTRACT (`lossless-8`, `latest-1`);
-//! - `caravan/G/topic/H/TOPIC`: the messages of TOPIC for host H, header, type and sending
-//!   host in the attachment.
+//! - `caravan/G/record/H`: liveliness token, host H records the whole group (the clock host
+//!   of a lockstep run): every host sends it every topic;
+//! - `caravan/G/topic/H/TOPIC`: the messages of TOPIC for host H, with an [`Envelope`] as
+//!   attachment.
 //!
 //! Group names, host names, topic names and type names (`caravan::Pose2D`) hold no character
 //! zenoh reserves (`*`, `$`, `#`, `?`), so keys need no escaping.
 
+use super::causal::Knowledge;
 use caravan::Delivery;
 use serde::{Deserialize, Serialize};
 
@@ -29,6 +32,10 @@ pub fn done(group: &str, host: &str) -> String {
 
 pub fn stop(group: &str) -> String {
     format!("caravan/{group}/stop")
+}
+
+pub fn record(group: &str, host: &str) -> String {
+    format!("caravan/{group}/record/{host}")
 }
 
 /// The messages of `topic` sent to `host`: one stream per reading host, so each starts when
@@ -62,10 +69,12 @@ impl Want {
     }
 
     pub fn key(&self, group: &str) -> String {
-        let contract = if self.lossless { "lossless" } else { "latest" };
         format!(
-            "caravan/{group}/want/{}/{}/{contract}-{}/{}",
-            self.host, self.type_name, self.depth, self.topic
+            "caravan/{group}/want/{}/{}/{}/{}",
+            self.host,
+            self.type_name,
+            contract(self.delivery()),
+            self.topic
         )
     }
 
@@ -75,19 +84,35 @@ impl Want {
         let mut parts = rest.splitn(4, '/');
         let host = parts.next()?.to_string();
         let type_name = parts.next()?.to_string();
-        let (contract, depth) = parts.next()?.split_once('-')?;
+        let delivery = parse_contract(parts.next()?)?;
         let topic = parts.next()?.to_string();
         Some(Want {
             host,
             type_name,
-            lossless: match contract {
-                "lossless" => true,
-                "latest" => false,
-                _ => return None,
-            },
-            depth: depth.parse().ok()?,
+            lossless: delivery.is_lossless(),
+            depth: delivery.depth(),
             topic,
         })
+    }
+}
+
+/// A delivery contract as keys and attachments write it: `lossless-8`, `latest-1`.
+pub fn contract(delivery: Delivery) -> String {
+    let kind = if delivery.is_lossless() {
+        "lossless"
+    } else {
+        "latest"
+    };
+    format!("{kind}-{}", delivery.depth())
+}
+
+fn parse_contract(text: &str) -> Option<Delivery> {
+    let (kind, depth) = text.split_once('-')?;
+    let depth = depth.parse().ok()?;
+    match kind {
+        "lossless" => Some(Delivery::Lossless { depth }),
+        "latest" => Some(Delivery::Latest { depth }),
+        _ => None,
     }
 }
 
@@ -100,38 +125,73 @@ pub struct StopNotice {
     pub failure: Option<String>,
 }
 
-/// The attachment of a message: its header (4 × u64, little-endian), its type's name and
-/// the sending host, separated by a space.
-pub fn attachment(header: &caravan::Header, type_name: &str, host: &str) -> Vec<u8> {
-    let mut out = Vec::with_capacity(33 + type_name.len() + host.len());
-    for v in [
-        header.seq,
-        header.stamp_ns,
-        header.send_wall_ns,
-        header.source_id,
-    ] {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
-    out.extend_from_slice(type_name.as_bytes());
-    out.push(b' ');
-    out.extend_from_slice(host.as_bytes());
-    out
+/// What travels with a message besides its payload, as its zenoh attachment: the header
+/// (4 × u64, little-endian), then `TYPE HOST CONTRACT` and, on lockstep control messages,
+/// ` KNOWLEDGE` (space-separated text).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Envelope {
+    pub header: caravan::Header,
+    /// The message type's name, `caravan::Pose2D`.
+    pub type_name: String,
+    /// The sending host.
+    pub host: String,
+    /// The topic's delivery contract on the sending side.
+    pub delivery: Delivery,
+    /// What the sender knew had been sent, when the message must wait for it
+    /// ([`super::causal`]).
+    pub knowledge: Option<Knowledge>,
 }
 
-/// Reads an [`attachment`].
-pub fn parse_attachment(bytes: &[u8]) -> Option<(caravan::Header, &str, &str)> {
-    if bytes.len() < 32 {
-        return None;
+impl Envelope {
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let h = &self.header;
+        let mut out = Vec::with_capacity(64 + self.type_name.len() + self.host.len());
+        for v in [h.seq, h.stamp_ns, h.send_wall_ns, h.source_id] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        let mut text = format!(
+            "{} {} {}",
+            self.type_name,
+            self.host,
+            contract(self.delivery)
+        );
+        if let Some(k) = &self.knowledge {
+            text.push(' ');
+            text.push_str(&k.encode());
+        }
+        out.extend_from_slice(text.as_bytes());
+        out
     }
-    let word = |i: usize| u64::from_le_bytes(bytes[i * 8..i * 8 + 8].try_into().unwrap());
-    let header = caravan::Header {
-        seq: word(0),
-        stamp_ns: word(1),
-        send_wall_ns: word(2),
-        source_id: word(3),
-    };
-    let (type_name, host) = std::str::from_utf8(&bytes[32..]).ok()?.split_once(' ')?;
-    Some((header, type_name, host))
+
+    /// Reads [`Self::to_bytes`]'s form; `None` for anything else.
+    pub fn parse(bytes: &[u8]) -> Option<Envelope> {
+        if bytes.len() < 32 {
+            return None;
+        }
+        let word = |i: usize| u64::from_le_bytes(bytes[i * 8..i * 8 + 8].try_into().unwrap());
+        let header = caravan::Header {
+            seq: word(0),
+            stamp_ns: word(1),
+            send_wall_ns: word(2),
+            source_id: word(3),
+        };
+        let text = std::str::from_utf8(&bytes[32..]).ok()?;
+        let mut parts = text.splitn(4, ' ');
+        let type_name = parts.next()?.to_string();
+        let host = parts.next()?.to_string();
+        let delivery = parse_contract(parts.next()?)?;
+        let knowledge = match parts.next() {
+            Some(k) => Some(Knowledge::parse(k)?),
+            None => None,
+        };
+        Some(Envelope {
+            header,
+            type_name,
+            host,
+            delivery,
+            knowledge,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -159,18 +219,28 @@ mod tests {
     }
 
     #[test]
-    fn attachments_round_trip() {
-        let header = caravan::Header {
-            seq: 7,
-            stamp_ns: 1 << 40,
-            send_wall_ns: 3,
-            source_id: u64::MAX,
+    fn envelopes_round_trip() {
+        let mut envelope = Envelope {
+            header: caravan::Header {
+                seq: 7,
+                stamp_ns: 1 << 40,
+                send_wall_ns: 3,
+                source_id: u64::MAX,
+            },
+            type_name: "caravan::Odometry".into(),
+            host: "rpi-1".into(),
+            delivery: Delivery::Latest { depth: 1 },
+            knowledge: None,
         };
-        let bytes = attachment(&header, "caravan::Odometry", "rpi-1");
-        assert_eq!(
-            parse_attachment(&bytes),
-            Some((header, "caravan::Odometry", "rpi-1"))
-        );
-        assert_eq!(parse_attachment(&bytes[..31]), None);
+        let bytes = envelope.to_bytes();
+        assert!(bytes.ends_with(b"caravan::Odometry rpi-1 latest-1"));
+        assert_eq!(Envelope::parse(&bytes), Some(envelope.clone()));
+        assert_eq!(Envelope::parse(&bytes[..31]), None);
+        let mut k = Knowledge::default();
+        k.sent.insert(("rpi-1".into(), "pc".into()), 4);
+        k.wants.insert("pc".into(), 2);
+        envelope.knowledge = Some(k);
+        envelope.delivery = Delivery::Lossless { depth: 256 };
+        assert_eq!(Envelope::parse(&envelope.to_bytes()), Some(envelope));
     }
 }

@@ -13,7 +13,10 @@
 //!
 //! Everything is said under the group's own keys ([`keys`]).
 
+pub mod causal;
+mod inbound;
 pub mod keys;
+mod outbound;
 pub mod presence;
 pub mod relay;
 
@@ -60,9 +63,7 @@ pub fn check_host(lf: &LaunchFile, host: &str) -> Result<()> {
         bail!("--host {host}: {file} declares no host '{host}' under [hosts]{hint}");
     }
     if lf.group.clock == caravan::ClockMode::Lockstep {
-        bail!(
-            "--host {host}: {file} runs in lockstep, which does not span hosts yet; run it with --clock realtime, or on one machine without --host"
-        );
+        clock_host(lf)?;
     }
     let reachable = lf.hosts.values().any(|h| !h.listen.is_empty());
     if lf.hosts.len() > 1 && !reachable {
@@ -71,6 +72,28 @@ pub fn check_host(lf: &LaunchFile, host: &str) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// In a lockstep group across hosts, the host whose launcher runs the scheduler and records:
+/// the one marked `clock = true`, or else the only host that listens (the hub the others
+/// connect to).
+pub fn clock_host(lf: &LaunchFile) -> Result<String> {
+    if let Some((name, _)) = lf.hosts.iter().find(|(_, h)| h.clock) {
+        return Ok(name.clone());
+    }
+    let listening: Vec<&String> = lf
+        .hosts
+        .iter()
+        .filter(|(_, h)| !h.listen.is_empty())
+        .map(|(name, _)| name)
+        .collect();
+    match listening.as_slice() {
+        [one] => Ok(one.to_string()),
+        _ => bail!(
+            "{}: a lockstep group across hosts needs one host to own simulated time and record; mark it with clock = true under its [hosts.NAME] table",
+            lf.path.display()
+        ),
+    }
 }
 
 fn session_config(spec: &HostSpec) -> Result<zenoh::Config> {
@@ -219,6 +242,11 @@ impl Bridge {
         })
     }
 
+    /// The host this launcher runs.
+    pub fn host(&self) -> &str {
+        &self.host
+    }
+
     /// Waits until every required host has joined; an error names those that did not.
     pub fn wait_for_hosts(&self, timeout: Duration, say: impl Fn(&str)) -> Result<()> {
         let deadline = Instant::now() + timeout;
@@ -263,6 +291,7 @@ impl Bridge {
         events: Sender<Event>,
         iceoryx: &iceoryx2::config::Config,
         remote_nodes: BTreeSet<u64>,
+        clock_host: Option<String>,
     ) -> Result<()> {
         {
             let mut out = self.shared.events.lock().unwrap();
@@ -272,12 +301,16 @@ impl Bridge {
             out.to = Some(events);
         }
         let shared = self.shared.clone();
+        let cfg = relay::RelayConfig {
+            group: self.group.clone(),
+            host: self.host.clone(),
+            iceoryx: iceoryx.clone(),
+            remote: remote_nodes,
+            clock_host,
+        };
         self.relay = Some(relay::Relay::start(
             self.session.clone(),
-            &self.group,
-            &self.host,
-            iceoryx,
-            remote_nodes,
+            cfg,
             move |why| shared.tell(FleetEvent::Failed(why)),
         )?);
         Ok(())

@@ -75,6 +75,10 @@ pub struct HostSpec {
     /// Across machines: the group starts only once this host joined, and stops when it
     /// leaves. A host that is not required may join late or leave; the others go on.
     pub required: bool,
+    /// Lockstep across machines: this host's launcher owns simulated time (runs the
+    /// scheduler) and records the whole group. At most one host says so; when none does, the
+    /// only host that listens is the one.
+    pub clock: bool,
 }
 
 impl Default for HostSpec {
@@ -84,6 +88,7 @@ impl Default for HostSpec {
             listen: Vec::new(),
             connect: Vec::new(),
             required: true,
+            clock: false,
         }
     }
 }

@@ -27,7 +27,7 @@ const GROUP_KEYS: &[&str] = &[
     "step_timeout",
     "join_timeout",
 ];
-const HOST_KEYS: &[&str] = &["cpu_slowdown", "listen", "connect", "required"];
+const HOST_KEYS: &[&str] = &["cpu_slowdown", "listen", "connect", "required", "clock"];
 const LINK_KEYS: &[&str] = &[
     "between",
     "latency",
@@ -135,6 +135,14 @@ impl Checker<'_> {
             let listen = self.get(&h, "listen", endpoints).unwrap_or_default();
             let connect = self.get(&h, "connect", endpoints).unwrap_or_default();
             let required = self.get(&h, "required", boolean).unwrap_or(true);
+            let clock = self.get(&h, "clock", boolean).unwrap_or(false);
+            if clock && let Some(other) = hosts.iter().find(|(_, h): &(_, &HostSpec)| h.clock) {
+                let msg = format!(
+                    "host '{}' already has clock = true; one host owns simulated time",
+                    other.0
+                );
+                self.key_problem(&h, "clock", msg);
+            }
             hosts.insert(
                 name.to_string(),
                 HostSpec {
@@ -142,6 +150,7 @@ impl Checker<'_> {
                     listen,
                     connect,
                     required,
+                    clock,
                 },
             );
         }

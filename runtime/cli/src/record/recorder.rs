@@ -36,7 +36,19 @@ pub struct Recording {
 /// The `run` metadata: Caravan's version, the command line, the seed and (realtime only) the
 /// wall-clock start in Unix ns.
 pub fn run_metadata(seed: Option<u64>, wall_start_ns: Option<u64>) -> BTreeMap<String, String> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    // Which host's launcher records a group across hosts is not part of the run: the file is
+    // the one a single host makes.
+    let mut args = Vec::new();
+    let mut all = std::env::args().skip(1);
+    while let Some(arg) = all.next() {
+        match arg.as_str() {
+            "--host" => {
+                all.next();
+            }
+            a if a.starts_with("--host=") => {}
+            _ => args.push(arg),
+        }
+    }
     let mut m = BTreeMap::from([
         (
             "caravan_version".to_string(),
@@ -58,7 +70,7 @@ pub fn run_metadata(seed: Option<u64>, wall_start_ns: Option<u64>) -> BTreeMap<S
 
 /// The modification time of the directory iceoryx2 keeps the services' static configs in,
 /// which changes whenever a service is made or removed; `None` when it cannot be read.
-fn services_changed(config: &iceoryx2::config::Config) -> Option<std::time::SystemTime> {
+pub fn services_changed(config: &iceoryx2::config::Config) -> Option<std::time::SystemTime> {
     let dir = Path::new(&config.global.root_path().to_string())
         .join(config.global.service.directory.to_string());
     std::fs::metadata(dir).and_then(|m| m.modified()).ok()

@@ -34,6 +34,9 @@ pub struct DriverConfig {
     pub duration: Option<Duration>,
     /// Processes that must join the lockstep schedule.
     pub expected: Vec<String>,
+    /// Lockstep across hosts, on a host other than the clock host: its scheduler steps this
+    /// host's nodes from there, and records them there.
+    pub follower: bool,
     /// Wall time a lockstep step may take before the node is deemed hung.
     pub step_timeout: Duration,
     /// Wall time the processes have to join the lockstep schedule, or in realtime to publish
@@ -78,7 +81,16 @@ pub fn spawn(
         }
         // The recorder's node made the group's global files; keep them to this user.
         caravan::group::make_private(&cfg.group);
-        let (sim_time_ns, schedule) = if lockstep {
+        let (sim_time_ns, schedule) = if lockstep && cfg.follower {
+            // Only the nodes' statuses, for this host's report.
+            record_until(
+                &cfg.iceoryx,
+                &mut recorder,
+                SignalHandlingMode::Disabled,
+                |_| finish.try_recv().is_ok(),
+            )?;
+            (0, None)
+        } else if lockstep {
             let (end, stats) = run_lockstep(&cfg, &mut recorder, &control, &events, &finish)?;
             (end, Some(stats))
         } else {

@@ -82,6 +82,16 @@ pub fn run_group(
             let _ = signals_tx.send(Event::Signal(sig));
         }
     });
+    // Lockstep across hosts: one host's launcher owns simulated time and records; the others
+    // only run their processes.
+    let clock_host = match &bridge {
+        Some(_) if lockstep => Some(crate::bridge::clock_host(lf)?),
+        _ => None,
+    };
+    let follower = match (&clock_host, &bridge) {
+        (Some(clock), Some(b)) => b.host() != clock,
+        _ => false,
+    };
     let mut sup = Supervisor::new(
         plan(lf),
         environment(lf, dir, config_path)?,
@@ -94,11 +104,29 @@ pub fn run_group(
             group: lf.group.name.clone(),
             iceoryx: caravan::group::load_config(config_path)?,
             record_path: dir.join(caravan_report::RECORDING_FILE),
-            patterns: lf.group.record.clone(),
+            // The clock host records the whole group.
+            patterns: if follower {
+                Vec::new()
+            } else {
+                lf.group.record.clone()
+            },
             tick: lf.group.tick,
             overlap: lf.group.overlap,
             duration: lf.group.duration,
-            expected: sup.names(),
+            expected: {
+                let mut names = sup.names();
+                if let Some(b) = bridge.as_deref() {
+                    // The scheduler waits for the processes of every host.
+                    names.extend(
+                        lf.left_out
+                            .iter()
+                            .filter(|(_, host)| *host != b.host())
+                            .map(|(name, _)| name.clone()),
+                    );
+                }
+                names
+            },
+            follower,
             step_timeout: lf.group.step_timeout,
             join_timeout: lf.group.join_timeout,
             reporting: plan(lf)
@@ -131,6 +159,7 @@ pub fn run_group(
             events_tx_for_bridge,
             &caravan::group::load_config(config_path)?,
             crate::bridge::remote_nodes(lf),
+            clock_host,
         )?;
     }
     let started = Instant::now();

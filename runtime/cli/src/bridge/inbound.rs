@@ -1,0 +1,145 @@
+//! The receiving side of a host's relay: publishes what other hosts send here on this host's
+//! shared memory, header untouched. Lockstep control messages wait until what was sent before
+//! them has arrived ([`super::causal`]); they leave in the order they came.
+
+use super::causal::{Knowledge, Received};
+use super::keys::Envelope;
+use super::relay::{Arrival, Ctx, POLL, is_control};
+use anyhow::Result;
+use caravan::relay::Inlet;
+use crossbeam::channel::{Receiver, RecvTimeoutError};
+use iceoryx2::prelude::ipc;
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::time::{Duration, Instant};
+
+/// A control message held until what was sent before it is in.
+struct Held {
+    topic: String,
+    envelope: Envelope,
+    knowledge: Knowledge,
+    wire: Vec<u8>,
+    since: Instant,
+}
+
+/// After this long, a held message is worth a warning: something it waits for is lost.
+const HELD_TOO_LONG: Duration = Duration::from_secs(5);
+
+struct Inbound<'a> {
+    ctx: &'a Ctx,
+    iox: iceoryx2::node::Node<ipc::Service>,
+    inlets: BTreeMap<String, Box<dyn Inlet>>,
+    /// Topics whose messages cannot be published here (the failure was said once).
+    refused: BTreeSet<String>,
+}
+
+pub(super) fn run(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
+    let mut inbound = Inbound {
+        iox: ctx.iox_node()?,
+        ctx,
+        inlets: BTreeMap::new(),
+        refused: BTreeSet::new(),
+    };
+    let mut got = Received::default();
+    let mut held: VecDeque<Held> = VecDeque::new();
+    let mut warned = false;
+    while ctx.is_running() {
+        match arrivals.recv_timeout(POLL) {
+            Ok(Arrival::Message {
+                topic,
+                mut envelope,
+                wire,
+            }) => match envelope.knowledge.take() {
+                Some(knowledge) => {
+                    ctx.knowledge.lock().unwrap().merge(&knowledge);
+                    held.push_back(Held {
+                        topic,
+                        envelope,
+                        knowledge,
+                        wire,
+                        since: Instant::now(),
+                    });
+                }
+                None => {
+                    let from = envelope.host.clone();
+                    inbound.deliver(&topic, &envelope, &wire)?;
+                    *got.messages.entry(from).or_default() += 1;
+                }
+            },
+            Ok(Arrival::Handled) | Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => return Ok(()),
+        }
+        if held.is_empty() {
+            continue;
+        }
+        got.wants = ctx.wants_handled.lock().unwrap().clone();
+        while let Some(front) = held.front() {
+            if !front.knowledge.is_met(ctx.host(), &got) {
+                if !warned && front.since.elapsed() > HELD_TOO_LONG {
+                    warned = true;
+                    eprintln!(
+                        "caravan: warning: a lockstep message on '{}' from host '{}' has waited {HELD_TOO_LONG:?} for the data sent before it (it needs {}; this host has {:?})",
+                        front.topic,
+                        front.envelope.host,
+                        front.knowledge.encode(),
+                        got
+                    );
+                }
+                break;
+            }
+            let h = held.pop_front().expect("a held message");
+            inbound.deliver(&h.topic, &h.envelope, &h.wire)?;
+        }
+    }
+    Ok(())
+}
+
+impl Inbound<'_> {
+    /// Publishes one message here; an empty one only makes its topic.
+    fn deliver(&mut self, topic: &str, envelope: &Envelope, wire: &[u8]) -> Result<()> {
+        let ctx = self.ctx;
+        if self.refused.contains(topic) {
+            return Ok(());
+        }
+        let read_as = ctx.reading.lock().unwrap().get(topic).cloned();
+        if let Some(read_as) = read_as.filter(|t| *t != envelope.type_name) {
+            self.refused.insert(topic.to_string());
+            (ctx.failed)(format!(
+                "topic '{topic}': host '{}' publishes it as {}, but processes of host '{}' read it as {read_as}; publisher and subscribers of a topic must use one message type",
+                envelope.host,
+                envelope.type_name,
+                ctx.host()
+            ));
+            return Ok(());
+        }
+        if !self.inlets.contains_key(topic) {
+            match caravan::relay::open_inlet(
+                &self.iox,
+                topic,
+                &envelope.type_name,
+                envelope.delivery,
+            ) {
+                Ok(inlet) => {
+                    self.inlets.insert(topic.to_string(), inlet);
+                }
+                Err(e) => {
+                    self.refused.insert(topic.to_string());
+                    (ctx.failed)(format!(
+                        "topic '{topic}': host '{}' sends it, but host '{}' cannot publish it: {e}",
+                        envelope.host,
+                        ctx.host()
+                    ));
+                    return Ok(());
+                }
+            }
+        }
+        if wire.is_empty() {
+            return Ok(());
+        }
+        if !is_control(topic) {
+            // Its node runs elsewhere: what it publishes here is not sent back.
+            ctx.remote.lock().unwrap().insert(envelope.header.source_id);
+        }
+        self.inlets[topic].publish(&envelope.header, wire)?;
+        Ok(())
+    }
+}
