@@ -173,6 +173,10 @@ pub struct LinkStats {
 /// Directory of the run where nodes leave their link statistics (`<node>.json`).
 pub const LINK_STATS_DIR: &str = "links";
 
+/// Directory of the run where a launcher of a group across machines leaves what it measured of
+/// the real network from each other host (`<host>.json`, a list of [`LinkStats`]).
+pub const NETWORK_STATS_DIR: &str = "network";
+
 /// Width of a latency bin, ns.
 pub const LATENCY_BIN_NS: u64 = 100_000;
 

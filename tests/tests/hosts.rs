@@ -61,6 +61,17 @@ fn shm_left(s: &Scenario, host: &str) -> String {
     std::fs::read_to_string(s.dir.join(format!("shm-{host}.txt"))).unwrap_or_default()
 }
 
+/// The report's entry for the real network from `from` to `to`, in run directory `run`.
+fn network_link(run: &std::path::Path, from: &str, to: &str) -> serde_json::Value {
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(run.join("report.json")).unwrap()).unwrap();
+    let links = report["links"].as_array().cloned().unwrap_or_default();
+    links
+        .into_iter()
+        .find(|l| l["kind"] == "network" && l["from"] == from && l["to"] == to)
+        .unwrap_or_else(|| panic!("no network link {from} → {to}: {report:#}"))
+}
+
 fn hosts_table(hosts: &Hosts, c_required: bool) -> String {
     format!(
         r#"
@@ -129,6 +140,10 @@ params = {{ topic = "bulk", count = {count}, value = 7.0 }}
                 log.contains(&format!("received {count} missed 0")),
                 "host {host}: {log}"
             );
+            // The report measures the real network the messages crossed.
+            let network = network_link(&run, "a", host);
+            assert_eq!(network["delivered"], count, "host {host}: {network}");
+            assert!(network["latency_ms"]["p50"].as_f64().is_some(), "{network}");
         }
     }
 }
@@ -187,7 +202,13 @@ fn a_lockstep_group_across_hosts_records_the_bytes_of_one_host() {
         );
         assert_eq!(shm_left(&s, host), "", "host {host} left shared memory");
     }
-    let many = std::fs::read(hosts.run_dir("a", &s.dir).join("record.mcap")).unwrap();
+    let run_a = hosts.run_dir("a", &s.dir);
+    let many = std::fs::read(run_a.join("record.mcap")).unwrap();
+    // Every message crossed into a: pong and noise from b, sum from c.
+    for (from, messages) in [("b", 100 + 70), ("c", 201)] {
+        let link = network_link(&run_a, from, "a");
+        assert!(link["delivered"].as_u64().unwrap() >= messages, "{link}");
+    }
     assert!(
         one == many,
         "the recording across hosts differs from the one on one host ({:?}): {:?} vs {:?}",
@@ -195,6 +216,52 @@ fn a_lockstep_group_across_hosts_records_the_bytes_of_one_host() {
         recording::channels(&one),
         recording::channels(&many)
     );
+}
+
+#[test]
+fn a_process_hung_on_another_host_fails_a_lockstep_group() {
+    let hosts = Hosts::new("hang", &["a", "b"]);
+    let s = Scenario::new(
+        "hosts-hang",
+        &format!(
+            r#"clock = "lockstep"
+duration = "1min"
+step_timeout = "2s"
+
+[hosts.a]
+listen = ["{a}"]
+
+[hosts.b]
+connect = ["{a}"]
+
+[[process]]
+name = "ping"
+exec = "caravan-demo ping"
+host = "a"
+
+[[process]]
+name = "stuck"
+exec = "caravan-testnode hang"
+host = "b"
+params = {{ count = 3 }}
+"#,
+            a = hosts.endpoint("a")
+        ),
+    );
+    let a = Launcher::start(&hosts, "a", &s);
+    let b = Launcher::start(&hosts, "b", &s);
+    let (code, err) = a.finish();
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("process 'stuck' has not finished a step") && err.contains("on host 'b'"),
+        "{err}"
+    );
+    let (code, err) = b.finish();
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("host 'a' stopped the group (failed"), "{err}");
+    for host in ["a", "b"] {
+        assert_eq!(shm_left(&s, host), "", "host {host} left shared memory");
+    }
 }
 
 #[test]

@@ -62,6 +62,9 @@ pub(super) fn run(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
                 None => {
                     let from = envelope.host.clone();
                     inbound.deliver(&topic, &envelope, &wire)?;
+                    if !wire.is_empty() {
+                        inbound.measure(&envelope);
+                    }
                     *got.messages.entry(from).or_default() += 1;
                 }
             },
@@ -94,6 +97,26 @@ pub(super) fn run(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
 }
 
 impl Inbound<'_> {
+    /// Notes how long a message took from its publisher's send to its publication here. The
+    /// two wall clocks are two machines' (one in tests): a message that seems to arrive before
+    /// it was sent says the clocks disagree, and counts as 0.
+    fn measure(&self, envelope: &Envelope) {
+        let sent = envelope.header.send_wall_ns;
+        if sent == 0 {
+            return;
+        }
+        let latency = caravan::wall_clock_ns().saturating_sub(sent);
+        let mut network = self.ctx.network.lock().unwrap();
+        network
+            .entry(envelope.host.clone())
+            .or_insert_with(|| caravan::network::LinkStats {
+                from: envelope.host.clone(),
+                to: self.ctx.host().to_string(),
+                ..Default::default()
+            })
+            .record(Some(latency));
+    }
+
     /// Publishes one message here; an empty one only makes its topic.
     fn deliver(&mut self, topic: &str, envelope: &Envelope, wire: &[u8]) -> Result<()> {
         let ctx = self.ctx;

@@ -292,6 +292,7 @@ impl Bridge {
         iceoryx: &iceoryx2::config::Config,
         remote_nodes: BTreeSet<u64>,
         clock_host: Option<String>,
+        run_dir: &std::path::Path,
     ) -> Result<()> {
         {
             let mut out = self.shared.events.lock().unwrap();
@@ -307,6 +308,7 @@ impl Bridge {
             iceoryx: iceoryx.clone(),
             remote: remote_nodes,
             clock_host,
+            stats_dir: run_dir.join(caravan::network::NETWORK_STATS_DIR),
         };
         self.relay = Some(relay::Relay::start(
             self.session.clone(),

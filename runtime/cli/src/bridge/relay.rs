@@ -33,6 +33,7 @@ use super::keys::{self, Envelope};
 use super::z;
 use super::{inbound, outbound};
 use anyhow::Result;
+use caravan::network::LinkStats;
 use crossbeam::channel::{Receiver, Sender, unbounded};
 use iceoryx2::identifiers::UniqueNodeId;
 use iceoryx2::prelude::*;
@@ -61,6 +62,9 @@ pub struct RelayConfig {
     pub remote: BTreeSet<u64>,
     /// Lockstep: the host whose launcher owns simulated time and records.
     pub clock_host: Option<String>,
+    /// Where the measured latency of the network from each host is written when the relay
+    /// stops (`<this host>.json`, see [`caravan::network::NETWORK_STATS_DIR`]).
+    pub stats_dir: std::path::PathBuf,
 }
 
 /// What both threads share.
@@ -79,6 +83,9 @@ pub(super) struct Ctx {
     pub wants_handled: Mutex<BTreeMap<String, u64>>,
     /// Topics read here → their message type, for naming a mismatch.
     pub reading: Mutex<BTreeMap<String, String>>,
+    /// Sending host → what its messages took to be published here (header send time →
+    /// publication here, wall clocks of two machines).
+    pub network: Mutex<BTreeMap<String, LinkStats>>,
     pub failed: Box<dyn Fn(String) + Send + Sync>,
 }
 
@@ -150,6 +157,7 @@ impl Relay {
             knowledge: Mutex::new(Knowledge::default()),
             wants_handled: Mutex::new(BTreeMap::new()),
             reading: Mutex::new(BTreeMap::new()),
+            network: Mutex::new(BTreeMap::new()),
             failed: Box::new(failed),
         });
         let (tx, rx) = unbounded();
@@ -186,9 +194,24 @@ impl Relay {
         for _ in 0..self.threads {
             if self.ended.recv_deadline(deadline).is_err() {
                 eprintln!("caravan: warning: a bridge thread did not stop within 3 s; leaving it");
-                return;
+                break;
             }
         }
+        if let Err(e) = self.save_network() {
+            eprintln!("caravan: warning: cannot save the network's statistics: {e:#}");
+        }
+    }
+
+    fn save_network(&self) -> Result<()> {
+        let stats: Vec<LinkStats> = self.ctx.network.lock().unwrap().values().cloned().collect();
+        if stats.is_empty() {
+            return Ok(());
+        }
+        let dir = &self.ctx.cfg.stats_dir;
+        std::fs::create_dir_all(dir)?;
+        let path = dir.join(format!("{}.json", self.ctx.host()));
+        std::fs::write(&path, serde_json::to_vec(&stats)?)?;
+        Ok(())
     }
 }
 

@@ -82,12 +82,13 @@ pub fn render(r: &Value) -> String {
         );
     }
     if let Some(links) = r["links"].as_array() {
-        md.push_str("\n## Links\n\n| from | to | delivered | dropped | loss % | latency p50 / p90 / p99 / max ms |\n|---|---|---|---|---|---|\n");
+        md.push_str("\n## Links\n\nEmulated: the `[[links]]` a message crossed (drawn delays and losses). Network: the real network between two machines, as the receiving host's launcher measured it (publisher's send → published there; two machines' wall clocks).\n\n| link | from | to | delivered | dropped | loss % | latency p50 / p90 / p99 / max ms |\n|---|---|---|---|---|---|---|\n");
         for l in links {
             let q = &l["latency_ms"];
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} |",
+                l["kind"].as_str().unwrap_or(""),
                 l["from"].as_str().unwrap_or(""),
                 l["to"].as_str().unwrap_or(""),
                 l["delivered"],

@@ -12,6 +12,11 @@ use crossbeam::channel::{Receiver, RecvTimeoutError};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
+/// The host a process of the launch file runs on.
+fn host_of<'a>(lf: &'a LaunchFile, name: &str) -> &'a str {
+    lf.left_out.get(name).map_or("?", String::as_str)
+}
+
 /// How the run ended: "completed", "interrupted" or "failed", and why it failed.
 pub struct Ending {
     pub outcome: &'static str,
@@ -121,11 +126,20 @@ pub fn supervise(
                 timeout,
             }) => {
                 for name in names {
-                    console.say(&format!(
-                        "process '{name}' has not finished a step at {:.3} s for {timeout:?} (step_timeout); it looks hung, killing it",
+                    let at = format!(
+                        "process '{name}' has not finished a step at {:.3} s for {timeout:?} (step_timeout)",
                         now_ns as f64 * 1e-9
-                    ));
-                    sup.kill(&name);
+                    );
+                    if sup.names().contains(&name) {
+                        console.say(&format!("{at}; it looks hung, killing it"));
+                        sup.kill(&name);
+                    } else if !stopping {
+                        // It runs on another host, whose launcher kills it when the group stops.
+                        let why = format!("{at} on host '{}'", host_of(lf, &name));
+                        console.say(&why);
+                        (outcome, failure) = ("failed", Some(why));
+                        begin_stop(sup, &mut stopping, &mut kill_at);
+                    }
                 }
             }
             Ok(Event::Silent { names, timeout }) => {

@@ -160,6 +160,7 @@ pub fn run_group(
             &caravan::group::load_config(config_path)?,
             crate::bridge::remote_nodes(lf),
             clock_host,
+            dir,
         )?;
     }
     let started = Instant::now();
