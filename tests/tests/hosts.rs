@@ -202,6 +202,13 @@ fn a_lockstep_group_across_hosts_records_the_bytes_of_one_host() {
         );
         assert_eq!(shm_left(&s, host), "", "host {host} left shared memory");
     }
+    // b and c ran their processes; a kept the time and recorded.
+    for host in ["b", "c"] {
+        let run = hosts.run_dir(host, &s.dir);
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(run.join("report.json")).unwrap()).unwrap();
+        assert_eq!(report["run"]["clock_host"], "a", "{report:#}");
+    }
     let run_a = hosts.run_dir("a", &s.dir);
     let many = std::fs::read(run_a.join("record.mcap")).unwrap();
     // Every message crossed into a: pong and noise from b, sum from c.

@@ -127,6 +127,10 @@ pub struct RunFacts {
     /// Lockstep: what the scheduler did.
     #[serde(default)]
     pub schedule: Option<caravan::lockstep::ScheduleStats>,
+    /// A lockstep group across machines, seen from a host other than its clock host: the
+    /// host that kept simulated time and recorded the group (this host did neither).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clock_host: Option<String>,
 }
 
 impl RunFacts {

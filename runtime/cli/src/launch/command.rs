@@ -254,7 +254,10 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
     }
     let result = run::run_group(&lf, &dir, &config_path, &console, live, bridge.as_mut()).map(
         |mut facts| {
-            facts.reports = reports;
+            // The report plugins read the recording, which the clock host has.
+            if facts.clock_host.is_none() {
+                facts.reports = reports;
+            }
             facts
         },
     );
@@ -273,12 +276,21 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
     for failure in &written.failures {
         console.say(failure);
     }
+    let time = match &facts.clock_host {
+        Some(clock) => format!(
+            "ran {:.1} s (host '{clock}' kept simulated time and recorded)",
+            facts.wall_time_s
+        ),
+        None => format!(
+            "simulated {:.1} s in {:.1} s (real-time factor {:.2})",
+            facts.sim_time_s,
+            facts.wall_time_s,
+            facts.real_time_factor()
+        ),
+    };
     console.say(&format!(
-        "{}: simulated {:.1} s in {:.1} s (real-time factor {:.2}); report in {}",
+        "{}: {time}; report in {}",
         facts.outcome,
-        facts.sim_time_s,
-        facts.wall_time_s,
-        facts.real_time_factor(),
         dir.join("report.md").display()
     ));
     Ok(Launched {

@@ -11,10 +11,7 @@ use std::path::Path;
 /// `links[]`, or `None` when nothing crossed a link, emulated or real.
 pub fn section(run_dir: &Path) -> Option<Value> {
     let mut all = Vec::new();
-    for (dir, kind) in [
-        (LINK_STATS_DIR, "emulated"),
-        (NETWORK_STATS_DIR, "network"),
-    ] {
+    for (dir, kind) in [(LINK_STATS_DIR, "emulated"), (NETWORK_STATS_DIR, "network")] {
         all.extend(merged(&run_dir.join(dir)).into_iter().map(|mut v| {
             v["kind"] = kind.into();
             v

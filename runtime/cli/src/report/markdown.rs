@@ -26,13 +26,21 @@ pub fn render(r: &Value) -> String {
     for w in run["warnings"].as_array().into_iter().flatten() {
         let _ = writeln!(md, "**Warning:** {}\n", w.as_str().unwrap_or(""));
     }
-    let _ = writeln!(
-        md,
-        "Simulated {} s in {} s of wall time: real-time factor {}.\n",
-        num(&run["sim_time_s"], 2),
-        num(&run["wall_time_s"], 2),
-        num(&run["real_time_factor"], 2)
-    );
+    if let Some(clock) = run["clock_host"].as_str() {
+        let _ = writeln!(
+            md,
+            "Host '{clock}' kept simulated time and recorded the group (see its report); this host's processes ran for {} s of wall time.\n",
+            num(&run["wall_time_s"], 2),
+        );
+    } else {
+        let _ = writeln!(
+            md,
+            "Simulated {} s in {} s of wall time: real-time factor {}.\n",
+            num(&run["sim_time_s"], 2),
+            num(&run["wall_time_s"], 2),
+            num(&run["real_time_factor"], 2)
+        );
+    }
     let schedule = &run["schedule"];
     if let (Some(advances), Some(steps), Some(overlapped)) = (
         schedule["advances"].as_u64(),

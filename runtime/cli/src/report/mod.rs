@@ -128,6 +128,7 @@ fn generic(facts: &RunFacts, messages: &[RecordedMessage], run_dir: &Path) -> Va
             "real_time_factor": facts.real_time_factor(),
             "warnings": facts.warnings,
             "schedule": facts.schedule,
+            "clock_host": facts.clock_host,
         },
         "nodes": nodes(facts),
         "topics": topics(facts, messages),

@@ -70,6 +70,7 @@ pub fn collect(
         reports: Vec::new(),
         warnings,
         schedule: driven.schedule,
+        clock_host: None,
         trends: recording
             .status_series
             .iter()

@@ -88,6 +88,7 @@ pub fn run_group(
         Some(_) if lockstep => Some(crate::bridge::clock_host(lf)?),
         _ => None,
     };
+    let clock_host_name = clock_host.clone();
     let follower = match (&clock_host, &bridge) {
         (Some(clock), Some(b)) => b.host() != clock,
         _ => false,
@@ -159,7 +160,7 @@ pub fn run_group(
             events_tx_for_bridge,
             &caravan::group::load_config(config_path)?,
             crate::bridge::remote_nodes(lf),
-            clock_host,
+            clock_host.clone(),
             dir,
         )?;
     }
@@ -182,13 +183,11 @@ pub fn run_group(
     let driven = driver
         .join()
         .map_err(|_| anyhow::anyhow!("the driver thread panicked"))??;
-    Ok(facts::collect(
-        lf,
-        ending,
-        sup.records(),
-        driven,
-        wall_time_s,
-    ))
+    let mut facts = facts::collect(lf, ending, sup.records(), driven, wall_time_s);
+    if follower {
+        facts.clock_host = clock_host_name;
+    }
+    Ok(facts)
 }
 
 /// What every process of the group finds in its environment (each adds its own name,
