@@ -17,7 +17,7 @@ pub fn section(run_dir: &Path) -> Option<Value> {
             v
         }));
     }
-    (!all.is_empty()).then(|| Value::Array(all))
+    (!all.is_empty()).then_some(Value::Array(all))
 }
 
 /// Every file's statistics in `dir`, merged per ordered host pair.
