@@ -235,12 +235,7 @@ fn a_process_hung_on_another_host_fails_a_lockstep_group() {
 duration = "1min"
 step_timeout = "2s"
 
-[hosts.a]
-listen = ["{a}"]
-
-[hosts.b]
-connect = ["{a}"]
-
+{hosts}
 [[process]]
 name = "ping"
 exec = "caravan-demo ping"
@@ -252,7 +247,7 @@ exec = "caravan-testnode hang"
 host = "b"
 params = {{ count = 3 }}
 "#,
-            a = hosts.endpoint("a")
+            hosts = pair(hosts.endpoint("a"))
         ),
     );
     let a = Launcher::start(&hosts, "a", &s);
@@ -406,6 +401,12 @@ fn a_host_the_file_lacks_or_cannot_run_is_refused() {
         &out,
         &["launch.toml:", "clock", "host 'a' already has clock = true"],
     );
+    let s = Scenario::new(
+        "hosts-lockstep-optional",
+        &two_hosts("lockstep", "").replace("[hosts.b]", "[hosts.b]\nrequired = false"),
+    );
+    let out = s.run(&["--host", "a"]);
+    assert_refused(&s, &out, &["every host is required", "'b'"]);
     let s = Scenario::new(
         "hosts-unreachable",
         &two_hosts("realtime", "").replace("listen = ", "connect = "),

@@ -21,8 +21,9 @@ struct Held {
     since: Instant,
 }
 
-/// After this long, a held message is worth a warning: something it waits for is lost.
-const HELD_TOO_LONG: Duration = Duration::from_secs(5);
+/// After this long, a held message waits for something that was lost (or counted wrong): the
+/// run could no longer be the single-host one, so the group fails.
+const HELD_TOO_LONG: Duration = Duration::from_secs(20);
 
 struct Inbound<'a> {
     ctx: &'a Ctx,
@@ -41,7 +42,7 @@ pub(super) fn run(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
     };
     let mut got = Received::default();
     let mut held: VecDeque<Held> = VecDeque::new();
-    let mut warned = false;
+    let mut failed = false;
     while ctx.is_running() {
         match arrivals.recv_timeout(POLL) {
             Ok(Arrival::Message {
@@ -77,15 +78,16 @@ pub(super) fn run(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
         got.wants = ctx.wants_handled.lock().unwrap().clone();
         while let Some(front) = held.front() {
             if !front.knowledge.is_met(ctx.host(), &got) {
-                if !warned && front.since.elapsed() > HELD_TOO_LONG {
-                    warned = true;
-                    eprintln!(
-                        "caravan: warning: a lockstep message on '{}' from host '{}' has waited {HELD_TOO_LONG:?} for the data sent before it (it needs {}; this host has {:?})",
+                if !failed && front.since.elapsed() > HELD_TOO_LONG {
+                    failed = true;
+                    (ctx.failed)(format!(
+                        "bridge of host '{}': a lockstep message on '{}' from host '{}' waited {HELD_TOO_LONG:?} for what was sent before it, which never came (it needs {}; this host has {:?})",
+                        ctx.host(),
                         front.topic,
                         front.envelope.host,
                         front.knowledge.encode(),
                         got
-                    );
+                    ));
                 }
                 break;
             }

@@ -64,6 +64,12 @@ pub fn check_host(lf: &LaunchFile, host: &str) -> Result<()> {
     }
     if lf.group.clock == caravan::ClockMode::Lockstep {
         clock_host(lf)?;
+        // The scheduler would wait for its processes, and cannot learn of their exits.
+        if let Some((name, _)) = lf.hosts.iter().find(|(_, h)| !h.required) {
+            bail!(
+                "--host {host}: {file} runs in lockstep, where every host is required (host '{name}' has required = false); run it with --clock realtime, or make the host required"
+            );
+        }
     }
     let reachable = lf.hosts.values().any(|h| !h.listen.is_empty());
     if lf.hosts.len() > 1 && !reachable {

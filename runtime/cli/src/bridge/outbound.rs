@@ -144,11 +144,16 @@ impl Outbound<'_> {
             }
             let k = (want.topic.clone(), want.host.clone());
             if !put {
-                // Unread, a lossless outlet would fill and hold up the publishers here.
-                self.sending.remove(&k);
+                // Unread, a lossless outlet would fill and hold up the publishers here; but a
+                // host that records the group still gets the topic.
+                if !self.recorders.contains(&want.host) || is_control(&want.topic) {
+                    self.sending.remove(&k);
+                }
                 return Ok(());
             }
-            if !self.sending.contains_key(&k)
+            if is_control(&want.topic) && !self.sends_control(&want) {
+                // Counted all the same: the wish was seen and acted on.
+            } else if !self.sending.contains_key(&k)
                 && let Err(e) = self.open(&want.topic, &want.host, &want.type_name, want.delivery())
             {
                 (self.ctx.failed)(format!(
@@ -160,7 +165,7 @@ impl Outbound<'_> {
                 ));
             }
             want.host
-        } else {
+        } else if key.starts_with(&keys::record(self.ctx.group(), "")) {
             let host = keys::last(key).to_string();
             if host == self.ctx.host() || !put {
                 return Ok(());
@@ -168,6 +173,9 @@ impl Outbound<'_> {
             self.recorders.insert(host.clone());
             self.discover()?;
             host
+        } else {
+            // Another version's key: nothing this one can act on.
+            return Ok(());
         };
         *self
             .ctx
@@ -178,6 +186,34 @@ impl Outbound<'_> {
             .or_default() += 1;
         let _ = self.arrivals.send(Arrival::Handled);
         Ok(())
+    }
+
+    /// Whether this host sends a lockstep control topic to the host that asks: hellos and
+    /// reports go only to the clock host, grants only come from it. A control message that
+    /// arrived here is thus never sent on, whoever else reads it.
+    fn sends_control(&self, want: &Want) -> bool {
+        let Some(clock) = &self.ctx.cfg.clock_host else {
+            return false;
+        };
+        let to_clock = [
+            caravan::schemas::lockstep::HELLO,
+            caravan::schemas::lockstep::DONE,
+        ]
+        .contains(&want.topic.as_str());
+        if to_clock {
+            want.host == *clock && self.ctx.host() != clock
+        } else {
+            self.ctx.host() == clock
+        }
+    }
+
+    /// Whether this host may send control messages: a follower waits until it sends the clock
+    /// host every topic, so the clock host knows them all before a node is stepped.
+    fn control_ready(&self) -> bool {
+        match &self.ctx.cfg.clock_host {
+            Some(clock) if clock != self.ctx.host() => self.recorders.contains(clock),
+            _ => true,
+        }
     }
 
     /// Starts sending `topic` to `host`, and tells it the topic is coming (an empty message),
@@ -234,6 +270,10 @@ impl Outbound<'_> {
 
     /// Takes the waiting control messages.
     fn take_control(&self, into: &mut Vec<Control>) -> Result<()> {
+        if !self.control_ready() {
+            // Left in their topics until the clock host's record token is handled.
+            return Ok(());
+        }
         for (key, o) in self.sending.iter().filter(|(k, _)| is_control(&k.0)) {
             o.outlet.drain(&mut |header, wire| {
                 into.push(Control {
@@ -291,9 +331,13 @@ impl Outbound<'_> {
             if topic.name.starts_with("caravan/") && !control {
                 continue;
             }
-            // The topic may vanish between listing and opening.
+            // The topic may vanish between listing and opening, or be busy: as it was, until
+            // the next look (a wish to read withdrawn and said again would count twice).
             let Ok(ports) = caravan::tap::topic_ports(&self.iox, &topic.name, &topic.type_name)
             else {
+                if self.reading.contains_key(&topic.name) {
+                    read_now.insert(topic.name.clone());
+                }
                 continue;
             };
             // Ports of this launcher (recorder, bridge) read for others, not for a process;
@@ -344,8 +388,14 @@ impl Outbound<'_> {
                 if !self
                     .sending
                     .contains_key(&(topic.name.clone(), host.clone()))
+                    && let Err(e) = self.open(&topic.name, &host, &topic.type_name, delivery)
                 {
-                    self.open(&topic.name, &host, &topic.type_name, delivery)?;
+                    (ctx.failed)(format!(
+                        "topic '{}': host '{}' records the group, but host '{}' cannot send it the topic: {e:#}",
+                        topic.name,
+                        host,
+                        ctx.host()
+                    ));
                 }
             }
         }

@@ -130,7 +130,8 @@ pub fn supervise(
                         "process '{name}' has not finished a step at {:.3} s for {timeout:?} (step_timeout)",
                         now_ns as f64 * 1e-9
                     );
-                    if sup.names().contains(&name) {
+                    let remote = fleet.is_some() && lf.left_out.contains_key(&name);
+                    if !remote {
                         console.say(&format!("{at}; it looks hung, killing it"));
                         sup.kill(&name);
                     } else if !stopping {
