@@ -116,6 +116,29 @@ fn session_config(spec: &HostSpec) -> Result<zenoh::Config> {
     if !spec.listen.is_empty() {
         set("listen/endpoints", &list(&spec.listen))?;
     }
+    if let Some(tls) = &spec.tls {
+        let path = |p: &std::path::Path| {
+            serde_json::to_string(&p.display().to_string()).expect("a string serialises")
+        };
+        // Only TLS, both ways: a launcher without a certificate of the group's authority is
+        // refused, and refuses.
+        set("transport/link/protocols", r#"["tls"]"#)?;
+        if spec.listen.is_empty() {
+            set("listen/endpoints", r#"["tls/[::]:0"]"#)?;
+        }
+        set("transport/link/tls/root_ca_certificate", &path(&tls.ca))?;
+        for side in ["listen", "connect"] {
+            set(
+                &format!("transport/link/tls/{side}_certificate"),
+                &path(&tls.certificate),
+            )?;
+            set(
+                &format!("transport/link/tls/{side}_private_key"),
+                &path(&tls.key),
+            )?;
+        }
+        set("transport/link/tls/enable_mtls", "true")?;
+    }
     set("connect/endpoints", &list(&spec.connect))?;
     // Bytes cross the network even between "hosts" on one machine.
     set("transport/shared_memory/enabled", "false")?;

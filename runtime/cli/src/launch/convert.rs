@@ -264,7 +264,7 @@ pub fn is_executable(path: &Path) -> bool {
 }
 
 /// The transports this build of Caravan can reach other hosts over.
-pub const ENDPOINT_PROTOCOLS: &[&str] = &["tcp"];
+pub const ENDPOINT_PROTOCOLS: &[&str] = &["tcp", "tls"];
 
 /// A list of zenoh endpoints, each `PROTOCOL/HOST:PORT` (e.g. `tcp/192.168.1.10:7447`).
 pub fn endpoints(item: &Item) -> Result<Vec<String>, String> {

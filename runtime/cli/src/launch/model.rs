@@ -75,6 +75,9 @@ pub struct HostSpec {
     /// Across machines: the group starts only once this host joined, and stops when it
     /// leaves. A host that is not required may join late or leave; the others go on.
     pub required: bool,
+    /// TLS for this host's connections (endpoints `tls/…`), with client certificates: a
+    /// launcher joins only with a certificate signed by the group's authority.
+    pub tls: Option<TlsSpec>,
     /// Lockstep across machines: this host's launcher owns simulated time (runs the
     /// scheduler) and records the whole group. At most one host says so; when none does, the
     /// only host that listens is the one.
@@ -88,9 +91,21 @@ impl Default for HostSpec {
             listen: Vec::new(),
             connect: Vec::new(),
             required: true,
+            tls: None,
             clock: false,
         }
     }
+}
+
+/// A host's `tls` table: PEM files, relative to the file that names them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TlsSpec {
+    /// The group's certificate authority: the other hosts' certificates must be signed by it.
+    pub ca: PathBuf,
+    /// This host's certificate, shown to the others (as server and as client).
+    pub certificate: PathBuf,
+    /// Its private key.
+    pub key: PathBuf,
 }
 
 /// One `[[links]]` entry: the network between two sets of hosts.

@@ -27,7 +27,15 @@ const GROUP_KEYS: &[&str] = &[
     "step_timeout",
     "join_timeout",
 ];
-const HOST_KEYS: &[&str] = &["cpu_slowdown", "listen", "connect", "required", "clock"];
+const HOST_KEYS: &[&str] = &[
+    "cpu_slowdown",
+    "listen",
+    "connect",
+    "required",
+    "clock",
+    "tls",
+];
+const TLS_KEYS: &[&str] = &["ca", "certificate", "key"];
 const LINK_KEYS: &[&str] = &[
     "between",
     "latency",
@@ -136,6 +144,20 @@ impl Checker<'_> {
             let connect = self.get(&h, "connect", endpoints).unwrap_or_default();
             let required = self.get(&h, "required", boolean).unwrap_or(true);
             let clock = self.get(&h, "clock", boolean).unwrap_or(false);
+            let tls = self.tls(&h, name);
+            for key in ["listen", "connect"] {
+                let list = if key == "listen" { &listen } else { &connect };
+                let tls_endpoints = list.iter().filter(|e| e.starts_with("tls/")).count();
+                if tls.is_some() && tls_endpoints < list.len() {
+                    let msg = "this host has a tls table: its endpoints must be tls/ADDRESS:PORT";
+                    self.key_problem(&h, key, msg.to_string());
+                } else if tls.is_none() && tls_endpoints > 0 {
+                    let msg = format!(
+                        "a tls/ endpoint needs a [hosts.{name}.tls] table with ca, certificate and key"
+                    );
+                    self.key_problem(&h, key, msg);
+                }
+            }
             if clock && let Some(other) = hosts.iter().find(|(_, h): &(_, &HostSpec)| h.clock) {
                 let msg = format!(
                     "host '{}' already has clock = true; one host owns simulated time",
@@ -150,11 +172,40 @@ impl Checker<'_> {
                     listen,
                     connect,
                     required,
+                    tls,
                     clock,
                 },
             );
         }
+        let with_tls = hosts.values().filter(|h| h.tls.is_some()).count();
+        if with_tls > 0 && with_tls < hosts.len() {
+            let msg = "some hosts have a tls table and some do not: hosts without one could not connect to those with one; give every host a tls table, or none";
+            self.scope_problem(&s, msg);
+        }
         hosts
+    }
+
+    /// A host's `tls` table; each file must exist.
+    fn tls(&mut self, h: &Scope, name: &str) -> Option<TlsSpec> {
+        let t = self.table(h, "tls", format!("host '{name}' tls"), Some(TLS_KEYS))?;
+        let dir = self.origins.entry(&t.path).0.abs_dir.clone();
+        let mut file = |key: &str| {
+            let given = self.required(&t, key, string)?;
+            let path = dir.join(&given);
+            if path.is_file() {
+                Some(path)
+            } else {
+                let msg = format!("'{given}' is not a file ({})", path.display());
+                self.key_problem(&t, key, msg);
+                None
+            }
+        };
+        let (ca, certificate, key) = (file("ca"), file("certificate"), file("key"));
+        Some(TlsSpec {
+            ca: ca?,
+            certificate: certificate?,
+            key: key?,
+        })
     }
 
     pub fn links(&mut self, root: &Scope, hosts: &BTreeMap<String, HostSpec>) -> Vec<LinkSpec> {
