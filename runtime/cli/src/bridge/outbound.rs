@@ -98,6 +98,12 @@ pub(super) fn run(ctx: &Ctx, arrivals: Sender<Arrival>) -> Result<()> {
                 || {
                     out.take_control(&mut control)?;
                     out.send_data()?;
+                    // Reports and grants go at once, without leaving the wait (whose set-up
+                    // costs a system call per topic); a hello, or a new topic, needs a look
+                    // for topics first.
+                    if !control.is_empty() && !out.must_discover(&control) {
+                        out.send_taken(&mut control)?;
+                    }
                     for subscriber in [&wants, &records] {
                         while let Ok(Some(sample)) = subscriber.try_recv() {
                             samples.push(sample);
@@ -303,12 +309,23 @@ impl Outbound<'_> {
     /// Sends `control`, after the data published before it: a hello after the topics its
     /// node opened were looked for.
     fn send_control(&mut self, control: &mut Vec<Control>) -> Result<()> {
+        if self.must_discover(control) {
+            self.discover()?;
+        }
+        self.send_taken(control)
+    }
+
+    /// Whether topics must be looked for before `control` goes: it holds a hello, or a topic
+    /// was made or removed since the last look.
+    fn must_discover(&self, control: &[Control]) -> bool {
         let hello = control
             .iter()
             .any(|c| c.key.0 == caravan::schemas::lockstep::HELLO);
-        if hello || services_changed(&self.ctx.cfg.iceoryx) != self.services {
-            self.discover()?;
-        }
+        hello || services_changed(&self.ctx.cfg.iceoryx) != self.services
+    }
+
+    /// Sends the data waiting, then `control`.
+    fn send_taken(&self, control: &mut Vec<Control>) -> Result<()> {
         self.send_data()?;
         for c in control.drain(..) {
             if let Some(o) = self.sending.get(&c.key) {
