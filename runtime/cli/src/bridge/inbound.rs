@@ -63,9 +63,7 @@ pub(super) fn run(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
                 None => {
                     let from = envelope.host.clone();
                     inbound.deliver(&topic, &envelope, &wire)?;
-                    if !wire.is_empty() {
-                        inbound.measure(&envelope);
-                    }
+                    inbound.measure(&envelope);
                     *got.messages.entry(from).or_default() += 1;
                 }
             },
@@ -101,7 +99,8 @@ pub(super) fn run(ctx: &Ctx, arrivals: Receiver<Arrival>) -> Result<()> {
 impl Inbound<'_> {
     /// Notes how long a message took from its publisher's send to its publication here. The
     /// two wall clocks are two machines' (one in tests): a message that seems to arrive before
-    /// it was sent says the clocks disagree, and counts as 0.
+    /// it was sent says the clocks disagree, and counts as 0. An announcement (no send time)
+    /// is not a message.
     fn measure(&self, envelope: &Envelope) {
         let sent = envelope.header.send_wall_ns;
         if sent == 0 {

@@ -97,11 +97,12 @@ pub(super) fn run(ctx: &Ctx, arrivals: Sender<Arrival>) -> Result<()> {
                 SignalHandlingMode::Disabled,
                 || {
                     out.take_control(&mut control)?;
-                    out.send_data()?;
                     // Reports and grants go at once, without leaving the wait (whose set-up
                     // costs a system call per topic); a hello, or a new topic, needs a look
-                    // for topics first.
-                    if !control.is_empty() && !out.must_discover(&control) {
+                    // for topics first, outside it.
+                    if control.is_empty() || out.must_discover(&control) {
+                        out.send_data()?;
+                    } else {
                         out.send_taken(&mut control)?;
                     }
                     for subscriber in [&wants, &records] {
@@ -114,7 +115,8 @@ pub(super) fn run(ctx: &Ctx, arrivals: Sender<Arrival>) -> Result<()> {
             )?;
             drop(listeners);
             if !control.is_empty() {
-                out.send_control(&mut control)?;
+                out.discover()?;
+                out.send_taken(&mut control)?;
             }
             if !woken || !samples.is_empty() || !ctx.is_running() {
                 break;
@@ -306,15 +308,6 @@ impl Outbound<'_> {
         Ok(())
     }
 
-    /// Sends `control`, after the data published before it: a hello after the topics its
-    /// node opened were looked for.
-    fn send_control(&mut self, control: &mut Vec<Control>) -> Result<()> {
-        if self.must_discover(control) {
-            self.discover()?;
-        }
-        self.send_taken(control)
-    }
-
     /// Whether topics must be looked for before `control` goes: it holds a hello, or a topic
     /// was made or removed since the last look.
     fn must_discover(&self, control: &[Control]) -> bool {
@@ -324,7 +317,8 @@ impl Outbound<'_> {
         hello || services_changed(&self.ctx.cfg.iceoryx) != self.services
     }
 
-    /// Sends the data waiting, then `control`.
+    /// Sends the data waiting, then `control`: every message published before it is on its
+    /// way first.
     fn send_taken(&self, control: &mut Vec<Control>) -> Result<()> {
         self.send_data()?;
         for c in control.drain(..) {

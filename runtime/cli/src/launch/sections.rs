@@ -145,8 +145,7 @@ impl Checker<'_> {
             let required = self.get(&h, "required", boolean).unwrap_or(true);
             let clock = self.get(&h, "clock", boolean).unwrap_or(false);
             let tls = self.tls(&h, name);
-            for key in ["listen", "connect"] {
-                let list = if key == "listen" { &listen } else { &connect };
+            for (key, list) in [("listen", &listen), ("connect", &connect)] {
                 let tls_endpoints = list.iter().filter(|e| e.starts_with("tls/")).count();
                 if tls.is_some() && tls_endpoints < list.len() {
                     let msg = "this host has a tls table: its endpoints must be tls/ADDRESS:PORT";

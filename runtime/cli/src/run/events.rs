@@ -12,11 +12,6 @@ use crossbeam::channel::{Receiver, RecvTimeoutError};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-/// The host a process of the launch file runs on.
-fn host_of<'a>(lf: &'a LaunchFile, name: &str) -> &'a str {
-    lf.left_out.get(name).map_or("?", String::as_str)
-}
-
 /// How the run ended: "completed", "interrupted" or "failed", and why it failed.
 pub struct Ending {
     pub outcome: &'static str,
@@ -130,16 +125,20 @@ pub fn supervise(
                         "process '{name}' has not finished a step at {:.3} s for {timeout:?} (step_timeout)",
                         now_ns as f64 * 1e-9
                     );
-                    let remote = fleet.is_some() && lf.left_out.contains_key(&name);
-                    if !remote {
-                        console.say(&format!("{at}; it looks hung, killing it"));
-                        sup.kill(&name);
-                    } else if !stopping {
-                        // It runs on another host, whose launcher kills it when the group stops.
-                        let why = format!("{at} on host '{}'", host_of(lf, &name));
+                    // Across hosts, a process left out here runs on another host.
+                    let remote = fleet.and(lf.left_out.get(&name));
+                    if let Some(host) = remote {
+                        if stopping {
+                            continue;
+                        }
+                        // Its launcher kills it when the group stops.
+                        let why = format!("{at} on host '{host}'");
                         console.say(&why);
                         (outcome, failure) = ("failed", Some(why));
                         begin_stop(sup, &mut stopping, &mut kill_at);
+                    } else {
+                        console.say(&format!("{at}; it looks hung, killing it"));
+                        sup.kill(&name);
                     }
                 }
             }

@@ -88,7 +88,6 @@ pub fn run_group(
         Some(_) if lockstep => Some(crate::bridge::clock_host(lf)?),
         _ => None,
     };
-    let clock_host_name = clock_host.clone();
     let follower = match (&clock_host, &bridge) {
         (Some(clock), Some(b)) => b.host() != clock,
         _ => false,
@@ -185,7 +184,7 @@ pub fn run_group(
         .map_err(|_| anyhow::anyhow!("the driver thread panicked"))??;
     let mut facts = facts::collect(lf, ending, sup.records(), driven, wall_time_s);
     if follower {
-        facts.clock_host = clock_host_name;
+        facts.clock_host = clock_host;
     }
     Ok(facts)
 }
