@@ -8,7 +8,9 @@ robot i drives toward where its predecessor was tau seconds ago,
 
 never reversing, with |w| <= 2 rad/s and v <= 0.25 m/s, holding still until the predecessor's
 history reaches back tau, easing off as the gap between the two footprints shrinks, and stopping
-before it reaches the 0.15 m safety distance. It publishes wheel set-points at 20 Hz.
+before it reaches the 0.15 m safety distance, allowing for how far the robot still rolls at its
+measured speed and how old the poses are (their header stamps). It publishes wheel set-points
+at 20 Hz.
 
 launch/convoy/convoy-python.toml runs it as follower-2 of the reference convoy:
 
@@ -35,7 +37,12 @@ PARAMS = {
         "k3": 1.0,
         "tau_s": 2.0,
         "safety_distance_m": 0.15,
-        "stop_margin_m": 0.05,  # a robot rolls about 6 cm after a zero set-point
+        "stop_margin_m": 0.05,  # extra gap at a standstill
+        "brake_time_s": 0.45,  # own speed may still carry the robot this long after a stop, s
+        "coast_time_s": 0.2,  # the predecessor's speed carries it at least this long, s
+        "rollback_time_s": 0.18,  # a robot stopped from speed V rolls back up to V times this, s
+        "rollback_window_s": 1.0,  # the predecessor's peak speed is looked for this far back, s
+        "speed_window_s": 0.1,  # speeds are measured over this much pose history, s
         "k_gap": 1.5,  # speed allowed per metre of gap beyond safety distance and margin, 1/s
         "footprint_half_m": (0.10, 0.09),
         "footprint_offset_m": -0.02,
@@ -70,6 +77,30 @@ class PoseHistory:
 
     def latest(self):
         return self.poses[-1] if self.poses else None
+
+    def latest_stamped(self):
+        return (self.times[-1], self.poses[-1]) if self.poses else None
+
+    def forward_speed(self, window_s, end=None):
+        """Speed along the heading at sample ``end`` (default the newest) over window_s before
+        it, m/s: negative rolling back, 0 with fewer than two samples."""
+        if not self.times:
+            return 0.0
+        end = len(self.times) - 1 if end is None else end
+        t1, last = self.times[end], self.poses[end]
+        t0 = max(t1 - window_s, self.times[0])
+        if t1 <= t0:
+            return 0.0
+        start = self.at(t0)
+        dx, dy = last[0] - start[0], last[1] - start[1]
+        return (dx * math.cos(last[2]) + dy * math.sin(last[2])) / (t1 - t0)
+
+    def peak_forward_speed(self, window_s, span_s):
+        """The highest forward speed measured at any sample of the last span_s (0 if none)."""
+        if not self.times:
+            return 0.0
+        first = bisect.bisect_left(self.times, self.times[-1] - span_s)
+        return max([0.0] + [self.forward_speed(window_s, k) for k in range(first, len(self.times))])
 
     def at(self, t):
         """The pose at time t, interpolated (heading the short way); None before the history."""
@@ -128,14 +159,29 @@ def rect_distance(a, b):
     )
 
 
-def command(own, history, now_s, p):
-    """(v, w) for a follower at pose ``own`` given its predecessor's history, at time now_s."""
-    target, current = history.at(now_s - p.tau_s), history.latest()
-    if target is None or current is None:
+def command(own_history, history, now_s, p):
+    """(v, w) for a follower given its own and its predecessor's pose histories, at now_s."""
+    target, latest = history.at(now_s - p.tau_s), history.latest_stamped()
+    if target is None or latest is None:
         return 0.0, 0.0  # waiting for history that reaches back tau
+    (own_t, own), (pred_t, current) = own_history.latest_stamped(), latest
+
+    # How much nearer the two can come once both are at rest if both stopped now: the follower
+    # drives on from its (older) pose for the longest roll-out, the predecessor coasts for the
+    # shortest and then rolls back in proportion to its recent peak speed.
+    own_travel = max(own_history.forward_speed(p.speed_window_s), 0.0) * (
+        max(now_s - own_t, 0.0) + p.brake_time_s
+    )
+    pred_speed = history.forward_speed(p.speed_window_s)
+    pred_travel = (
+        p.coast_time_s * max(pred_speed, 0.0)
+        + min(pred_speed, 0.0) * max(now_s - pred_t, 0.0)  # rolling back since its pose
+        - p.rollback_time_s * history.peak_forward_speed(p.speed_window_s, p.rollback_window_s)
+    )
+    closing = max(own_travel - pred_travel, 0.0)
     rect = lambda q: footprint(q, p.footprint_half_m, p.footprint_offset_m)  # noqa: E731
     room = rect_distance(rect(own), rect(current)) - p.safety_distance_m - p.stop_margin_m
-    if room <= 0.0:
+    if room <= closing:
         return 0.0, 0.0  # safety stop
     s, c = math.sin(own[2]), math.cos(own[2])
     v = p.k1 * (target[0] - own[0]) * c + p.k2 * (target[1] - own[1]) * s
@@ -161,17 +207,16 @@ def agent():
     predecessor = node.subscriber(Pose2D, p.predecessor_topic or topics.pose_true(i - 1))
     setpoint = node.publisher(WheelSetpoint, topics.wheel_setpoint(i))
     history = PoseHistory(p.follower.tau_s + 2.0)
-    pose = None
+    own_history = PoseHistory(p.follower.speed_window_s + 1.0)  # for the robot's own speed
 
     def step(s):
-        nonlocal pose
         for msg in predecessor.receive_all():
             history.push(msg.stamp_s, (msg.payload.x, msg.payload.y, msg.payload.theta))
         if (msg := own.latest()) is not None:
-            pose = (msg.payload.x, msg.payload.y, msg.payload.theta)
-        if pose is None:
+            own_history.push(msg.stamp_s, (msg.payload.x, msg.payload.y, msg.payload.theta))
+        if own_history.latest() is None:
             return
-        v, omega = command(pose, history, s.now, p.follower)
+        v, omega = command(own_history, history, s.now, p.follower)
         setpoint.publish(
             WheelSetpoint((2 * v - sep * omega) / (2 * r), (2 * v + sep * omega) / (2 * r))
         )

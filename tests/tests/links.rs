@@ -152,6 +152,70 @@ fn convoy_over_wlan_reports_its_links_and_compute_budgets() {
     assert!(node("slam")["emulated_compute_mean_ms"].is_null());
 }
 
+/// The convoy's nodes on the reference hosts over a bad WLAN (50 ms + U[0, 8 ms], 5 % loss,
+/// 1 % spikes), without CPU budgets so that the run is reproducible (links are seeded).
+const BAD_WLAN: &str = r#"
+[[include]]
+file = "CONVOY"
+args = { world_host = "world", pc_host = "pc", leader_host = "rpi-0", robot_host = "rpi-{i}" }
+
+[hosts.world]
+[hosts.pc]
+[hosts.rpi-0]
+[hosts.rpi-1]
+[hosts.rpi-2]
+[hosts.rpi-3]
+[hosts.rpi-4]
+
+[[links]]
+between = ["rpi-*", "pc"]
+LINK
+[[links]]
+between = ["rpi-*", "rpi-*"]
+LINK
+"#;
+
+/// The bad WLAN's profile, for every link of `BAD_WLAN`.
+const BAD_LINK: &str = r#"latency = "50ms"
+jitter = "8ms"
+loss = 0.05
+spike_probability = 0.01
+spike = ["50ms", "100ms"]"#;
+
+/// Followers keep the 0.15 m safety distance over a bad WLAN, through the stops after the
+/// leader's goals. With a fixed stop margin (before the speed-aware rule) this run came within
+/// 0.129 m.
+#[test]
+fn convoy_keeps_its_safety_distance_over_a_bad_wlan() {
+    let convoy = caravan_tests::workspace_root().join("launch/convoy/convoy.toml");
+    let s = Scenario::new(
+        "badwlan",
+        &BAD_WLAN
+            .replace("CONVOY", &convoy.to_string_lossy())
+            .replace("LINK", BAD_LINK),
+    );
+    let out = s.run(&["--duration", "60s", "--seed", "3"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = s.report();
+    let c = &report["convoy"];
+    assert!(c["goals_reached"].as_u64().unwrap() >= 3, "{c}");
+    assert!(c["min_gap_m"].as_f64().unwrap() >= 0.15, "{c}");
+    let link = report["links"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|l| l["from"] == "rpi-3" && l["to"] == "rpi-4")
+        .expect("the rpi-3 → rpi-4 link");
+    assert!(
+        link["latency_ms"]["p50"].as_f64().unwrap() >= 50.0,
+        "{link}"
+    );
+}
+
 /// A host with a CPU budget publishes later in simulated time by its compute time × the
 /// slowdown; a subscriber stepped by messages still sees each message, exactly when it shows.
 #[test]

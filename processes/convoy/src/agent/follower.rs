@@ -8,9 +8,26 @@
 //! k1 = k2 = 1.5 s⁻¹ and k3 = 1 s⁻¹ (the wheel-speed loop settles in 2.5 s on the floor and
 //! overshoots; higher heading gains make the chain oscillate); no reversing (v ≥ 0); limits
 //! |ω| ≤ 2 rad/s, v ≤ 0.25 m/s; the robot holds still while t − τ precedes the predecessor's
-//! history; near the predecessor the speed is capped at k_gap·(gap − safety − margin), so it
-//! eases to a stop before the gap between the two footprints reaches the 0.15 m safety
-//! distance (a robot rolls about 6 cm after a zero set-point).
+//! history; near the predecessor the speed is capped at k_gap·room, with
+//! room = gap − safety − margin (gap: the distance between the two footprints as last
+//! reported). It stops when room is no more than how much nearer the two can come once both
+//! are at rest, if both stopped now:
+//!
+//!   closing = max(v·(age + t_brake) − (max(v_p, 0)·t_coast + min(v_p, 0)·age_p
+//!                                       − t_rollback·v_p,peak), 0)
+//!
+//! v and v_p are the follower's and its predecessor's forward speeds, measured from their
+//! stamped pose histories; age and age_p are how old the two poses are (now − header stamp):
+//! the follower has driven on since its pose, and a predecessor rolling back has rolled on.
+//! The wheel loop is slow and underdamped (it settles in 2.5 s on the floor): a robot told to
+//! stop rolls on for 0.33·v typically and 0.44·v at most, and then rolls *back* by up to 0.18 s
+//! times the speed it had (v_p,peak: the predecessor's highest speed over the last second;
+//! figures measured in the fig9a runs, docs/fig9a.md). So the follower charges itself the longest roll-out
+//! from where it is by now, and credits the predecessor only the shortest. A predecessor that
+//! drives forward gets no credit for its pose's age: its older pose places it nearer, which
+//! errs safe. With a fixed margin alone, a follower arriving at full speed behind a
+//! stopped predecessor came within 0.13 m of it (docs/fig9a.md). The speed cap is left as it
+//! was, so followers drive as before until a stop is needed.
 
 use crate::agent::angle::wrap;
 use crate::agent::history::PoseHistory;
@@ -27,8 +44,22 @@ pub struct FollowerParams {
     /// Delay τ, s.
     pub tau_s: f64,
     pub safety_distance_m: f64,
-    /// Extra gap kept for the distance a robot rolls after it is told to stop, m.
+    /// Extra gap kept at a standstill, m: pose errors and the last step's travel.
     pub stop_margin_m: f64,
+    /// How long the follower's own speed may still carry it after a zero set-point, s: an
+    /// upper bound (roll-outs measured over 706 stops: 0.33·v median, 0.40·v p95, 0.44·v
+    /// most, while turning; more when it was still speeding up).
+    pub brake_time_s: f64,
+    /// How long the predecessor's speed carries it at least after a zero set-point, s: a
+    /// lower bound (0.30·v p10 in the same stops).
+    pub coast_time_s: f64,
+    /// A robot that stopped from speed V rolls back up to V times this, s: the wheel loop's
+    /// undershoot below zero (at most 0.18·V measured).
+    pub rollback_time_s: f64,
+    /// How far back the predecessor's peak speed is looked for, s.
+    pub rollback_window_s: f64,
+    /// Window over which both speeds are measured from the pose histories, s.
+    pub speed_window_s: f64,
     /// Speed allowed per metre of gap beyond safety distance and margin, s⁻¹.
     pub k_gap: f64,
     /// Footprint half extents (x, y) and its centre's offset ahead of base_link, m: the URDF's
@@ -50,6 +81,11 @@ impl Default for FollowerParams {
             tau_s: 2.0,
             safety_distance_m: 0.15,
             stop_margin_m: 0.05,
+            brake_time_s: 0.45,
+            coast_time_s: 0.2,
+            rollback_time_s: 0.18,
+            rollback_window_s: 1.0,
+            speed_window_s: 0.1,
             k_gap: 1.5,
             // The convoy robot's chassis; the node takes it from the URDF.
             footprint_half_m: [0.10, 0.09],
@@ -70,15 +106,19 @@ pub enum Reason {
     SafetyStop,
 }
 
-/// (v, ω) for a follower at `own`, given its predecessor's history, at time `now_s`.
+/// (v, ω) for a follower whose own recent poses are `own`, given its predecessor's history,
+/// at time `now_s`. Both histories are keyed by the poses' header stamps.
 pub fn command(
-    own: Pose2D,
+    own: &PoseHistory,
     predecessor: &PoseHistory,
     now_s: f64,
     p: &FollowerParams,
 ) -> (f64, f64, Reason) {
-    let (Some(target), Some(current)) = (predecessor.at(now_s - p.tau_s), predecessor.latest())
-    else {
+    let (Some((own_t, own_pose)), Some(target), Some((pred_t, current))) = (
+        own.latest_stamped(),
+        predecessor.at(now_s - p.tau_s),
+        predecessor.latest_stamped(),
+    ) else {
         return (0.0, 0.0, Reason::Waiting);
     };
     let rect = |q: Pose2D| {
@@ -88,8 +128,20 @@ pub fn command(
             p.footprint_offset_m,
         )
     };
-    let room = rect_distance(&rect(own), &rect(current)) - p.safety_distance_m - p.stop_margin_m;
-    if room <= 0.0 {
+    // How much nearer the two will be once both are at rest, at worst, if both stopped now: the
+    // follower drives on from its (older) reported pose for the longest roll-out; the
+    // predecessor coasts for the shortest, then rolls back in proportion to its recent speed.
+    let own_speed = own.forward_speed(p.speed_window_s).max(0.0);
+    let own_travel = own_speed * ((now_s - own_t).max(0.0) + p.brake_time_s);
+    let pred_speed = predecessor.forward_speed(p.speed_window_s);
+    let pred_travel = p.coast_time_s * pred_speed.max(0.0)
+        + pred_speed.min(0.0) * (now_s - pred_t).max(0.0)
+        - p.rollback_time_s * predecessor.peak_forward_speed(p.speed_window_s, p.rollback_window_s);
+    let closing = (own_travel - pred_travel).max(0.0);
+    let room =
+        rect_distance(&rect(own_pose), &rect(current)) - p.safety_distance_m - p.stop_margin_m;
+    let own = own_pose;
+    if room <= closing {
         return (0.0, 0.0, Reason::SafetyStop);
     }
     let (s, c) = own.theta.sin_cos();
@@ -112,6 +164,13 @@ mod tests {
         Pose2D { x, y, theta }
     }
 
+    /// A follower's own history: standing at `q`.
+    fn still(q: Pose2D) -> PoseHistory {
+        let mut h = PoseHistory::new(1.0);
+        h.push(0.0, q);
+        h
+    }
+
     /// A predecessor that drove along +x at 0.2 m/s from x = 1 for `until` seconds.
     fn straight_history(until: f64) -> PoseHistory {
         let mut h = PoseHistory::new(5.0);
@@ -127,7 +186,12 @@ mod tests {
     fn drives_toward_the_delayed_pose() {
         let h = straight_history(10.0);
         // τ = 2 s ago the predecessor was at x = 2.6; we are at 2.4 heading +x.
-        let (v, w, why) = command(pose(2.4, 0.0, 0.0), &h, 10.0, &FollowerParams::default());
+        let (v, w, why) = command(
+            &still(pose(2.4, 0.0, 0.0)),
+            &h,
+            10.0,
+            &FollowerParams::default(),
+        );
         assert_eq!(why, Reason::Tracking);
         assert!(
             (v - 0.3_f64.min(0.25)).abs() < 1e-9 && w.abs() < 1e-12,
@@ -140,7 +204,12 @@ mod tests {
         let mut h = PoseHistory::new(20.0);
         h.push(0.0, pose(0.0, 0.0, 3.0));
         h.push(10.0, pose(5.0, 0.0, 3.0));
-        let (_, w, _) = command(pose(-1.0, 0.0, -3.0), &h, 10.0, &FollowerParams::default());
+        let (_, w, _) = command(
+            &still(pose(-1.0, 0.0, -3.0)),
+            &h,
+            10.0,
+            &FollowerParams::default(),
+        );
         // θ_p − θ = 6 rad ≡ −0.283 rad: turn right, not 6 rad left.
         assert!(
             w < 0.0
@@ -155,12 +224,96 @@ mod tests {
         let p = FollowerParams::default();
         let gap = p.safety_distance_m + p.stop_margin_m - 0.01;
         let (v, w, why) = command(
-            pose(3.0 - 2.0 * p.footprint_half_m[0] - gap, 0.0, 0.0),
+            &still(pose(3.0 - 2.0 * p.footprint_half_m[0] - gap, 0.0, 0.0)),
             &h,
             10.0,
             &p,
         );
         assert_eq!((v, w, why), (0.0, 0.0, Reason::SafetyStop));
+    }
+
+    /// A predecessor that drove as `straight_history(10.0)` and has stood at x = 3.0 since,
+    /// until `until`.
+    fn parked(until: f64) -> PoseHistory {
+        let mut h = straight_history(10.0);
+        let mut t = 10.05;
+        while t <= until + 1e-9 {
+            h.push(t, pose(3.0, 0.0, 0.0));
+            t += 0.05;
+        }
+        h
+    }
+
+    /// A follower that drove along +x at `speed` until `until`, its front `gap` behind the
+    /// back of a predecessor at x = 3.0.
+    fn approaching(speed: f64, until: f64, gap: f64, p: &FollowerParams) -> PoseHistory {
+        let x = 3.0 - 2.0 * p.footprint_half_m[0] - gap;
+        let mut h = PoseHistory::new(1.0);
+        for k in 0..=10 {
+            let dt = 0.05 * k as f64;
+            h.push(until - 0.5 + dt, pose(x - speed * (0.5 - dt), 0.0, 0.0));
+        }
+        h
+    }
+
+    /// The gap at which `room` is left beyond safety distance and margin.
+    fn gap_with_room(room: f64, p: &FollowerParams) -> f64 {
+        p.safety_distance_m + p.stop_margin_m + room
+    }
+
+    #[test]
+    fn a_fast_follower_stops_earlier_than_a_slow_one() {
+        let p = FollowerParams::default();
+        // Behind a predecessor that stopped 0.5 s ago from 0.2 m/s (it may roll back
+        // 0.18 × 0.2 = 3.6 cm): 6 cm of room is enough at a crawl; at 0.2 m/s the follower
+        // may roll 0.2 × 0.45 = 9 cm more.
+        let (v, _, why) = command(
+            &approaching(0.01, 10.5, gap_with_room(0.06, &p), &p),
+            &parked(10.5),
+            10.5,
+            &p,
+        );
+        assert_eq!(why, Reason::Tracking);
+        assert!(v > 0.0, "{v}");
+        let fast = approaching(0.2, 10.5, gap_with_room(0.1, &p), &p);
+        let (_, _, why) = command(&fast, &parked(10.5), 10.5, &p);
+        assert_eq!(why, Reason::SafetyStop);
+        // Behind a predecessor driving as fast, which coasts too, 10 cm is enough.
+        let (_, _, why) = command(
+            &approaching(0.2, 10.0, gap_with_room(0.1, &p), &p),
+            &straight_history(10.0),
+            10.0,
+            &p,
+        );
+        assert_eq!(why, Reason::Tracking);
+    }
+
+    #[test]
+    fn an_older_own_pose_counts_as_distance_driven() {
+        let p = FollowerParams::default();
+        let closing = 0.2 * p.brake_time_s + p.rollback_time_s * 0.2;
+        let gap = gap_with_room(closing + 0.01, &p);
+        // Reported now, the last 1 cm is room; reported 0.1 s ago at 0.2 m/s, it is gone.
+        let (_, _, why) = command(&approaching(0.2, 10.5, gap, &p), &parked(10.5), 10.5, &p);
+        assert_eq!(why, Reason::Tracking);
+        let (_, _, why) = command(&approaching(0.2, 10.4, gap, &p), &parked(10.5), 10.5, &p);
+        assert_eq!(why, Reason::SafetyStop);
+    }
+
+    #[test]
+    fn a_predecessor_that_just_stopped_keeps_room_to_roll_back() {
+        let p = FollowerParams::default();
+        let own = still(pose(
+            3.0 - 2.0 * p.footprint_half_m[0] - gap_with_room(0.02, &p),
+            0.0,
+            0.0,
+        ));
+        // Stopped 0.5 s ago from 0.2 m/s: it may roll back 3.6 cm, more than the 2 cm of room.
+        let (_, _, why) = command(&own, &parked(10.5), 10.5, &p);
+        assert_eq!(why, Reason::SafetyStop);
+        // Standing for more than the rollback window: the room is the follower's.
+        let (_, _, why) = command(&own, &parked(11.5), 11.5, &p);
+        assert_eq!(why, Reason::Tracking);
     }
 
     #[test]
@@ -176,7 +329,7 @@ mod tests {
         let room = 0.05;
         let gap = p.safety_distance_m + p.stop_margin_m + room;
         let (v, _, why) = command(
-            pose(3.0 - 2.0 * p.footprint_half_m[0] - gap, 0.0, 0.0),
+            &still(pose(3.0 - 2.0 * p.footprint_half_m[0] - gap, 0.0, 0.0)),
             &h,
             10.0,
             &p,
@@ -188,7 +341,12 @@ mod tests {
     #[test]
     fn holds_until_history_reaches_back_tau() {
         let h = straight_history(1.0);
-        let (v, w, why) = command(pose(0.0, 0.0, 0.0), &h, 1.0, &FollowerParams::default());
+        let (v, w, why) = command(
+            &still(pose(0.0, 0.0, 0.0)),
+            &h,
+            1.0,
+            &FollowerParams::default(),
+        );
         assert_eq!((v, w, why), (0.0, 0.0, Reason::Waiting));
     }
 
@@ -196,11 +354,11 @@ mod tests {
     fn respects_limits_and_never_reverses() {
         let h = straight_history(10.0);
         let p = FollowerParams::default();
-        let (v, _, _) = command(pose(-5.0, 0.0, 0.0), &h, 10.0, &p);
+        let (v, _, _) = command(&still(pose(-5.0, 0.0, 0.0)), &h, 10.0, &p);
         assert_eq!(v, p.v_max);
-        let (v, _, _) = command(pose(2.4, 0.0, std::f64::consts::PI), &h, 10.0, &p);
+        let (v, _, _) = command(&still(pose(2.4, 0.0, std::f64::consts::PI)), &h, 10.0, &p);
         assert_eq!(v, 0.0);
-        let (_, w, _) = command(pose(2.4, 0.0, 2.5), &h, 10.0, &p);
+        let (_, w, _) = command(&still(pose(2.4, 0.0, 2.5)), &h, 10.0, &p);
         assert_eq!(w, -p.omega_max);
     }
 
@@ -208,7 +366,12 @@ mod tests {
     fn lateral_offset_is_not_corrected() {
         // Beside the delayed pose, same heading: the law commands nothing sideways.
         let h = straight_history(10.0);
-        let (v, w, _) = command(pose(2.6, 0.3, 0.0), &h, 10.0, &FollowerParams::default());
+        let (v, w, _) = command(
+            &still(pose(2.6, 0.3, 0.0)),
+            &h,
+            10.0,
+            &FollowerParams::default(),
+        );
         assert!(v.abs() < 1e-12 && w.abs() < 1e-12);
     }
 }

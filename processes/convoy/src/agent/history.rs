@@ -39,6 +39,44 @@ impl PoseHistory {
         self.samples.back().map(|(_, p)| *p)
     }
 
+    /// The newest sample: its stamp (s) and pose.
+    pub fn latest_stamped(&self) -> Option<(f64, Pose2D)> {
+        self.samples.back().copied()
+    }
+
+    /// The highest of the forward speeds measured over `window_s` at each sample of the last
+    /// `span_s`, m/s (0 with fewer than two samples).
+    pub fn peak_forward_speed(&self, window_s: f64, span_s: f64) -> f64 {
+        let Some(&(t_last, _)) = self.samples.back() else {
+            return 0.0;
+        };
+        let first = self.samples.partition_point(|(t, _)| *t < t_last - span_s);
+        (first..self.samples.len())
+            .map(|end| self.speed_until(end, window_s))
+            .fold(0.0, f64::max)
+    }
+
+    /// Speed along the newest heading over the last `window_s` of history, m/s: negative when
+    /// the robot rolls back, 0 with fewer than two samples.
+    pub fn forward_speed(&self, window_s: f64) -> f64 {
+        self.speed_until(self.samples.len().saturating_sub(1), window_s)
+    }
+
+    /// Forward speed over the `window_s` that ends at sample `end`, along its heading.
+    fn speed_until(&self, end: usize, window_s: f64) -> f64 {
+        let (Some(&(t_first, _)), Some(&(t_last, last))) =
+            (self.samples.front(), self.samples.get(end))
+        else {
+            return 0.0;
+        };
+        let t0 = (t_last - window_s).max(t_first);
+        let Some(from) = self.at(t0).filter(|_| t_last > t0) else {
+            return 0.0;
+        };
+        let (s, c) = last.theta.sin_cos();
+        ((last.x - from.x) * c + (last.y - from.y) * s) / (t_last - t0)
+    }
+
     /// The pose at time `t`, linearly interpolated (heading along the shorter arc). `None` if
     /// `t` precedes the history: the caller holds position then.
     pub fn at(&self, t: f64) -> Option<Pose2D> {
@@ -88,6 +126,26 @@ mod tests {
         h.push(5.0, pose(0.0, 0.0));
         assert!(h.at(4.9).is_none());
         assert_eq!(h.at(7.0).unwrap().x, 0.0);
+    }
+
+    #[test]
+    fn forward_speed_is_signed_along_the_heading() {
+        let mut h = PoseHistory::new(10.0);
+        assert_eq!(h.forward_speed(0.2), 0.0);
+        h.push(0.0, pose(1.0, 0.0));
+        assert_eq!(h.forward_speed(0.2), 0.0);
+        for k in 1..=10 {
+            h.push(k as f64 * 0.05, pose(1.0 + 0.01 * k as f64, 0.0));
+        }
+        assert!((h.forward_speed(0.2) - 0.2).abs() < 1e-9);
+        // Rolling back while facing +x, then facing −x while moving +x.
+        h.push(0.55, pose(1.09, 0.0));
+        assert!(h.forward_speed(0.05) < 0.0);
+        h.push(0.6, pose(1.1, std::f64::consts::PI));
+        assert!(h.forward_speed(0.05) < 0.0);
+        // It drove at 0.2 m/s until 0.5 s; in the last 0.05 s it only went backwards.
+        assert!((h.peak_forward_speed(0.05, 1.0) - 0.2).abs() < 1e-9);
+        assert_eq!(h.peak_forward_speed(0.05, 0.05), 0.0);
     }
 
     #[test]

@@ -158,17 +158,24 @@ fn run_follower(
     };
     let predecessor = node.subscriber(&predecessor_topic)?;
     let mut history = PoseHistory::new(p.follower.tau_s + 2.0);
-    let mut pose = None;
+    // The own pose's recent past, for the robot's speed; a step sees the newest pose only.
+    let mut own_history = PoseHistory::new(p.follower.speed_window_s + 1.0);
     node.run(Trigger::every_hz(RATE_HZ), |step| {
         while let Some(msg) = predecessor.receive()? {
             history.push(msg.header().stamp_ns as f64 * 1e-9, *msg);
         }
         if let Some(msg) = own.latest()? {
-            pose = Some(*msg);
+            own_history.push(msg.header().stamp_ns as f64 * 1e-9, *msg);
         }
-        let Some(current) = pose else { return Ok(()) };
-        let (v, omega, _) =
-            follower::command(current, &history, step.now().as_secs_f64(), &p.follower);
+        if own_history.latest().is_none() {
+            return Ok(());
+        }
+        let (v, omega, _) = follower::command(
+            &own_history,
+            &history,
+            step.now().as_secs_f64(),
+            &p.follower,
+        );
         wheels.drive((v, omega))
     })?;
     Ok(())
