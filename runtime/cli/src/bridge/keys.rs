@@ -106,9 +106,17 @@ pub fn contract(delivery: Delivery) -> String {
     format!("{kind}-{}", delivery.depth())
 }
 
+/// The deepest queue another host may ask for: a reader's queue is allocated at that depth for
+/// every message of the topic, so a depth from the network is bounded (Caravan's deepest, the
+/// lossless default, is 256).
+pub const MAX_NETWORK_DEPTH: usize = 4096;
+
 fn parse_contract(text: &str) -> Option<Delivery> {
     let (kind, depth) = text.split_once('-')?;
-    let depth = depth.parse().ok()?;
+    let depth = depth
+        .parse()
+        .ok()
+        .filter(|d| (1..=MAX_NETWORK_DEPTH).contains(d))?;
     match kind {
         "lossless" => Some(Delivery::Lossless { depth }),
         "latest" => Some(Delivery::Latest { depth }),
@@ -216,6 +224,12 @@ mod tests {
         assert_eq!(Want::parse("g1", &key), Some(want));
         assert_eq!(Want::parse("g2", &key), None);
         assert_eq!(Want::parse("g1", "caravan/g1/want/a/T/sometimes-3/x"), None);
+        // A depth from the network is bounded: no queue of a billion messages, and none of 0.
+        for depth in ["0", "4097", "1000000000"] {
+            let key = format!("caravan/g1/want/a/T/lossless-{depth}/x");
+            assert_eq!(Want::parse("g1", &key), None, "{depth}");
+        }
+        assert!(Want::parse("g1", "caravan/g1/want/a/T/lossless-4096/x").is_some());
     }
 
     #[test]
