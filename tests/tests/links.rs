@@ -175,7 +175,8 @@ between = ["rpi-*", "rpi-*"]
 LINK
 "#;
 
-/// The bad WLAN's profile, for every link of `BAD_WLAN`.
+/// The bad WLAN's latency, jitter, loss and spikes (no bandwidth limit), for every link of
+/// `BAD_WLAN`.
 const BAD_LINK: &str = r#"latency = "50ms"
 jitter = "8ms"
 loss = 0.05

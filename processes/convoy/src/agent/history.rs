@@ -146,6 +146,7 @@ mod tests {
         // It drove at 0.2 m/s until 0.5 s; in the last 0.05 s it only went backwards.
         assert!((h.peak_forward_speed(0.05, 1.0) - 0.2).abs() < 1e-9);
         assert_eq!(h.peak_forward_speed(0.05, 0.05), 0.0);
+        assert!((h.peak_forward_speed(0.05, 0.1) - 0.2).abs() < 1e-9);
     }
 
     #[test]

@@ -106,17 +106,14 @@ pub fn contract(delivery: Delivery) -> String {
     format!("{kind}-{}", delivery.depth())
 }
 
-/// The deepest queue another host may ask for: a reader's queue is allocated at that depth for
-/// every message of the topic, so a depth from the network is bounded (Caravan's deepest, the
-/// lossless default, is 256).
+/// The deepest queue another host may have opened here: a queue is allocated at its depth, so
+/// a depth from the network is capped (Caravan's deepest, the lossless default, is 256). Capped,
+/// not refused: every message and wish still counts for the lockstep hand-off.
 pub const MAX_NETWORK_DEPTH: usize = 4096;
 
 fn parse_contract(text: &str) -> Option<Delivery> {
     let (kind, depth) = text.split_once('-')?;
-    let depth = depth
-        .parse()
-        .ok()
-        .filter(|d| (1..=MAX_NETWORK_DEPTH).contains(d))?;
+    let depth = depth.parse::<usize>().ok()?.clamp(1, MAX_NETWORK_DEPTH);
     match kind {
         "lossless" => Some(Delivery::Lossless { depth }),
         "latest" => Some(Delivery::Latest { depth }),
@@ -224,12 +221,16 @@ mod tests {
         assert_eq!(Want::parse("g1", &key), Some(want));
         assert_eq!(Want::parse("g2", &key), None);
         assert_eq!(Want::parse("g1", "caravan/g1/want/a/T/sometimes-3/x"), None);
-        // A depth from the network is bounded: no queue of a billion messages, and none of 0.
-        for depth in ["0", "4097", "1000000000"] {
+        // A depth from the network is capped: no queue of a billion messages, and none of 0.
+        for (depth, capped) in [
+            ("0", 1),
+            ("4096", 4096),
+            ("4097", 4096),
+            ("1000000000", 4096),
+        ] {
             let key = format!("caravan/g1/want/a/T/lossless-{depth}/x");
-            assert_eq!(Want::parse("g1", &key), None, "{depth}");
+            assert_eq!(Want::parse("g1", &key).unwrap().depth, capped, "{depth}");
         }
-        assert!(Want::parse("g1", "caravan/g1/want/a/T/lossless-4096/x").is_some());
     }
 
     #[test]

@@ -182,10 +182,7 @@ impl Outbound<'_> {
             self.discover()?;
             host
         } else {
-            // Another version's key, or a depth out of bounds: nothing this one can act on.
-            if put && key.starts_with(&format!("{}/want/", keys::root(self.ctx.group()))) {
-                eprintln!("caravan: warning: ignoring a wish to read it cannot act on: {key}");
-            }
+            // Another version's key: nothing this one can act on.
             return Ok(());
         };
         *self
