@@ -106,16 +106,16 @@ pub enum Reason {
     SafetyStop,
 }
 
-/// (v, ω) for a follower whose own recent poses are `own`, given its predecessor's history,
-/// at time `now_s`. Both histories are keyed by the poses' header stamps.
+/// (v, ω) for a follower whose own recent poses are `own_history`, given its predecessor's
+/// history, at time `now_s`. Both histories are keyed by the poses' header stamps.
 pub fn command(
-    own: &PoseHistory,
+    own_history: &PoseHistory,
     predecessor: &PoseHistory,
     now_s: f64,
     p: &FollowerParams,
 ) -> (f64, f64, Reason) {
-    let (Some((own_t, own_pose)), Some(target), Some((pred_t, current))) = (
-        own.latest_stamped(),
+    let (Some((own_t, own)), Some(target), Some((pred_t, current))) = (
+        own_history.latest_stamped(),
         predecessor.at(now_s - p.tau_s),
         predecessor.latest_stamped(),
     ) else {
@@ -131,16 +131,14 @@ pub fn command(
     // How much nearer the two will be once both are at rest, at worst, if both stopped now: the
     // follower drives on from its (older) reported pose for the longest roll-out; the
     // predecessor coasts for the shortest, then rolls back in proportion to its recent speed.
-    let own_speed = own.forward_speed(p.speed_window_s).max(0.0);
+    let own_speed = own_history.forward_speed(p.speed_window_s).max(0.0);
     let own_travel = own_speed * ((now_s - own_t).max(0.0) + p.brake_time_s);
     let pred_speed = predecessor.forward_speed(p.speed_window_s);
     let pred_travel = p.coast_time_s * pred_speed.max(0.0)
         + pred_speed.min(0.0) * (now_s - pred_t).max(0.0)
         - p.rollback_time_s * predecessor.peak_forward_speed(p.speed_window_s, p.rollback_window_s);
     let closing = (own_travel - pred_travel).max(0.0);
-    let room =
-        rect_distance(&rect(own_pose), &rect(current)) - p.safety_distance_m - p.stop_margin_m;
-    let own = own_pose;
+    let room = rect_distance(&rect(own), &rect(current)) - p.safety_distance_m - p.stop_margin_m;
     if room <= closing {
         return (0.0, 0.0, Reason::SafetyStop);
     }

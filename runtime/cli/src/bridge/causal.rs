@@ -36,14 +36,14 @@ pub struct Received {
 impl Knowledge {
     /// Takes the larger of each count.
     pub fn merge(&mut self, other: &Knowledge) {
-        for (k, &n) in &other.sent {
-            let e = self.sent.entry(k.clone()).or_default();
-            *e = (*e).max(n);
+        fn max_into<K: Ord + Clone>(into: &mut BTreeMap<K, u64>, from: &BTreeMap<K, u64>) {
+            for (k, &n) in from {
+                let e = into.entry(k.clone()).or_default();
+                *e = (*e).max(n);
+            }
         }
-        for (k, &n) in &other.wants {
-            let e = self.wants.entry(k.clone()).or_default();
-            *e = (*e).max(n);
-        }
+        max_into(&mut self.sent, &other.sent);
+        max_into(&mut self.wants, &other.wants);
     }
 
     /// Whether `me` has what this knowledge says was sent to it: each other host's messages to
