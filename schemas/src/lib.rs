@@ -6,6 +6,7 @@
 //! subscribers. The stamped [`Header`] travels as iceoryx2's user header, beside the payload.
 
 mod articulated;
+pub mod bench;
 pub mod describe;
 mod episodes;
 mod fixed;

@@ -27,8 +27,9 @@ macro_rules! with_message_type {
     }};
 }
 
-/// [`with_message_type!`], and the lockstep protocol's own messages (`caravan::lockstep::Hello`,
-/// `Grant`, `Done`), which cross between hosts like any topic.
+/// [`with_message_type!`], the lockstep protocol's own messages (`caravan::lockstep::Hello`,
+/// `Grant`, `Done`), which cross between hosts like any topic, and the bench's blobs
+/// ([`crate::bench`]), so that `caravan bench transport` can measure the bridge.
 #[macro_export]
 macro_rules! with_wire_type {
     ($name:expr, |$T:ident| $body:expr) => {{
@@ -44,7 +45,7 @@ macro_rules! with_wire_type {
                 type $T = $crate::lockstep::Done;
                 Some($body)
             } else {
-                None
+                $crate::with_blob_type!(name, |$T| $body)
             }
         })
     }};

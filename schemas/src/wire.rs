@@ -32,7 +32,8 @@ fn table() -> &'static BTreeMap<&'static str, (usize, Ranges)> {
         // Each layout comes after the types it contains, so their ranges are ready.
         let mut by_name = BTreeMap::new();
         let mut table = BTreeMap::new();
-        for layout in layouts() {
+        // The bench's blobs cross hosts too, though they are not message types.
+        for layout in layouts().into_iter().chain(crate::bench::layouts()) {
             if let Some(ranges) = ranges_of(&layout, &by_name) {
                 by_name.insert(layout.name, ranges.clone());
                 table.insert(layout.type_name, (layout.size, ranges));

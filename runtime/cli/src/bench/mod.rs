@@ -18,6 +18,9 @@ pub enum BenchCommand {
     /// Internal: the echoing side of `bench transport`
     #[command(hide = true)]
     TransportPong(transport::PongArgs),
+    /// Internal: two hosts' relays for `bench transport --transports caravan-bridged`
+    #[command(hide = true)]
+    TransportRelays(transport::RelaysArgs),
 }
 
 #[derive(Args)]
@@ -39,5 +42,6 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Pong(args) => pingpong::pong(&args),
         BenchCommand::Transport(args) => transport::run(&args),
         BenchCommand::TransportPong(args) => transport::pong(&args),
+        BenchCommand::TransportRelays(args) => transport::relays(&args),
     }
 }

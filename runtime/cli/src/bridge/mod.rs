@@ -102,7 +102,7 @@ pub fn clock_host(lf: &LaunchFile) -> Result<String> {
     }
 }
 
-fn session_config(spec: &HostSpec) -> Result<zenoh::Config> {
+pub(crate) fn session_config(spec: &HostSpec) -> Result<zenoh::Config> {
     let list = |v: &[String]| serde_json::to_string(v).expect("strings serialise");
     let mut c = zenoh::Config::default();
     let mut set = |key: &str, value: &str| z(c.insert_json5(key, value));

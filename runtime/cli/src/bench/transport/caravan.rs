@@ -1,8 +1,9 @@
 //! Caravan topics: `Publisher::loan` in place, `Subscriber::receive`, header stamping and gap
-//! counting included. Woken by events through `Node::run`, or (benchmark only) spinning.
+//! counting included. Woken by events through `Node::run`, or (benchmark only) spinning. The
+//! same nodes measure the path between two hosts ([`super::bridged`]).
 
 use super::payload::{Bytes, STOP, copy_mark, mark, read_mark, with_blob};
-use super::{ECHO_TIMEOUT, PONG_IDLE, Pair, Recorder, ready, spin};
+use super::{ECHO_TIMEOUT, Kind, PONG_IDLE, Pair, Recorder, ready, spin};
 use anyhow::{Result, bail};
 use caravan::{Node, NodeIdentity, Publisher, Topic, Trigger};
 use caravan_schemas::Message;
@@ -11,11 +12,32 @@ use std::time::Instant;
 const PING: &str = "bench/ping";
 const PONG: &str = "bench/pong";
 
-/// A node of the pair's group, with the bench's iceoryx2 config (see `iceoryx2_raw`).
+/// A node of the pair's group, with the bench's iceoryx2 config (see `iceoryx2_raw`): the
+/// group's, or between hosts that of the node's host.
 fn node(pair: &Pair, name: &str) -> Result<Node> {
     let mut identity = NodeIdentity::new(&pair.group, name);
-    identity.iceoryx_config = Some(pair.temp_path("toml"));
+    identity.iceoryx_config = Some(match pair.kind {
+        Kind::CaravanBridged => super::bridged::config_path(pair, name),
+        _ => pair.temp_path("toml"),
+    });
     Ok(Node::new(identity)?)
+}
+
+/// Waits until `publisher` has a reader. On one host the other side's exists already; between
+/// hosts a message sent before the bridge subscribed for the other host would be lost (as a
+/// topic's messages are before its first reader, on one host too).
+fn await_reader<T: Message>(publisher: &Publisher<T>) -> Result<()> {
+    let start = Instant::now();
+    while publisher.subscribers() == 0 {
+        if start.elapsed() > ECHO_TIMEOUT {
+            bail!(
+                "nobody subscribed to '{}' within {ECHO_TIMEOUT:?}",
+                publisher.topic()
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    Ok(())
 }
 
 /// Loans a message in shared memory, writes the 16 marker bytes and publishes it.
@@ -39,6 +61,7 @@ fn ping_event_t<T: Message + Bytes>(pair: &Pair, rec: &mut Recorder) -> Result<(
     let pong = node.subscriber(&Topic::<T>::new(PONG))?;
     let total = rec.total();
     let mut seq = 0;
+    await_reader(&ping)?;
     let mut sent_at = Instant::now();
     send(&ping, seq)?;
     node.run(Trigger::on(PONG), |step| {
@@ -73,11 +96,16 @@ fn pong_event_t<T: Message + Bytes>(pair: &Pair) -> Result<()> {
     let ping = node.subscriber(&Topic::<T>::new(PING))?;
     let pong = node.publisher(&Topic::<T>::new(PONG))?;
     ready("");
+    let mut answered = false;
     node.run(Trigger::on(PING), |step| {
         while let Some(msg) = ping.receive()? {
             if read_mark(msg.bytes()) == Some(STOP) {
                 step.stop();
                 return Ok(());
+            }
+            if !answered {
+                await_reader(&pong).map_err(|e| caravan::Error::Step(format!("{e:#}")))?;
+                answered = true;
             }
             let mut loan = pong.loan()?;
             copy_mark(msg.bytes(), loan.bytes_mut());

@@ -1,5 +1,6 @@
 //! `caravan bench transport`: one-way latency of Caravan topics side by side with raw iceoryx2,
-//! Unix domain sockets, UDP, TCP and zenoh, between two processes, in one run.
+//! Unix domain sockets, UDP, TCP and zenoh, between two processes, in one run; and of a Caravan
+//! topic between two hosts, through the bridge ([`bridged`]).
 //!
 //! For every payload size and transport the bench starts its own executable as the echoing
 //! side (`caravan bench transport-pong`), measures round trips after a warm-up and records half
@@ -7,6 +8,7 @@
 //! transport at 2.7 KiB, …) so that a busier moment of the machine does not hit one transport
 //! only.
 
+mod bridged;
 mod caravan;
 mod iceoryx2_raw;
 mod payload;
@@ -28,6 +30,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
+pub use bridged::{RelaysArgs, relays};
 pub use payload::SIZES;
 
 /// The transports compared, in table order.
@@ -37,6 +40,9 @@ pub enum Kind {
     CaravanEvent,
     /// Caravan topics, polled in a spin loop (benchmark-only; Caravan nodes do not spin)
     CaravanPoll,
+    /// Caravan topics between two hosts on this machine: shared memory on each, the hosts'
+    /// relays joined by zenoh over TCP on loopback; woken by events
+    CaravanBridged,
     /// iceoryx2 publish-subscribe woken through a WaitSet, no Caravan wrapper
     Iceoryx2Event,
     /// iceoryx2 publish-subscribe polled in a spin loop, no events
@@ -54,9 +60,10 @@ pub enum Kind {
 }
 
 impl Kind {
-    pub const ALL: [Kind; 9] = [
+    pub const ALL: [Kind; 10] = [
         Kind::CaravanEvent,
         Kind::CaravanPoll,
+        Kind::CaravanBridged,
         Kind::Iceoryx2Event,
         Kind::Iceoryx2Poll,
         Kind::Uds,
@@ -70,6 +77,7 @@ impl Kind {
         match self {
             Kind::CaravanEvent => "caravan-event",
             Kind::CaravanPoll => "caravan-poll",
+            Kind::CaravanBridged => "caravan-bridged",
             Kind::Iceoryx2Event => "iceoryx2-event",
             Kind::Iceoryx2Poll => "iceoryx2-poll",
             Kind::Uds => "uds",
@@ -85,6 +93,7 @@ impl Kind {
         match self {
             Kind::CaravanPoll | Kind::Iceoryx2Poll => "busy-poll (benchmark only)",
             Kind::CaravanEvent | Kind::Iceoryx2Event => "event (iceoryx2 WaitSet)",
+            Kind::CaravanBridged => "event (iceoryx2 WaitSet), relays between",
             Kind::Uds | Kind::Tcp | Kind::Udp => "blocking read",
             Kind::Zenoh | Kind::ZenohShm => "zenoh subscriber channel",
         }
@@ -371,25 +380,47 @@ fn measure(
     if kind.uses_iceoryx2() {
         iceoryx2_raw::write_config_file(&group)?;
     }
+    if kind == Kind::CaravanBridged {
+        bridged::write_configs(&group)?;
+    }
     let endpoint = match kind {
-        Kind::Zenoh | Kind::ZenohShm => Some(zenoh_peer::free_endpoint()?),
+        Kind::Zenoh | Kind::ZenohShm | Kind::CaravanBridged => Some(zenoh_peer::free_endpoint()?),
+        _ => None,
+    };
+    // Between hosts: both hosts' relays, in a process of their own, before either side.
+    let mut relays = match (kind, &endpoint) {
+        (Kind::CaravanBridged, Some(e)) => match start_relays(&group, e) {
+            Ok(child) => Some(child),
+            Err(e) => {
+                cleanup(kind, &group);
+                return Err(e);
+            }
+        },
         _ => None,
     };
     let mut cmd = Command::new(std::env::current_exe()?);
     cmd.args(["bench", "transport-pong", "--group", &group])
         .args(["--transport", kind.name()])
         .args(["--bytes", &bytes.to_string()]);
-    if let Some(e) = &endpoint {
+    if let Some(e) = endpoint.as_ref().filter(|_| kind != Kind::CaravanBridged) {
         cmd.args(["--endpoint", e]);
     }
     if let Some(cpu) = pong_cpu {
         cmd.args(["--cpu", &cpu.to_string()]);
     }
-    let mut child = cmd
+    let child = cmd
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .spawn()
-        .context("cannot start the echoing process")?;
+        .context("cannot start the echoing process");
+    let mut child = match child {
+        Ok(child) => child,
+        Err(e) => {
+            stop_relays(relays.take());
+            cleanup(kind, &group);
+            return Err(e);
+        }
+    };
     let result = (|| {
         let info = await_ready(child.stdout.take().expect("piped stdout"))?;
         let pair = Pair {
@@ -414,8 +445,35 @@ fn measure(
         recorder.finish()
     })();
     stop_child(&mut child);
+    stop_relays(relays);
     cleanup(kind, &group);
     result.map(Some)
+}
+
+/// Starts `caravan bench transport-relays` and waits until both relays run.
+fn start_relays(group: &str, endpoint: &str) -> Result<Child> {
+    let mut child = Command::new(std::env::current_exe()?)
+        .args(["bench", "transport-relays", "--group", group])
+        .args(["--endpoint", endpoint])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .context("cannot start the relays")?;
+    match await_ready(child.stdout.take().expect("piped stdout")) {
+        Ok(_) => Ok(child),
+        Err(e) => {
+            stop_relays(Some(child));
+            Err(e.context("the relays did not start"))
+        }
+    }
+}
+
+/// Closes the relays' standard input, which stops them.
+fn stop_relays(relays: Option<Child>) {
+    if let Some(mut child) = relays {
+        drop(child.stdin.take());
+        stop_child(&mut child);
+    }
 }
 
 /// Reads the echoing process's stdout up to its `ready` line and returns what follows `ready`.
@@ -443,6 +501,7 @@ fn ping(pair: &Pair, rec: &mut Recorder) -> Result<()> {
     match pair.kind {
         Kind::CaravanEvent => caravan::ping_event(pair, rec),
         Kind::CaravanPoll => caravan::ping_poll(pair, rec),
+        Kind::CaravanBridged => caravan::ping_event(pair, rec),
         Kind::Iceoryx2Event => iceoryx2_raw::ping(pair, rec, false),
         Kind::Iceoryx2Poll => iceoryx2_raw::ping(pair, rec, true),
         Kind::Uds => stream::ping_uds(pair, rec),
@@ -467,6 +526,7 @@ pub fn pong(args: &PongArgs) -> Result<()> {
     match pair.kind {
         Kind::CaravanEvent => caravan::pong_event(&pair),
         Kind::CaravanPoll => caravan::pong_poll(&pair),
+        Kind::CaravanBridged => caravan::pong_event(&pair),
         Kind::Iceoryx2Event => iceoryx2_raw::pong(&pair, false),
         Kind::Iceoryx2Poll => iceoryx2_raw::pong(&pair, true),
         Kind::Uds => stream::pong_uds(&pair),
@@ -530,6 +590,9 @@ fn cleanup(kind: Kind, group: &str) {
     }
     if kind == Kind::Uds {
         let _ = std::fs::remove_file(temp_path(group, "sock"));
+    }
+    if kind == Kind::CaravanBridged {
+        bridged::cleanup(group);
     }
 }
 

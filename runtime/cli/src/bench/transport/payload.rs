@@ -5,43 +5,13 @@
 //! touched by the benchmark, so the cost of filling a 4 MiB message is not mistaken for the cost
 //! of moving it. Sockets still send (and the kernel copies) every byte: that is their nature.
 
-use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+use caravan_schemas::bench::Blob;
 
-/// The sizes measured, in bytes: a wheel set-point, a 682-beam laser scan's ranges
-/// (682 × f32), a small image, a point cloud and a large map or image.
-pub const SIZES: [usize; 5] = [16, 2_728, 64 * 1024, 1024 * 1024, 4 * 1024 * 1024];
+/// The sizes measured, in bytes (see [`caravan_schemas::bench::BLOB_SIZES`]).
+pub const SIZES: [usize; 5] = caravan_schemas::bench::BLOB_SIZES;
 
 /// Sent instead of a sequence number to end the echoing side.
 pub const STOP: u64 = u64::MAX;
-
-/// A message of `N` opaque bytes for Caravan topics and raw iceoryx2.
-#[repr(C)]
-#[derive(Clone, Copy, ZeroCopySend)]
-pub struct Blob<const N: usize> {
-    pub bytes: [u8; N],
-}
-
-// SAFETY (benchmark-only): a blob's "default" leaves its bytes as they are. Blobs only ever
-// live in iceoryx2 data segments, which iceoryx2 zero-fills when it creates them and which
-// afterwards hold only earlier blobs, so every byte is initialised. The derived impl would
-// write all N bytes on every `Publisher::loan` (a 4 MiB memset per message), which is the
-// filling cost this benchmark keeps out of the transport's numbers.
-impl<const N: usize> PlacementDefault for Blob<N> {
-    unsafe fn placement_default(_ptr: *mut Self) {}
-}
-
-impl<const N: usize> std::fmt::Debug for Blob<N> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Blob<{N}>")
-    }
-}
-
-/// Blobs are never recorded; serialising one gives only its length.
-impl<const N: usize> serde::Serialize for Blob<N> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_u64(N as u64)
-    }
-}
 
 /// Writes `seq` into the first and the last 8 bytes of `bytes` (at least 16 long).
 pub fn mark(bytes: &mut [u8], seq: u64) {
@@ -82,11 +52,11 @@ pub fn label(bytes: usize) -> String {
 macro_rules! with_blob {
     ($bytes:expr, $f:ident ( $($arg:expr),* $(,)? )) => {
         match $bytes {
-            16 => $f::<$crate::bench::transport::payload::Blob<16>>($($arg),*),
-            2_728 => $f::<$crate::bench::transport::payload::Blob<2_728>>($($arg),*),
-            65_536 => $f::<$crate::bench::transport::payload::Blob<65_536>>($($arg),*),
-            1_048_576 => $f::<$crate::bench::transport::payload::Blob<1_048_576>>($($arg),*),
-            4_194_304 => $f::<$crate::bench::transport::payload::Blob<4_194_304>>($($arg),*),
+            16 => $f::<caravan_schemas::bench::Blob<16>>($($arg),*),
+            2_728 => $f::<caravan_schemas::bench::Blob<2_728>>($($arg),*),
+            65_536 => $f::<caravan_schemas::bench::Blob<65_536>>($($arg),*),
+            1_048_576 => $f::<caravan_schemas::bench::Blob<1_048_576>>($($arg),*),
+            4_194_304 => $f::<caravan_schemas::bench::Blob<4_194_304>>($($arg),*),
             other => Err(anyhow::anyhow!(
                 "no blob type for {other} bytes; sizes are {:?}",
                 $crate::bench::transport::payload::SIZES

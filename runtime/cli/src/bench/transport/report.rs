@@ -63,11 +63,14 @@ pub fn ratios(rows: &[Row]) -> String {
         (Kind::CaravanEvent, Kind::Uds),
         (Kind::CaravanEvent, Kind::Zenoh),
         (Kind::CaravanEvent, Kind::ZenohShm),
+        // Between hosts: what the bridge adds to one host's path, and to zenoh's own.
+        (Kind::CaravanBridged, Kind::CaravanEvent),
+        (Kind::CaravanBridged, Kind::Zenoh),
     ];
     let mut sizes: Vec<usize> = rows.iter().map(|r| r.bytes).collect();
     sizes.dedup();
     let mut out = String::new();
-    let mut header = format!("\np50 ratios (< 1: Caravan faster)\n{:<32}", "");
+    let mut header = format!("\np50 ratios (< 1: the first is faster)\n{:<32}", "");
     for &b in &sizes {
         let _ = write!(header, " {:>9}", label(b));
     }
