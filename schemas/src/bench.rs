@@ -98,7 +98,10 @@ mod tests {
             assert_eq!(layout.size, size);
             let known = crate::with_wire_type!(layout.type_name, |T| size_of::<T>());
             assert_eq!(known, Some(size), "{}", layout.type_name);
-            assert_eq!(crate::wire::data_ranges(layout.type_name), Some(&[(0, size)][..]));
+            assert_eq!(
+                crate::wire::data_ranges(layout.type_name),
+                Some(&[(0, size)][..])
+            );
         }
         // Not message types: nothing records or generates code for them.
         assert!(crate::with_message_type!(all[0].type_name, |T| ()).is_none());

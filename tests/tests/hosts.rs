@@ -16,7 +16,13 @@ struct Launcher {
 
 impl Launcher {
     fn start(hosts: &Hosts, host: &str, s: &Scenario) -> Self {
-        let mut child = hosts.launch(host, &s.file, &s.dir, &[]);
+        Self::start_in(hosts, host, s, &s.dir)
+    }
+
+    /// As `start`, with its temporary, run and pid files under `dir`.
+    fn start_in(hosts: &Hosts, host: &str, s: &Scenario, dir: &std::path::Path) -> Self {
+        std::fs::create_dir_all(dir).unwrap();
+        let mut child = hosts.launch(host, &s.file, dir, &[]);
         let err = Arc::new(Mutex::new(String::new()));
         let mut pipe = child.stderr.take().unwrap();
         let sink = err.clone();
@@ -311,9 +317,15 @@ fn hosts_join_over_tls_only_with_the_groups_certificates() {
         Launcher::start(&hosts, "a", &s),
         Launcher::start(&hosts, "b", &s),
     );
-    for (host, l) in [("a", a), ("b", b)] {
-        let (code, err) = l.finish();
-        assert_eq!(code, Some(0), "host {host} ({:?}): {err}", hosts.how());
+    // Both hosts' output on failure: one host's reason is often in the other's.
+    let ended = [("a", a.finish()), ("b", b.finish())];
+    for (host, (code, _)) in &ended {
+        assert_eq!(
+            *code,
+            Some(0),
+            "host {host} ({:?}): {ended:#?}",
+            hosts.how()
+        );
     }
     let log = std::fs::read_to_string(hosts.run_dir("b", &s.dir).join("logs/sink.log")).unwrap();
     assert!(log.contains("received 200 missed 0"), "{log}");
@@ -387,6 +399,66 @@ host = "c"
     );
     assert!(err.contains("failed"), "{err}");
     assert_eq!(shm_left(&s, "a"), "", "host a left shared memory");
+}
+
+#[test]
+fn a_second_launcher_of_a_host_gives_way_and_the_group_goes_on() {
+    let hosts = Hosts::new("twin", &["a", "b"]);
+    let s = Scenario::new(
+        "hosts-twin",
+        &format!(
+            r#"clock = "realtime"
+duration = "10min"
+
+[hosts.a]
+listen = ["{a}"]
+
+[hosts.b]
+connect = ["{a}"]
+
+[[process]]
+name = "idle-a"
+exec = "caravan-testnode idle"
+host = "a"
+
+[[process]]
+name = "idle-b"
+exec = "caravan-testnode idle"
+host = "b"
+"#,
+            a = hosts.endpoint("a"),
+        ),
+    );
+    let a = Launcher::start(&hosts, "a", &s);
+    let b = Launcher::start(&hosts, "b", &s);
+    wait_until("both hosts run their part", || {
+        [&a, &b]
+            .iter()
+            .all(|l| l.stderr().contains("run directory"))
+    });
+    let a_pid = pid_of(&s, "a");
+    // The same host started again (a mistake), as if on another machine (on this one, its
+    // launcher would find the group running): it gives way as soon as it sees the first.
+    let twin = Launcher::start_in(&hosts, "b", &s, &s.dir.join("twin"));
+    let (code, err) = twin.finish();
+    assert_eq!(code, Some(1), "({:?}) {err}", hosts.how());
+    assert!(
+        err.contains("another launcher already runs host 'b' of this group"),
+        "{err}"
+    );
+    wait_until("the first launcher of b notices", || {
+        b.stderr().contains("a second launcher for host 'b' joined")
+    });
+    // The group went on: b did not leave, and a stops it for both.
+    unsafe { libc::kill(a_pid, libc::SIGINT) };
+    let (_, err_b) = b.finish();
+    let (_, err_a) = a.finish();
+    assert!(
+        err_b.contains("host 'a' stopped the group (interrupted"),
+        "{err_b}"
+    );
+    assert!(!err_a.contains("left the group"), "{err_a}");
+    assert!(!err_b.contains("failed"), "{err_b}");
 }
 
 /// Two hosts on loopback ports, `a` listening.

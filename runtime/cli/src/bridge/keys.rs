@@ -1,7 +1,9 @@
 //! The zenoh key space of a group: everything a group says between hosts lives under
 //! `caravan/GROUP/`, so two groups on one network never hear each other.
 //!
-//! - `caravan/G/host/H`: liveliness token, host H's launcher is up;
+//! - `caravan/G/host/H/START-ZID`: liveliness token, a launcher of host H is up, started at
+//!   START (wall clock, ns) with zenoh id ZID ([`LauncherId`]): two launchers of one host see
+//!   each other, and the later gives way;
 //! - `caravan/G/done/H`: liveliness token, every process of host H has exited;
 //! - `caravan/G/stop`: a put, a host stopped the group (JSON [`StopNotice`]);
 //! - `caravan/G/want/H/TYPE/CONTRACT/TOPIC`: liveliness token, a process of host H reads
@@ -22,8 +24,37 @@ pub fn root(group: &str) -> String {
     format!("caravan/{group}")
 }
 
-pub fn host(group: &str, host: &str) -> String {
-    format!("caravan/{group}/host/{host}")
+/// The token of a launcher of `host`; `id` is `START-ZID` (see [`LauncherId`]), or `*`.
+pub fn host(group: &str, host: &str, id: &str) -> String {
+    format!("caravan/{group}/host/{host}/{id}")
+}
+
+/// The host and launcher of a `host/H/START-ZID` token.
+pub fn host_of(key: &str) -> Option<(&str, LauncherId)> {
+    let (rest, id) = key.rsplit_once('/')?;
+    Some((last(rest), LauncherId::parse(id)?))
+}
+
+/// Who a launcher is: when it started, and its zenoh id. Of two launchers of one host, the
+/// one that started later gives way (on a tie, the greater id).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+pub struct LauncherId {
+    pub start_ns: u64,
+    pub zid: String,
+}
+
+impl LauncherId {
+    pub fn key_chunk(&self) -> String {
+        format!("{}-{}", self.start_ns, self.zid)
+    }
+
+    pub fn parse(chunk: &str) -> Option<Self> {
+        let (start, zid) = chunk.split_once('-')?;
+        Some(Self {
+            start_ns: start.parse().ok()?,
+            zid: zid.to_string(),
+        })
+    }
 }
 
 pub fn done(group: &str, host: &str) -> String {
@@ -202,6 +233,27 @@ impl Envelope {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_later_launcher_of_a_host_gives_way() {
+        let first = LauncherId {
+            start_ns: 5,
+            zid: "ab12".into(),
+        };
+        let chunk = first.key_chunk();
+        assert_eq!(chunk, "5-ab12");
+        assert_eq!(LauncherId::parse(&chunk), Some(first.clone()));
+        let later = LauncherId::parse("6-0f").unwrap();
+        let tie = LauncherId::parse("5-ff").unwrap();
+        assert!(later > first && tie > first);
+        let key = host("g", "rpi-0", &later.key_chunk());
+        assert_eq!(key, "caravan/g/host/rpi-0/6-0f");
+        assert_eq!(host_of(&key), Some(("rpi-0", later)));
+        assert_eq!(host_of("caravan/g/host/rpi-0"), None);
+        for bad in ["", "5", "x-ab", "-ab"] {
+            assert_eq!(LauncherId::parse(bad), None, "{bad}");
+        }
+    }
 
     #[test]
     fn want_keys_round_trip() {

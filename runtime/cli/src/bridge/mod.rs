@@ -154,6 +154,8 @@ struct Shared {
     changed: Condvar,
     /// Where events go once the group runs; until then they wait here.
     events: Mutex<Outbox>,
+    /// Why this launcher must not run: another launcher of its host came first.
+    conflict: Mutex<Option<String>>,
 }
 
 #[derive(Default)]
@@ -171,6 +173,20 @@ impl Shared {
             }
             None => out.waiting.push(event),
         }
+    }
+
+    /// Another launcher runs this host and started first: this one gives way.
+    fn give_way(&self, why: String) {
+        let presence = self.presence.lock().unwrap();
+        let mut conflict = self.conflict.lock().unwrap();
+        if conflict.is_none() {
+            *conflict = Some(why.clone());
+            self.tell(FleetEvent::Failed(why));
+        }
+        drop(conflict);
+        // Under the lock the join wait holds: it cannot miss this.
+        self.changed.notify_all();
+        drop(presence);
     }
 
     fn apply(&self, changes: impl IntoIterator<Item = Change>) {
@@ -212,24 +228,36 @@ impl Bridge {
             )),
             changed: Condvar::new(),
             events: Mutex::new(Outbox::default()),
+            conflict: Mutex::new(None),
         });
         shared.presence.lock().unwrap().joined(host);
         let watch = |kind: &'static str| -> Result<zenoh::pubsub::Subscriber<()>> {
             let shared = shared.clone();
             let me = host.to_string();
+            let pattern = match kind {
+                "host" => keys::host(&group, "*", "*"),
+                _ => keys::done(&group, "*"),
+            };
             z(session
                 .liveliness()
-                .declare_subscriber(format!("{}/{kind}/*", keys::root(&group)))
+                .declare_subscriber(pattern)
                 .history(true)
                 .callback(move |sample| {
-                    let h = keys::last(sample.key_expr().as_str());
+                    let key = sample.key_expr().as_str();
+                    let (h, id) = match kind {
+                        "host" => match keys::host_of(key) {
+                            Some((h, id)) => (h, id.key_chunk()),
+                            None => return,
+                        },
+                        _ => (keys::last(key), String::new()),
+                    };
                     let mut p = shared.presence.lock().unwrap();
                     if h == me || !p.knows(h) {
                         return;
                     }
                     let change: Vec<Change> = match (kind, sample.kind()) {
-                        ("host", SampleKind::Put) => p.joined(h).into_iter().collect(),
-                        ("host", SampleKind::Delete) => p.gone(h),
+                        ("host", SampleKind::Put) => p.launcher_up(h, &id).into_iter().collect(),
+                        ("host", SampleKind::Delete) => p.launcher_down(h, &id),
                         ("done", SampleKind::Put) => p.finished(h).into_iter().collect(),
                         _ => Vec::new(),
                     };
@@ -255,9 +283,14 @@ impl Bridge {
                 .wait())?
         };
         watchers.push(stops);
+        let me = keys::LauncherId {
+            start_ns: caravan::wall_clock_ns(),
+            zid: session.zid().to_string(),
+        };
+        watchers.push(watch_twins(&session, &group, host, &me, &shared)?);
         let token = z(session
             .liveliness()
-            .declare_token(keys::host(&group, host))
+            .declare_token(keys::host(&group, host, &me.key_chunk()))
             .wait())?;
         Ok(Self {
             group,
@@ -282,6 +315,9 @@ impl Bridge {
         let mut presence = self.shared.presence.lock().unwrap();
         let mut said = false;
         loop {
+            if let Some(why) = self.shared.conflict.lock().unwrap().clone() {
+                bail!("{why}");
+            }
             let lost = presence.lost();
             if !lost.is_empty() {
                 bail!(
@@ -347,10 +383,15 @@ impl Bridge {
         Ok(())
     }
 
+    /// Whether another launcher of this host came first, and this one gave way.
+    fn gave_way(&self) -> bool {
+        self.shared.conflict.lock().unwrap().is_some()
+    }
+
     /// Every process of this host has exited: the group ends once every host's have.
     pub fn local_done(&self) {
         let mut token = self.done_token.lock().unwrap();
-        if token.is_none() {
+        if token.is_none() && !self.gave_way() {
             *token = z(self
                 .session
                 .liveliness()
@@ -364,6 +405,10 @@ impl Bridge {
 
     /// Tells the other hosts this host stopped the group, and why.
     pub fn stop(&self, outcome: &str, failure: Option<&str>) {
+        // A launcher that gave way to another of its host stops itself only.
+        if self.gave_way() {
+            return;
+        }
         let notice = StopNotice {
             host: self.host.clone(),
             outcome: outcome.to_string(),
@@ -387,6 +432,42 @@ impl Bridge {
         }
         let _ = self.session.close().wait();
     }
+}
+
+/// Watches for other launchers of this launcher's host. The one that started later gives way
+/// (its group fails with a message naming the other); the earlier one warns and goes on.
+fn watch_twins(
+    session: &zenoh::Session,
+    group: &str,
+    host: &str,
+    me: &keys::LauncherId,
+    shared: &Arc<Shared>,
+) -> Result<zenoh::pubsub::Subscriber<()>> {
+    let (shared, me, host_name) = (shared.clone(), me.clone(), host.to_string());
+    z(session
+        .liveliness()
+        .declare_subscriber(keys::host(group, host, "*"))
+        .history(true)
+        .callback(move |sample| {
+            let Some((_, other)) = keys::host_of(sample.key_expr().as_str()) else {
+                return;
+            };
+            if sample.kind() != SampleKind::Put || other == me {
+                return;
+            }
+            if other < me {
+                shared.give_way(format!(
+                    "another launcher already runs host '{host_name}' of this group (zenoh id {}); start one launcher per host",
+                    other.zid
+                ));
+            } else {
+                eprintln!(
+                    "caravan: warning: a second launcher for host '{host_name}' joined (zenoh id {}); it gives way",
+                    other.zid
+                );
+            }
+        })
+        .wait())
 }
 
 fn quoted(names: &[String]) -> String {

@@ -22,6 +22,9 @@ pub struct Presence {
     done: BTreeSet<String>,
     /// Hosts whose leaving was already reported.
     left: BTreeSet<String>,
+    /// The launchers up per host, by id: a host leaves when its last launcher does, so a
+    /// second launcher of a host, which gives way, does not take the host with it.
+    launchers: BTreeMap<String, BTreeSet<String>>,
     all_done_said: bool,
 }
 
@@ -32,6 +35,7 @@ impl Presence {
             up: BTreeSet::new(),
             done: BTreeSet::new(),
             left: BTreeSet::new(),
+            launchers: BTreeMap::new(),
             all_done_said: false,
         }
     }
@@ -64,6 +68,24 @@ impl Presence {
         self.up.insert(host.to_string());
         self.left.remove(host);
         None
+    }
+
+    /// Launcher `id` of `host` is up.
+    pub fn launcher_up(&mut self, host: &str, id: &str) -> Option<Change> {
+        let ids = self.launchers.entry(host.to_string()).or_default();
+        ids.insert(id.to_string());
+        self.joined(host)
+    }
+
+    /// Launcher `id` of `host` went away; the host goes with its last launcher.
+    pub fn launcher_down(&mut self, host: &str, id: &str) -> Vec<Change> {
+        let ids = self.launchers.entry(host.to_string()).or_default();
+        ids.remove(id);
+        if ids.is_empty() {
+            self.gone(host)
+        } else {
+            Vec::new()
+        }
     }
 
     pub fn finished(&mut self, host: &str) -> Option<Change> {
@@ -119,6 +141,21 @@ mod tests {
         assert_eq!(p.missing(), ["b"]);
         p.joined("b");
         assert!(p.missing().is_empty());
+    }
+
+    #[test]
+    fn a_host_leaves_with_its_last_launcher() {
+        let mut p = fleet();
+        p.launcher_up("b", "1-x");
+        p.launcher_up("b", "2-y");
+        assert!(p.launcher_down("b", "2-y").is_empty());
+        assert!(p.lost().is_empty());
+        let left = Change::Left {
+            host: "b".into(),
+            required: true,
+        };
+        assert_eq!(p.launcher_down("b", "1-x"), [left]);
+        assert_eq!(p.lost(), ["b"]);
     }
 
     #[test]

@@ -93,7 +93,7 @@ impl Kind {
         match self {
             Kind::CaravanPoll | Kind::Iceoryx2Poll => "busy-poll (benchmark only)",
             Kind::CaravanEvent | Kind::Iceoryx2Event => "event (iceoryx2 WaitSet)",
-            Kind::CaravanBridged => "event (iceoryx2 WaitSet), relays between",
+            Kind::CaravanBridged => "event (iceoryx2 WaitSet) via relays",
             Kind::Uds | Kind::Tcp | Kind::Udp => "blocking read",
             Kind::Zenoh | Kind::ZenohShm => "zenoh subscriber channel",
         }
