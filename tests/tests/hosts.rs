@@ -349,27 +349,7 @@ fn a_host_that_leaves_is_reported_and_stops_the_group_if_required() {
     let hosts = Hosts::new("kill", &["a", "b", "c"]);
     let s = Scenario::new(
         "hosts-kill",
-        &format!(
-            r#"clock = "realtime"
-duration = "10min"
-{}
-[[process]]
-name = "idle-a"
-exec = "caravan-testnode idle"
-host = "a"
-
-[[process]]
-name = "idle-b"
-exec = "caravan-testnode idle"
-host = "b"
-
-[[process]]
-name = "idle-c"
-exec = "caravan-testnode idle"
-host = "c"
-"#,
-            hosts_table(&hosts, false)
-        ),
+        &idle_group(&hosts_table(&hosts, false), &["a", "b", "c"]),
     );
     let a = Launcher::start(&hosts, "a", &s);
     let b = Launcher::start(&hosts, "b", &s);
@@ -406,28 +386,7 @@ fn a_second_launcher_of_a_host_gives_way_and_the_group_goes_on() {
     let hosts = Hosts::new("twin", &["a", "b"]);
     let s = Scenario::new(
         "hosts-twin",
-        &format!(
-            r#"clock = "realtime"
-duration = "10min"
-
-[hosts.a]
-listen = ["{a}"]
-
-[hosts.b]
-connect = ["{a}"]
-
-[[process]]
-name = "idle-a"
-exec = "caravan-testnode idle"
-host = "a"
-
-[[process]]
-name = "idle-b"
-exec = "caravan-testnode idle"
-host = "b"
-"#,
-            a = hosts.endpoint("a"),
-        ),
+        &idle_group(&pair(hosts.endpoint("a")), &["a", "b"]),
     );
     let a = Launcher::start(&hosts, "a", &s);
     let b = Launcher::start(&hosts, "b", &s);
@@ -459,6 +418,18 @@ host = "b"
     );
     assert!(!err_a.contains("left the group"), "{err_a}");
     assert!(!err_b.contains("failed"), "{err_b}");
+}
+
+/// A realtime group that runs until it is stopped: an idle process on each host of `names`,
+/// under the `[hosts]` tables `hosts_toml`.
+fn idle_group(hosts_toml: &str, names: &[&str]) -> String {
+    let mut file = format!("clock = \"realtime\"\nduration = \"10min\"\n{hosts_toml}\n");
+    for n in names {
+        file += &format!(
+            "[[process]]\nname = \"idle-{n}\"\nexec = \"caravan-testnode idle\"\nhost = \"{n}\"\n\n"
+        );
+    }
+    file
 }
 
 /// Two hosts on loopback ports, `a` listening.
