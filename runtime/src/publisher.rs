@@ -79,6 +79,28 @@ impl<T: Message> Publisher<T> {
         })
     }
 
+    /// Loans a message in shared memory as it is: the bytes the sample's slot holds (zeros,
+    /// or an earlier message of this topic), without writing `T`'s default first. For
+    /// benchmarks and very large messages that are overwritten in part, where the default's
+    /// memset would cost more than the transport.
+    ///
+    /// # Safety
+    /// Every bit pattern must be a valid `T` (plain numbers and arrays of them, no `bool`,
+    /// enum or reference): a slot holds zeros when the OS made the segment and afterwards
+    /// only whole messages of this topic, but not necessarily `T`'s default.
+    pub unsafe fn loan_as_is(&self) -> Result<Loan<'_, T>, Error> {
+        let uninit = self
+            .port
+            .loan_uninit()
+            .map_err(|e| Error::topic(&self.topic, format!("cannot loan a sample: {e:?}")))?;
+        Ok(Loan {
+            // SAFETY: the slot's bytes are initialised (see above) and, by the caller's
+            // promise, a valid `T`.
+            sample: unsafe { uninit.assume_init() },
+            publisher: self,
+        })
+    }
+
     /// Publishes a copy of `value`.
     pub fn publish(&self, value: &T) -> Result<(), Error> {
         let uninit = self

@@ -12,21 +12,36 @@ use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 /// ranges (682 × f32), a small image, a point cloud and a large map or image.
 pub const BLOB_SIZES: [usize; 5] = [16, 2_728, 64 * 1024, 1024 * 1024, 4 * 1024 * 1024];
 
-/// A message of `N` opaque bytes. Its stable name is Rust's (`caravan_schemas::bench::Blob<16>`),
-/// distinct for every `N`.
+/// A message of `N` opaque bytes. Its stable name is `caravan::bench::Blob<N>`.
 #[repr(C)]
-#[derive(Clone, Copy, ZeroCopySend)]
+#[derive(Clone, Copy)]
 pub struct Blob<const N: usize> {
     pub bytes: [u8; N],
 }
 
-// SAFETY (benchmark payload): a blob's "default" leaves its bytes as they are. Blobs are only
-// ever loaned in iceoryx2 data segments, which iceoryx2 zero-fills when it creates them and
-// which afterwards hold only earlier blobs, so every byte is initialised. The derived impl
-// would write all N bytes on every `Publisher::loan` (a 4 MiB memset per message), a cost the
-// bench keeps out of the transport's numbers. Never place a blob anywhere else.
+// SAFETY: plain bytes in a `repr(C)` struct, the same layout in every process; the name below
+// is unique per `N`.
+unsafe impl<const N: usize> ZeroCopySend for Blob<N> {
+    unsafe fn type_name() -> &'static str {
+        match N {
+            16 => "caravan::bench::Blob<16>",
+            2_728 => "caravan::bench::Blob<2728>",
+            65_536 => "caravan::bench::Blob<65536>",
+            1_048_576 => "caravan::bench::Blob<1048576>",
+            4_194_304 => "caravan::bench::Blob<4194304>",
+            _ => core::any::type_name::<Self>(),
+        }
+    }
+}
+
+/// All zeros. The bench loans blobs with `Publisher::loan_as_is`, which skips this memset
+/// (every bit pattern is a valid blob), so the cost of filling a 4 MiB message is not taken
+/// for the cost of moving it.
 impl<const N: usize> PlacementDefault for Blob<N> {
-    unsafe fn placement_default(_ptr: *mut Self) {}
+    unsafe fn placement_default(ptr: *mut Self) {
+        // SAFETY: the caller gives a pointer valid for writes of one `Self`.
+        unsafe { ptr.write_bytes(0, 1) };
+    }
 }
 
 impl<const N: usize> std::fmt::Debug for Blob<N> {

@@ -7,8 +7,10 @@
 //! and removed when it ends. Where namespaces cannot be made (no privileges), each host gets
 //! a user and mount namespace and a loopback port instead; [`Hosts::how`] says which.
 
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
 
 /// How the hosts are separated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -180,4 +182,63 @@ impl Drop for Hosts {
             ip(&["netns", "del", ns]);
         }
     }
+}
+
+/// A host's launcher, its standard error collected as it comes.
+pub struct Launcher {
+    child: Child,
+    err: Arc<Mutex<String>>,
+}
+
+impl Launcher {
+    pub fn start(hosts: &Hosts, host: &str, s: &crate::Scenario) -> Self {
+        Self::start_in(hosts, host, s, &s.dir)
+    }
+
+    /// As `start`, with its temporary, run and pid files under `dir`.
+    pub fn start_in(hosts: &Hosts, host: &str, s: &crate::Scenario, dir: &std::path::Path) -> Self {
+        std::fs::create_dir_all(dir).unwrap();
+        let mut child = hosts.launch(host, &s.file, dir, &[]);
+        let err = Arc::new(Mutex::new(String::new()));
+        let mut pipe = child.stderr.take().unwrap();
+        let sink = err.clone();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while let Ok(n) = pipe.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                sink.lock()
+                    .unwrap()
+                    .push_str(&String::from_utf8_lossy(&buf[..n]));
+            }
+        });
+        Self { child, err }
+    }
+
+    pub fn stderr(&self) -> String {
+        self.err.lock().unwrap().clone()
+    }
+
+    /// Waits for the launcher (and its host's listing of /dev/shm) to end.
+    pub fn finish(mut self) -> (Option<i32>, String) {
+        let status = self.child.wait().unwrap();
+        // The reader thread ends with the pipe; give it the last lines.
+        crate::wait_until("the launcher's output is read", || {
+            Arc::strong_count(&self.err) == 1
+        });
+        (status.code(), self.stderr())
+    }
+}
+
+pub fn pid_of(s: &crate::Scenario, host: &str) -> i32 {
+    std::fs::read_to_string(s.dir.join(format!("pid-{host}.txt")))
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+pub fn shm_left(s: &crate::Scenario, host: &str) -> String {
+    std::fs::read_to_string(s.dir.join(format!("shm-{host}.txt"))).unwrap_or_default()
 }

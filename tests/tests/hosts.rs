@@ -2,70 +2,8 @@
 //! between them over zenoh. The hosts are namespaces of this machine (see
 //! `caravan_tests::hosts`).
 
-use caravan_tests::hosts::{Hosts, free_port};
+use caravan_tests::hosts::{Hosts, Launcher, free_port, pid_of, shm_left};
 use caravan_tests::{PINGPONG, Scenario, assert_refused, caravan, recording, wait_until};
-use std::io::Read;
-use std::process::Child;
-use std::sync::{Arc, Mutex};
-
-/// A host's launcher, its standard error collected as it comes.
-struct Launcher {
-    child: Child,
-    err: Arc<Mutex<String>>,
-}
-
-impl Launcher {
-    fn start(hosts: &Hosts, host: &str, s: &Scenario) -> Self {
-        Self::start_in(hosts, host, s, &s.dir)
-    }
-
-    /// As `start`, with its temporary, run and pid files under `dir`.
-    fn start_in(hosts: &Hosts, host: &str, s: &Scenario, dir: &std::path::Path) -> Self {
-        std::fs::create_dir_all(dir).unwrap();
-        let mut child = hosts.launch(host, &s.file, dir, &[]);
-        let err = Arc::new(Mutex::new(String::new()));
-        let mut pipe = child.stderr.take().unwrap();
-        let sink = err.clone();
-        std::thread::spawn(move || {
-            let mut buf = [0u8; 4096];
-            while let Ok(n) = pipe.read(&mut buf) {
-                if n == 0 {
-                    break;
-                }
-                sink.lock()
-                    .unwrap()
-                    .push_str(&String::from_utf8_lossy(&buf[..n]));
-            }
-        });
-        Self { child, err }
-    }
-
-    fn stderr(&self) -> String {
-        self.err.lock().unwrap().clone()
-    }
-
-    /// Waits for the launcher (and its host's listing of /dev/shm) to end.
-    fn finish(mut self) -> (Option<i32>, String) {
-        let status = self.child.wait().unwrap();
-        // The reader thread ends with the pipe; give it the last lines.
-        wait_until("the launcher's output is read", || {
-            Arc::strong_count(&self.err) == 1
-        });
-        (status.code(), self.stderr())
-    }
-}
-
-fn pid_of(s: &Scenario, host: &str) -> i32 {
-    std::fs::read_to_string(s.dir.join(format!("pid-{host}.txt")))
-        .unwrap()
-        .trim()
-        .parse()
-        .unwrap()
-}
-
-fn shm_left(s: &Scenario, host: &str) -> String {
-    std::fs::read_to_string(s.dir.join(format!("shm-{host}.txt"))).unwrap_or_default()
-}
 
 /// The report's entry for the real network from `from` to `to`, in run directory `run`.
 fn network_link(run: &std::path::Path, from: &str, to: &str) -> serde_json::Value {

@@ -202,16 +202,20 @@ impl<T: Message> RawSide<T> {
         Ok(())
     }
 
-    /// Loans a sample, initialises it in place with `PlacementDefault` (as Caravan's
-    /// `Publisher::loan` does), lets `fill` write to it and sends it; wakes the other side if
-    /// `notify`.
-    pub(super) fn send_in_place(&self, notify: bool, fill: impl FnOnce(&mut T)) -> Result<()> {
-        let mut uninit = self.publisher.loan_uninit()?;
-        // SAFETY: placement_default initialises every field of the payload in place.
-        let mut sample = unsafe {
-            T::placement_default(uninit.payload_mut().as_mut_ptr());
-            uninit.assume_init()
-        };
+    /// Loans a sample as it is (as Caravan's `Publisher::loan_as_is` does), lets `fill`
+    /// write to it and sends it; wakes the other side if `notify`.
+    ///
+    /// # Safety
+    /// Every bit pattern must be a valid `T` (see `Publisher::loan_as_is`).
+    pub(super) unsafe fn send_in_place(
+        &self,
+        notify: bool,
+        fill: impl FnOnce(&mut T),
+    ) -> Result<()> {
+        let uninit = self.publisher.loan_uninit()?;
+        // SAFETY: a slot holds zeros from the OS or an earlier whole `T`, and every bit
+        // pattern is a valid `T` (the caller's promise).
+        let mut sample = unsafe { uninit.assume_init() };
         fill(sample.payload_mut());
         sample.send()?;
         if notify {

@@ -41,7 +41,7 @@ pub enum FleetEvent {
     Stopped(StopNotice),
     /// Every host's processes have exited.
     AllDone,
-    /// Topics could not cross between hosts.
+    /// Topics could not cross between hosts, or another launcher of this host came first.
     Failed(String),
 }
 

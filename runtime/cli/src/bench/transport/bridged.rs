@@ -12,7 +12,7 @@
 //! The relays run in a process of their own because a relay never serves readers in its own
 //! process (it takes them for its launcher's recorder and scheduler).
 
-use super::{Pair, ready, temp_path};
+use super::{Pair, await_ready, ready, stop_child, temp_path};
 use crate::bridge::relay::{Relay, RelayConfig};
 use crate::bridge::{session_config, z};
 use crate::launch::model::HostSpec;
@@ -21,6 +21,7 @@ use caravan::schemas::lockstep::name_hash;
 use clap::Args;
 use std::io::Read;
 use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
 use zenoh::Wait;
 
 /// The measuring node's host, and the echoing node's.
@@ -106,4 +107,30 @@ pub fn relays(args: &RelaysArgs) -> Result<()> {
         let _ = session.close().wait();
     }
     Ok(())
+}
+
+/// Starts `caravan bench transport-relays` and waits until both relays run.
+pub fn start_relays(group: &str, endpoint: &str) -> Result<Child> {
+    let mut child = Command::new(std::env::current_exe()?)
+        .args(["bench", "transport-relays", "--group", group])
+        .args(["--endpoint", endpoint])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .context("cannot start the relays")?;
+    match await_ready(child.stdout.take().expect("piped stdout")) {
+        Ok(_) => Ok(child),
+        Err(e) => {
+            stop_relays(Some(child));
+            Err(e.context("the relays did not start"))
+        }
+    }
+}
+
+/// Closes the relays' standard input, which stops them.
+pub fn stop_relays(relays: Option<Child>) {
+    if let Some(mut child) = relays {
+        drop(child.stdin.take());
+        stop_child(&mut child, "relays' process");
+    }
 }

@@ -16,6 +16,7 @@ mod plot;
 pub mod report;
 mod stream;
 mod udp;
+mod watchdog;
 mod zenoh_peer;
 
 use anyhow::{Context, Result, bail};
@@ -27,8 +28,9 @@ use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
+use watchdog::Watchdog;
 
 pub use bridged::{RelaysArgs, relays};
 pub use payload::SIZES;
@@ -389,7 +391,7 @@ fn measure(
     };
     // Between hosts: both hosts' relays, in a process of their own, before either side.
     let mut relays = match (kind, &endpoint) {
-        (Kind::CaravanBridged, Some(e)) => match start_relays(&group, e) {
+        (Kind::CaravanBridged, Some(e)) => match bridged::start_relays(&group, e) {
             Ok(child) => Some(child),
             Err(e) => {
                 cleanup(kind, &group);
@@ -416,7 +418,7 @@ fn measure(
     let mut child = match child {
         Ok(child) => child,
         Err(e) => {
-            stop_relays(relays.take());
+            bridged::stop_relays(relays.take());
             cleanup(kind, &group);
             return Err(e);
         }
@@ -444,42 +446,16 @@ fn measure(
         outcome?;
         recorder.finish()
     })();
-    stop_child(&mut child);
-    stop_relays(relays);
+    stop_child(&mut child, "echoing process");
+    bridged::stop_relays(relays);
     cleanup(kind, &group);
     result.map(Some)
-}
-
-/// Starts `caravan bench transport-relays` and waits until both relays run.
-fn start_relays(group: &str, endpoint: &str) -> Result<Child> {
-    let mut child = Command::new(std::env::current_exe()?)
-        .args(["bench", "transport-relays", "--group", group])
-        .args(["--endpoint", endpoint])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .context("cannot start the relays")?;
-    match await_ready(child.stdout.take().expect("piped stdout")) {
-        Ok(_) => Ok(child),
-        Err(e) => {
-            stop_relays(Some(child));
-            Err(e.context("the relays did not start"))
-        }
-    }
-}
-
-/// Closes the relays' standard input, which stops them.
-fn stop_relays(relays: Option<Child>) {
-    if let Some(mut child) = relays {
-        drop(child.stdin.take());
-        stop_child(&mut child);
-    }
 }
 
 /// Reads the echoing process's stdout up to its `ready` line and returns what follows `ready`.
 /// Anything else it prints (zenoh logs there when RUST_LOG is set) goes on to our stderr, by a
 /// thread that keeps draining the pipe so the echoing process never blocks on it.
-fn await_ready(stdout: std::process::ChildStdout) -> Result<String> {
+pub(super) fn await_ready(stdout: std::process::ChildStdout) -> Result<String> {
     let mut lines = BufReader::new(stdout).lines();
     loop {
         let Some(line) = lines.next().transpose()? else {
@@ -570,7 +546,7 @@ mod pin {
 }
 
 /// Waits for the echoing side to exit after the stop message; kills it if it does not.
-fn stop_child(child: &mut Child) {
+pub(super) fn stop_child(child: &mut Child, what: &str) {
     let deadline = Instant::now() + Duration::from_secs(5);
     while Instant::now() < deadline {
         if let Ok(Some(_)) = child.try_wait() {
@@ -578,7 +554,7 @@ fn stop_child(child: &mut Child) {
         }
         std::thread::sleep(Duration::from_millis(5));
     }
-    eprintln!("caravan: the echoing process did not stop; killing it");
+    eprintln!("caravan: the {what} did not stop; killing it");
     let _ = child.kill();
     let _ = child.wait();
 }
@@ -593,47 +569,5 @@ fn cleanup(kind: Kind, group: &str) {
     }
     if kind == Kind::CaravanBridged {
         bridged::cleanup(group);
-    }
-}
-
-/// Ends the whole bench if a measurement makes no progress for a long time (a lost message on
-/// a transport that waits without a timeout), so that it never hangs a test or CI.
-struct Watchdog {
-    done: Arc<AtomicBool>,
-    thread: std::thread::JoinHandle<()>,
-}
-
-impl Watchdog {
-    const STALL: Duration = Duration::from_secs(60);
-
-    fn start(alive: Arc<AtomicU64>, child: u32, kind: Kind, bytes: usize) -> Self {
-        let done = Arc::new(AtomicBool::new(false));
-        let flag = done.clone();
-        let thread = std::thread::spawn(move || {
-            let mut last = (u64::MAX, Instant::now());
-            while !flag.load(Ordering::Relaxed) {
-                let now = alive.load(Ordering::Relaxed);
-                if now != last.0 {
-                    last = (now, Instant::now());
-                } else if last.1.elapsed() > Self::STALL {
-                    eprintln!(
-                        "caravan: {} {bytes} B made no progress for {:?}; giving up",
-                        kind.name(),
-                        Self::STALL
-                    );
-                    // SAFETY: signalling our own child.
-                    unsafe { libc::kill(child as i32, libc::SIGKILL) };
-                    std::process::exit(2);
-                }
-                std::thread::park_timeout(Duration::from_millis(200));
-            }
-        });
-        Self { done, thread }
-    }
-
-    fn stop(self) {
-        self.done.store(true, Ordering::Relaxed);
-        self.thread.thread().unpark();
-        let _ = self.thread.join();
     }
 }
