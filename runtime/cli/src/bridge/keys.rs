@@ -75,7 +75,7 @@ pub fn topic(group: &str, host: &str, topic: &str) -> String {
     format!("caravan/{group}/topic/{host}/{topic}")
 }
 
-/// The last chunk of a key: the host of a `host/H` or `done/H` token.
+/// The last chunk of a key: the host of a `done/H` or `record/H` token.
 pub fn last(key: &str) -> &str {
     key.rsplit('/').next().unwrap_or(key)
 }

@@ -231,9 +231,14 @@ impl Bridge {
             conflict: Mutex::new(None),
         });
         shared.presence.lock().unwrap().joined(host);
+        let me_id = keys::LauncherId {
+            start_ns: caravan::wall_clock_ns(),
+            zid: session.zid().to_string(),
+        };
         let watch = |kind: &'static str| -> Result<zenoh::pubsub::Subscriber<()>> {
             let shared = shared.clone();
             let me = host.to_string();
+            let me_id = me_id.clone();
             let pattern = match kind {
                 "host" => keys::host(&group, "*", "*"),
                 _ => keys::done(&group, "*"),
@@ -246,18 +251,28 @@ impl Bridge {
                     let key = sample.key_expr().as_str();
                     let (h, id) = match kind {
                         "host" => match keys::host_of(key) {
-                            Some((h, id)) => (h, id.key_chunk()),
+                            Some((h, id)) => (h, Some(id)),
                             None => return,
                         },
-                        _ => (keys::last(key), String::new()),
+                        _ => (keys::last(key), None),
                     };
-                    let mut p = shared.presence.lock().unwrap();
-                    if h == me || !p.knows(h) {
+                    if h == me {
+                        // Another launcher of this host?
+                        if let Some(other) = id.filter(|id| *id != me_id)
+                            && sample.kind() == SampleKind::Put
+                        {
+                            on_twin(&shared, &me_id, &other, &me);
+                        }
                         return;
                     }
+                    let mut p = shared.presence.lock().unwrap();
+                    if !p.knows(h) {
+                        return;
+                    }
+                    let zid = id.map(|id| id.zid).unwrap_or_default();
                     let change: Vec<Change> = match (kind, sample.kind()) {
-                        ("host", SampleKind::Put) => p.launcher_up(h, &id).into_iter().collect(),
-                        ("host", SampleKind::Delete) => p.launcher_down(h, &id),
+                        ("host", SampleKind::Put) => p.launcher_up(h, &zid).into_iter().collect(),
+                        ("host", SampleKind::Delete) => p.launcher_down(h, &zid),
                         ("done", SampleKind::Put) => p.finished(h).into_iter().collect(),
                         _ => Vec::new(),
                     };
@@ -283,14 +298,9 @@ impl Bridge {
                 .wait())?
         };
         watchers.push(stops);
-        let me = keys::LauncherId {
-            start_ns: caravan::wall_clock_ns(),
-            zid: session.zid().to_string(),
-        };
-        watchers.push(watch_twins(&session, &group, host, &me, &shared)?);
         let token = z(session
             .liveliness()
-            .declare_token(keys::host(&group, host, &me.key_chunk()))
+            .declare_token(keys::host(&group, host, &me_id.key_chunk()))
             .wait())?;
         Ok(Self {
             group,
@@ -434,40 +444,20 @@ impl Bridge {
     }
 }
 
-/// Watches for other launchers of this launcher's host. The one that started later gives way
-/// (its group fails with a message naming the other); the earlier one warns and goes on.
-fn watch_twins(
-    session: &zenoh::Session,
-    group: &str,
-    host: &str,
-    me: &keys::LauncherId,
-    shared: &Arc<Shared>,
-) -> Result<zenoh::pubsub::Subscriber<()>> {
-    let (shared, me, host_name) = (shared.clone(), me.clone(), host.to_string());
-    z(session
-        .liveliness()
-        .declare_subscriber(keys::host(group, host, "*"))
-        .history(true)
-        .callback(move |sample| {
-            let Some((_, other)) = keys::host_of(sample.key_expr().as_str()) else {
-                return;
-            };
-            if sample.kind() != SampleKind::Put || other == me {
-                return;
-            }
-            if other < me {
-                shared.give_way(format!(
-                    "another launcher already runs host '{host_name}' of this group (zenoh id {}); start one launcher per host",
-                    other.zid
-                ));
-            } else {
-                eprintln!(
-                    "caravan: warning: a second launcher for host '{host_name}' joined (zenoh id {}); it gives way",
-                    other.zid
-                );
-            }
-        })
-        .wait())
+/// Another launcher of this launcher's host (`host`) is up. The one that started later gives
+/// way (its group fails with a message naming the other); the earlier one warns and goes on.
+fn on_twin(shared: &Shared, me: &keys::LauncherId, other: &keys::LauncherId, host: &str) {
+    if other < me {
+        shared.give_way(format!(
+            "another launcher already runs host '{host}' of this group (zenoh id {}); start one launcher per host",
+            other.zid
+        ));
+    } else {
+        eprintln!(
+            "caravan: warning: a second launcher for host '{host}' joined (zenoh id {}); it gives way",
+            other.zid
+        );
+    }
 }
 
 fn quoted(names: &[String]) -> String {

@@ -1,6 +1,6 @@
-//! Caravan topics: `Publisher::loan_as_is` in place, `Subscriber::receive`, header stamping and gap
-//! counting included. Woken by events through `Node::run`, or (benchmark only) spinning. The
-//! same nodes measure the path between two hosts ([`super::bridged`]).
+//! Caravan topics: `Publisher::loan_as_is` in place, `Subscriber::receive`, header stamping
+//! and gap counting included. Woken by events through `Node::run`, or (benchmark only)
+//! spinning. The same nodes measure the path between two hosts ([`super::bridged`]).
 
 use super::payload::{Bytes, STOP, copy_mark, mark, read_mark, with_blob};
 use super::{ECHO_TIMEOUT, Kind, PONG_IDLE, Pair, Recorder, ready, spin};

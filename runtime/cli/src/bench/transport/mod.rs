@@ -379,6 +379,13 @@ fn measure(
         progress.inc(rounds + warmup);
         return Ok(None);
     }
+    // Removes whatever this measurement made, on every way out of it.
+    let mut made = Made {
+        kind,
+        group: group.clone(),
+        pong: None,
+        relays: None,
+    };
     if kind.uses_iceoryx2() {
         iceoryx2_raw::write_config_file(&group)?;
     }
@@ -390,16 +397,9 @@ fn measure(
         _ => None,
     };
     // Between hosts: both hosts' relays, in a process of their own, before either side.
-    let mut relays = match (kind, &endpoint) {
-        (Kind::CaravanBridged, Some(e)) => match bridged::start_relays(&group, e) {
-            Ok(child) => Some(child),
-            Err(e) => {
-                cleanup(kind, &group);
-                return Err(e);
-            }
-        },
-        _ => None,
-    };
+    if let (Kind::CaravanBridged, Some(e)) = (kind, &endpoint) {
+        made.relays = Some(bridged::start_relays(&group, e)?);
+    }
     let mut cmd = Command::new(std::env::current_exe()?);
     cmd.args(["bench", "transport-pong", "--group", &group])
         .args(["--transport", kind.name()])
@@ -410,46 +410,62 @@ fn measure(
     if let Some(cpu) = pong_cpu {
         cmd.args(["--cpu", &cpu.to_string()]);
     }
-    let child = cmd
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .spawn()
-        .context("cannot start the echoing process");
-    let mut child = match child {
-        Ok(child) => child,
-        Err(e) => {
-            bridged::stop_relays(relays.take());
-            cleanup(kind, &group);
-            return Err(e);
-        }
+    let child = made.pong.insert(
+        cmd.stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .spawn()
+            .context("cannot start the echoing process")?,
+    );
+    let info = await_ready(child.stdout.take().expect("piped stdout"))?;
+    let pair = Pair {
+        kind,
+        bytes,
+        group: group.clone(),
+        endpoint: endpoint.clone().unwrap_or(info),
     };
-    let result = (|| {
-        let info = await_ready(child.stdout.take().expect("piped stdout"))?;
-        let pair = Pair {
-            kind,
-            bytes,
-            group: group.clone(),
-            endpoint: endpoint.clone().unwrap_or(info),
-        };
-        let alive = Arc::new(AtomicU64::new(0));
-        let mut recorder = Recorder {
-            hist: histogram(),
-            warmup,
-            total: rounds + warmup,
-            done: 0,
-            progress: progress.clone(),
-            alive: alive.clone(),
-        };
-        let watchdog = Watchdog::start(alive, child.id(), kind, bytes);
-        let outcome = ping(&pair, &mut recorder);
-        watchdog.stop();
-        outcome?;
-        recorder.finish()
-    })();
-    stop_child(&mut child, "echoing process");
-    bridged::stop_relays(relays);
-    cleanup(kind, &group);
-    result.map(Some)
+    let alive = Arc::new(AtomicU64::new(0));
+    let mut recorder = Recorder {
+        hist: histogram(),
+        warmup,
+        total: rounds + warmup,
+        done: 0,
+        progress: progress.clone(),
+        alive: alive.clone(),
+    };
+    let watchdog = Watchdog::start(alive, child.id(), kind, bytes);
+    let outcome = ping(&pair, &mut recorder);
+    watchdog.stop();
+    outcome?;
+    recorder.finish().map(Some)
+}
+
+/// What one measurement made. Dropped, it stops the echoing process (after its stop message,
+/// or killing it) and the relays, and removes the shared memory, configs and sockets.
+struct Made {
+    kind: Kind,
+    group: String,
+    pong: Option<Child>,
+    relays: Option<Child>,
+}
+
+impl Drop for Made {
+    fn drop(&mut self) {
+        if let Some(mut child) = self.pong.take() {
+            stop_child(&mut child, "echoing process");
+        }
+        bridged::stop_relays(self.relays.take());
+        let group = self.group.as_str();
+        if self.kind.uses_iceoryx2() {
+            let _ = ::caravan::group::remove_resources(group);
+            let _ = std::fs::remove_file(temp_path(group, "toml"));
+        }
+        if self.kind == Kind::Uds {
+            let _ = std::fs::remove_file(temp_path(group, "sock"));
+        }
+        if self.kind == Kind::CaravanBridged {
+            bridged::cleanup(group);
+        }
+    }
 }
 
 /// Reads the echoing process's stdout up to its `ready` line and returns what follows `ready`.
@@ -475,9 +491,8 @@ pub(super) fn await_ready(stdout: std::process::ChildStdout) -> Result<String> {
 
 fn ping(pair: &Pair, rec: &mut Recorder) -> Result<()> {
     match pair.kind {
-        Kind::CaravanEvent => caravan::ping_event(pair, rec),
+        Kind::CaravanEvent | Kind::CaravanBridged => caravan::ping_event(pair, rec),
         Kind::CaravanPoll => caravan::ping_poll(pair, rec),
-        Kind::CaravanBridged => caravan::ping_event(pair, rec),
         Kind::Iceoryx2Event => iceoryx2_raw::ping(pair, rec, false),
         Kind::Iceoryx2Poll => iceoryx2_raw::ping(pair, rec, true),
         Kind::Uds => stream::ping_uds(pair, rec),
@@ -500,9 +515,8 @@ pub fn pong(args: &PongArgs) -> Result<()> {
         endpoint: args.endpoint.clone().unwrap_or_default(),
     };
     match pair.kind {
-        Kind::CaravanEvent => caravan::pong_event(&pair),
+        Kind::CaravanEvent | Kind::CaravanBridged => caravan::pong_event(&pair),
         Kind::CaravanPoll => caravan::pong_poll(&pair),
-        Kind::CaravanBridged => caravan::pong_event(&pair),
         Kind::Iceoryx2Event => iceoryx2_raw::pong(&pair, false),
         Kind::Iceoryx2Poll => iceoryx2_raw::pong(&pair, true),
         Kind::Uds => stream::pong_uds(&pair),
@@ -557,17 +571,4 @@ pub(super) fn stop_child(child: &mut Child, what: &str) {
     eprintln!("caravan: the {what} did not stop; killing it");
     let _ = child.kill();
     let _ = child.wait();
-}
-
-fn cleanup(kind: Kind, group: &str) {
-    if kind.uses_iceoryx2() {
-        let _ = ::caravan::group::remove_resources(group);
-        let _ = std::fs::remove_file(temp_path(group, "toml"));
-    }
-    if kind == Kind::Uds {
-        let _ = std::fs::remove_file(temp_path(group, "sock"));
-    }
-    if kind == Kind::CaravanBridged {
-        bridged::cleanup(group);
-    }
 }
