@@ -210,11 +210,11 @@ params = {{ count = 3 }}
     }
 }
 
-/// Hosts a (listening) and b over TLS, b with certificate `b_cert` (a file of
+/// Hosts a (listening) and b over TLS (QUIC), b with certificate `b_cert` (a file of
 /// `tests/data/tls`), and a lossless stream from a to b.
 fn tls_group(hosts: &Hosts, b_cert: &str) -> Scenario {
     let tls = concat!(env!("CARGO_MANIFEST_DIR"), "/data/tls");
-    let a = hosts.endpoint("a").replace("tcp/", "tls/");
+    let a = hosts.endpoint("a").replace("tcp/", "quic/");
     Scenario::new(
         "hosts-tls",
         &format!(
@@ -400,6 +400,7 @@ fn bad_endpoints_are_refused_with_file_line_and_key() {
             "protocol 'udp' is not available; use tcp",
         ),
         ("tcp/127.0.0.1", "has no port"),
+        ("tls/127.0.0.1:7447", "zenoh issue #2557"),
         ("127.0.0.1:7447", "is not an endpoint"),
     ] {
         let s = Scenario::new(
@@ -463,7 +464,7 @@ fn a_host_the_file_lacks_or_cannot_run_is_refused() {
     let out = s.run(&["--host", "a"]);
     let expected = [
         "some hosts have a tls table",
-        "endpoints must be tls/ADDRESS:PORT",
+        "endpoints must be quic/ADDRESS:PORT",
     ];
     assert_refused(&s, &out, &expected);
     let s = Scenario::new(

@@ -75,8 +75,9 @@ pub struct HostSpec {
     /// Across machines: the group starts only once this host joined, and stops when it
     /// leaves. A host that is not required may join late or leave; the others go on.
     pub required: bool,
-    /// TLS for this host's connections (endpoints `tls/…`), with client certificates: a
-    /// launcher joins only with a certificate signed by the group's authority.
+    /// TLS for this host's connections, over QUIC (endpoints `quic/…`), with both sides'
+    /// certificates checked: a launcher joins only with a certificate signed by the group's
+    /// authority.
     pub tls: Option<TlsSpec>,
     /// Lockstep across machines: this host's launcher owns simulated time (runs the
     /// scheduler) and records the whole group. At most one host says so; when none does, the

@@ -146,13 +146,13 @@ impl Checker<'_> {
             let clock = self.get(&h, "clock", boolean).unwrap_or(false);
             let tls = self.tls(&h, name);
             for (key, list) in [("listen", &listen), ("connect", &connect)] {
-                let tls_endpoints = list.iter().filter(|e| e.starts_with("tls/")).count();
-                if tls.is_some() && tls_endpoints < list.len() {
-                    let msg = "this host has a tls table: its endpoints must be tls/ADDRESS:PORT";
+                let secure = list.iter().filter(|e| e.starts_with("quic/")).count();
+                if tls.is_some() && secure < list.len() {
+                    let msg = "this host has a tls table: its endpoints must be quic/ADDRESS:PORT";
                     self.key_problem(&h, key, msg.to_string());
-                } else if tls.is_none() && tls_endpoints > 0 {
+                } else if tls.is_none() && secure > 0 {
                     let msg = format!(
-                        "a tls/ endpoint needs a [hosts.{name}.tls] table with ca, certificate and key"
+                        "a quic/ endpoint needs a [hosts.{name}.tls] table with ca, certificate and key"
                     );
                     self.key_problem(&h, key, msg);
                 }
