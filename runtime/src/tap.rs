@@ -201,30 +201,58 @@ pub fn topic_ports(
     topic: &str,
     type_name: &str,
 ) -> Result<TopicPorts, Error> {
-    fn ports<T: Message>(
+    Ok(watch_topic(iox, topic, type_name)?.ports())
+}
+
+/// A topic's service held open, so its ports can be read again and again: a look is a few
+/// reads of shared memory, where opening the service costs system calls and maps. Holding it
+/// keeps the service (not its ports) alive until the watch is dropped.
+pub struct TopicWatch {
+    ports: Box<dyn Fn() -> TopicPorts>,
+}
+
+impl TopicWatch {
+    /// Who is on the topic now.
+    pub fn ports(&self) -> TopicPorts {
+        (self.ports)()
+    }
+}
+
+/// Opens `topic`'s service (payload type named `type_name`) to watch its ports.
+pub fn watch_topic(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    type_name: &str,
+) -> Result<TopicWatch, Error> {
+    fn watch<T: Message>(
         iox: &iceoryx2::node::Node<ipc::Service>,
         topic: &str,
-    ) -> Result<TopicPorts, Error> {
+    ) -> Result<TopicWatch, Error> {
         let service = transport::open_existing::<T>(iox, topic)?;
-        let config = service.static_config();
-        let mut ports = TopicPorts {
-            lossless: !config.has_safe_overflow(),
-            depth: config.subscriber_max_buffer_size(),
-            publishers: Vec::new(),
-            subscribers: Vec::new(),
+        let ports = move || {
+            let config = service.static_config();
+            let mut ports = TopicPorts {
+                lossless: !config.has_safe_overflow(),
+                depth: config.subscriber_max_buffer_size(),
+                publishers: Vec::new(),
+                subscribers: Vec::new(),
+            };
+            let dynamic = service.dynamic_config();
+            dynamic.list_publishers(|p| {
+                ports.publishers.push(p.node_id);
+                CallbackProgression::Continue
+            });
+            dynamic.list_subscribers(|s| {
+                ports.subscribers.push(s.node_id);
+                CallbackProgression::Continue
+            });
+            ports
         };
-        let dynamic = service.dynamic_config();
-        dynamic.list_publishers(|p| {
-            ports.publishers.push(p.node_id);
-            CallbackProgression::Continue
-        });
-        dynamic.list_subscribers(|s| {
-            ports.subscribers.push(s.node_id);
-            CallbackProgression::Continue
-        });
-        Ok(ports)
+        Ok(TopicWatch {
+            ports: Box::new(ports),
+        })
     }
-    caravan_schemas::with_wire_type!(type_name, |T| ports::<T>(iox, topic)).unwrap_or_else(|| {
+    caravan_schemas::with_wire_type!(type_name, |T| watch::<T>(iox, topic)).unwrap_or_else(|| {
         Err(Error::topic(
             topic,
             format!("unknown message type '{type_name}'"),

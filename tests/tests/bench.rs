@@ -128,6 +128,60 @@ fn csv_rows(path: &std::path::Path) -> Vec<Vec<String>> {
 }
 
 #[test]
+fn bench_transport_streams_with_several_messages_in_flight() {
+    let out = std::env::temp_dir().join(format!("caravan-bench-window-{}", std::process::id()));
+    let args = [
+        "transport",
+        "--quick",
+        "--transports",
+        "caravan-event,caravan-bridged,zenoh",
+        "--sizes",
+        "16,65536",
+        "--in-flight",
+        "8",
+    ];
+    run_bench(&args, &out);
+    let text = std::fs::read_to_string(out.join("transport.csv")).unwrap();
+    let header: Vec<&str> = text
+        .lines()
+        .find(|l| !l.starts_with('#'))
+        .unwrap()
+        .split(',')
+        .collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let rows = csv_rows(&out.join("transport.csv"));
+    assert_eq!(rows.len(), 6, "{text}");
+    for row in &rows {
+        assert_eq!(row[col("status")], "ok", "{row:?}");
+        assert_eq!(row[col("in_flight")], "8", "{row:?}");
+        let throughput: f64 = row[col("throughput_bytes_per_s")].parse().unwrap();
+        assert!(throughput > 0.0, "{row:?}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    // Transports that cannot stream are refused, before anything runs.
+    let run = Command::new(workspace_bin("caravan"))
+        .args([
+            "bench",
+            "transport",
+            "--transports",
+            "uds",
+            "--in-flight",
+            "4",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_ne!(run.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("--in-flight 4") && err.contains("uds"),
+        "{err}"
+    );
+    assert!(!out.join("transport.csv").exists());
+}
+
+#[test]
 fn bench_scale_runs_each_clock_and_writes_its_table() {
     let out = std::env::temp_dir().join(format!("caravan-bench-scale-{}", std::process::id()));
     run_bench(&["scale", "--followers", "1,2", "--seconds", "2"], &out);

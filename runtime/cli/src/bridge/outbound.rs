@@ -50,8 +50,13 @@ struct Outbound<'a> {
     /// Hosts that record the whole group: every topic goes to them.
     recorders: BTreeSet<String>,
     arrivals: Sender<Arrival>,
-    /// When the services last changed as of the last look for topics.
+    /// When the services last changed as of the last listing of topics.
     services: Option<std::time::SystemTime>,
+    /// The topics as last listed, and those of them held open to read their ports: a look
+    /// for topics lists and opens services only after one was made or removed, so it does
+    /// not hold up the messages this thread forwards.
+    topics: Vec<caravan::tap::TopicInfo>,
+    watched: BTreeMap<String, caravan::tap::TopicWatch>,
 }
 
 pub(super) fn run(ctx: &Ctx, arrivals: Sender<Arrival>) -> Result<()> {
@@ -75,6 +80,8 @@ pub(super) fn run(ctx: &Ctx, arrivals: Sender<Arrival>) -> Result<()> {
         recorders: BTreeSet::new(),
         arrivals,
         services: None,
+        topics: Vec::new(),
+        watched: BTreeMap::new(),
     };
     let _record = match &ctx.cfg.clock_host {
         Some(clock) if clock == ctx.host() => Some(out.declare(keys::record(ctx.group(), clock))?),
@@ -335,22 +342,36 @@ impl Outbound<'_> {
         let ctx = self.ctx;
         let lockstep = ctx.cfg.clock_host.is_some();
         let me = std::process::id() as i64;
-        self.services = services_changed(&ctx.cfg.iceoryx);
+        let changed = services_changed(&ctx.cfg.iceoryx);
+        if changed.is_none() || changed != self.services {
+            // Read before listing: a change during the listing is listed next time.
+            self.services = changed;
+            self.topics = caravan::tap::list_topics(&ctx.cfg.iceoryx, lockstep)?;
+            self.topics
+                .retain(|t| !t.name.starts_with("caravan/") || is_control(&t.name));
+            // Opened again: a topic may have been removed and made again, of another type.
+            self.watched.clear();
+        }
         let mut read_now = BTreeSet::new();
-        for topic in caravan::tap::list_topics(&ctx.cfg.iceoryx, lockstep)? {
+        for topic in self.topics.clone() {
             let control = is_control(&topic.name);
-            if topic.name.starts_with("caravan/") && !control {
-                continue;
-            }
-            // The topic may vanish between listing and opening, or be busy: as it was, until
-            // the next look (a wish to read withdrawn and said again would count twice).
-            let Ok(ports) = caravan::tap::topic_ports(&self.iox, &topic.name, &topic.type_name)
-            else {
-                if self.reading.contains_key(&topic.name) {
-                    read_now.insert(topic.name.clone());
+            if !self.watched.contains_key(&topic.name) {
+                match caravan::tap::watch_topic(&self.iox, &topic.name, &topic.type_name) {
+                    Ok(watch) => {
+                        self.watched.insert(topic.name.clone(), watch);
+                    }
+                    // The topic may vanish between listing and opening, or be busy: as it
+                    // was, until the next look (a wish to read withdrawn and said again would
+                    // count twice).
+                    Err(_) => {
+                        if self.reading.contains_key(&topic.name) {
+                            read_now.insert(topic.name.clone());
+                        }
+                        continue;
+                    }
                 }
-                continue;
-            };
+            }
+            let ports = self.watched[&topic.name].ports();
             // Ports of this launcher (recorder, bridge) read for others, not for a process;
             // but its scheduler reads the nodes' reports.
             let readers = ports

@@ -5,8 +5,9 @@
 use super::payload::{Bytes, STOP, copy_mark, mark, read_mark, with_blob};
 use super::{ECHO_TIMEOUT, Kind, PONG_IDLE, Pair, Recorder, ready, spin};
 use anyhow::{Result, bail};
-use caravan::{Node, NodeIdentity, Publisher, Topic, Trigger};
+use caravan::{Delivery, Node, NodeIdentity, Publisher, Topic, Trigger};
 use caravan_schemas::Message;
+use std::collections::VecDeque;
 use std::time::Instant;
 
 const PING: &str = "bench/ping";
@@ -21,6 +22,16 @@ fn node(pair: &Pair, name: &str) -> Result<Node> {
         _ => pair.temp_path("toml"),
     });
     Ok(Node::new(identity)?)
+}
+
+/// The pair's topic `name`: as a node makes it by default with one message in flight; lossless
+/// and as deep as the window with several, so none is overwritten (the window bounds every
+/// queue on the way, so no publisher ever waits).
+fn topic<T: Message>(pair: &Pair, name: &str) -> Topic<T> {
+    match pair.in_flight {
+        1 => Topic::new(name),
+        n => Topic::new(name).with_delivery(Delivery::Lossless { depth: n as usize }),
+    }
 }
 
 /// Waits until `publisher` has a reader. On one host the other side's exists already; between
@@ -64,18 +75,31 @@ pub fn ping_event(pair: &Pair, rec: &mut Recorder) -> Result<()> {
     with_blob!(pair.bytes, ping_event_t(pair, rec))
 }
 
+/// Keeps `pair.in_flight` messages sent and not yet echoed; each echo's round trip is
+/// measured from its own message's send.
 fn ping_event_t<T: Message + Bytes>(pair: &Pair, rec: &mut Recorder) -> Result<()> {
     let mut node = node(pair, "ping")?;
-    let ping = node.publisher(&Topic::<T>::new(PING))?;
-    let pong = node.subscriber(&Topic::<T>::new(PONG))?;
+    let ping = node.publisher(&topic::<T>(pair, PING))?;
+    let pong = node.subscriber(&topic::<T>(pair, PONG))?;
     let total = rec.total();
-    let mut seq = 0;
+    // Sent and not echoed yet: when each was sent, oldest first.
+    let mut sent_at = VecDeque::new();
+    let (mut next, mut seq) = (0, 0);
+    let mut send_next = |sent_at: &mut VecDeque<Instant>| -> Result<(), caravan::Error> {
+        if next < total {
+            sent_at.push_back(Instant::now());
+            send(&ping, next)?;
+            next += 1;
+        }
+        Ok(())
+    };
     await_reader(&ping)?;
-    let mut sent_at = Instant::now();
-    send(&ping, seq)?;
+    for _ in 0..pair.in_flight {
+        send_next(&mut sent_at)?;
+    }
     node.run(Trigger::on(PONG), |step| {
         while let Some(msg) = pong.receive()? {
-            let rtt = sent_at.elapsed();
+            let rtt = sent_at.pop_front().map(|t| t.elapsed()).unwrap_or_default();
             let got = read_mark(msg.bytes());
             if got != Some(seq) {
                 return Err(mismatch(seq, got));
@@ -87,8 +111,7 @@ fn ping_event_t<T: Message + Bytes>(pair: &Pair, rec: &mut Recorder) -> Result<(
                 step.stop();
                 return Ok(());
             }
-            sent_at = Instant::now();
-            send(&ping, seq)?;
+            send_next(&mut sent_at)?;
         }
         Ok(())
     })?;
@@ -102,8 +125,8 @@ pub fn pong_event(pair: &Pair) -> Result<()> {
 
 fn pong_event_t<T: Message + Bytes>(pair: &Pair) -> Result<()> {
     let mut node = node(pair, "pong")?;
-    let ping = node.subscriber(&Topic::<T>::new(PING))?;
-    let pong = node.publisher(&Topic::<T>::new(PONG))?;
+    let ping = node.subscriber(&topic::<T>(pair, PING))?;
+    let pong = node.publisher(&topic::<T>(pair, PONG))?;
     ready("");
     let mut answered = false;
     node.run(Trigger::on(PING), |step| {

@@ -13,6 +13,7 @@ mod caravan;
 mod iceoryx2_raw;
 mod payload;
 mod plot;
+mod recorder;
 pub mod report;
 mod stream;
 mod udp;
@@ -20,10 +21,10 @@ mod watchdog;
 mod zenoh_peer;
 
 use anyhow::{Context, Result, bail};
-use caravan_report::bench::{Percentiles, histogram, percentiles};
+use caravan_report::bench::{Percentiles, percentiles};
 use clap::{Args, ValueEnum};
-use hdrhistogram::Histogram;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use recorder::{Measured, Recorder};
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
@@ -127,6 +128,11 @@ pub struct TransportArgs {
     /// Only these payload sizes in bytes, comma-separated [default: 16,2728,65536,1048576,4194304]
     #[arg(long, value_delimiter = ',')]
     pub sizes: Vec<usize>,
+    /// Messages in flight: the measuring side keeps this many sent and not yet echoed, so the
+    /// topics stream (latency is then under load). Above 1 only for caravan-event,
+    /// caravan-bridged and zenoh, whose topics become lossless with this depth
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
+    pub in_flight: u64,
     /// Let the scheduler place both sides (default: the measuring side on the first CPU this
     /// process may use, the echoing side on the second)
     #[arg(long)]
@@ -139,6 +145,8 @@ pub struct PongArgs {
     transport: Kind,
     #[arg(long)]
     bytes: usize,
+    #[arg(long, default_value_t = 1)]
+    in_flight: u64,
     #[arg(long)]
     group: String,
     /// Where to listen (zenoh): a zenoh endpoint such as tcp/127.0.0.1:7447
@@ -153,6 +161,8 @@ pub struct PongArgs {
 pub struct Pair {
     pub kind: Kind,
     pub bytes: usize,
+    /// Messages in flight (1: one round trip at a time).
+    pub in_flight: u64,
     /// Unique per measurement: iceoryx2 group, socket file name.
     pub group: String,
     /// What the pong side reported when ready (a port), or what it was told (zenoh endpoint).
@@ -168,44 +178,6 @@ impl Pair {
 
 fn temp_path(group: &str, ext: &str) -> PathBuf {
     std::env::temp_dir().join(format!("caravan-bench-{group}.{ext}"))
-}
-
-/// Counts round trips, records the measured ones (after warm-up) as one-way latencies.
-pub struct Recorder {
-    hist: Histogram<u64>,
-    warmup: u64,
-    total: u64,
-    done: u64,
-    progress: ProgressBar,
-    alive: Arc<AtomicU64>,
-}
-
-impl Recorder {
-    /// Round trips to make, warm-up included.
-    pub fn total(&self) -> u64 {
-        self.total
-    }
-
-    /// Records one round trip's time.
-    pub fn record(&mut self, rtt: Duration) {
-        if self.done >= self.warmup {
-            self.hist
-                .saturating_record((rtt.as_nanos() as u64 / 2).max(1));
-        }
-        self.done += 1;
-        self.alive.store(self.done, Ordering::Relaxed);
-        if self.done.is_multiple_of(64) {
-            self.progress.inc(64);
-        }
-    }
-
-    fn finish(self) -> Result<Histogram<u64>> {
-        self.progress.inc(self.done % 64);
-        if self.done < self.total {
-            bail!("stopped after {} of {} round trips", self.done, self.total);
-        }
-        Ok(self.hist)
-    }
 }
 
 /// Spins on `poll` until it yields a value. BENCHMARK ONLY: burns a core while waiting.
@@ -252,6 +224,8 @@ pub struct Row {
     pub rounds: u64,
     pub result: std::result::Result<Percentiles, String>,
     pub mean_ns: f64,
+    /// Payload bytes moved per second, both ways ([`recorder::Measured::bytes_per_s`]).
+    pub bytes_per_s: f64,
 }
 
 pub fn run(args: &TransportArgs) -> Result<()> {
@@ -267,6 +241,16 @@ pub fn run(args: &TransportArgs) -> Result<()> {
     };
     if let Some(bad) = sizes.iter().find(|s| !SIZES.contains(s)) {
         bail!("payload size {bad} is not one of {SIZES:?}");
+    }
+    let streams = [Kind::CaravanEvent, Kind::CaravanBridged, Kind::Zenoh];
+    if let Some(k) = kinds.iter().find(|k| !streams.contains(k))
+        && args.in_flight > 1
+    {
+        bail!(
+            "--in-flight {} is offered for caravan-event, caravan-bridged and zenoh only, not {}; choose them with --transports",
+            args.in_flight,
+            k.name()
+        );
     }
     let rounds = args.rounds.unwrap_or(if args.quick { 200 } else { 10_000 });
     let warmup = (rounds / 10).max(10);
@@ -288,7 +272,8 @@ pub fn run(args: &TransportArgs) -> Result<()> {
     println!("{}", machine.describe());
     println!(
         "one-way latency = round trip / 2; {rounds} round trips per transport and payload after \
-         {warmup} warm-up{}",
+         {warmup} warm-up, {} in flight{}",
+        args.in_flight,
         if args.quick { " (--quick)" } else { "" }
     );
     let progress = progress_bar(kinds.len() * sizes.len(), rounds + warmup);
@@ -297,11 +282,17 @@ pub fn run(args: &TransportArgs) -> Result<()> {
         for &kind in &kinds {
             progress.set_message(format!("{} {}", kind.name(), payload::label(bytes)));
             let pong_cpu = cpus.map(|(_, c)| c);
-            let result = measure(kind, bytes, rounds, warmup, pong_cpu, &progress);
-            let (result, mean_ns) = match result {
-                Ok(Some(h)) => (Ok(percentiles(&h)), h.mean()),
-                Ok(None) => (Err(unsupported(kind, bytes)), 0.0),
-                Err(e) => (Err(format!("failed: {e:#}")), 0.0),
+            let setup = Setup {
+                rounds,
+                warmup,
+                in_flight: args.in_flight,
+                pong_cpu,
+            };
+            let result = measure(kind, bytes, &setup, &progress);
+            let (result, mean_ns, bytes_per_s) = match result {
+                Ok(Some(m)) => (Ok(percentiles(&m.hist)), m.hist.mean(), m.bytes_per_s),
+                Ok(None) => (Err(unsupported(kind, bytes)), 0.0, 0.0),
+                Err(e) => (Err(format!("failed: {e:#}")), 0.0, 0.0),
             };
             if let Err(why) = &result {
                 progress.suspend(|| eprintln!("{} {}: {why}", kind.name(), bytes));
@@ -312,6 +303,7 @@ pub fn run(args: &TransportArgs) -> Result<()> {
                 rounds,
                 result,
                 mean_ns,
+                bytes_per_s,
             });
         }
     }
@@ -320,7 +312,8 @@ pub fn run(args: &TransportArgs) -> Result<()> {
     print!("{}", report::table(&rows));
     print!("{}", report::ratios(&rows));
     let csv_path = args.out.join("transport.csv");
-    std::fs::write(&csv_path, report::csv(&machine, &rows, rounds, warmup))
+    let csv = report::csv(&machine, &rows, rounds, warmup, args.in_flight);
+    std::fs::write(&csv_path, csv)
         .with_context(|| format!("cannot write {}", csv_path.display()))?;
     let svg_path = args.out.join("transport.svg");
     std::fs::write(&svg_path, plot::svg(&machine, &rows, rounds))
@@ -359,15 +352,22 @@ fn progress_bar(pairs: usize, rounds_per_pair: u64) -> ProgressBar {
     bar
 }
 
+/// How every measurement of a run is made.
+struct Setup {
+    rounds: u64,
+    warmup: u64,
+    in_flight: u64,
+    pong_cpu: Option<usize>,
+}
+
 /// Starts the echoing side, measures, stops it. `Ok(None)`: the transport cannot carry `bytes`.
 fn measure(
     kind: Kind,
     bytes: usize,
-    rounds: u64,
-    warmup: u64,
-    pong_cpu: Option<usize>,
+    setup: &Setup,
     progress: &ProgressBar,
-) -> Result<Option<Histogram<u64>>> {
+) -> Result<Option<Measured>> {
+    let (rounds, warmup) = (setup.rounds, setup.warmup);
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     // Group names are at most 40 of [A-Za-z0-9-].
     let group = format!(
@@ -403,11 +403,12 @@ fn measure(
     let mut cmd = Command::new(std::env::current_exe()?);
     cmd.args(["bench", "transport-pong", "--group", &group])
         .args(["--transport", kind.name()])
-        .args(["--bytes", &bytes.to_string()]);
+        .args(["--bytes", &bytes.to_string()])
+        .args(["--in-flight", &setup.in_flight.to_string()]);
     if let Some(e) = endpoint.as_ref().filter(|_| kind != Kind::CaravanBridged) {
         cmd.args(["--endpoint", e]);
     }
-    if let Some(cpu) = pong_cpu {
+    if let Some(cpu) = setup.pong_cpu {
         cmd.args(["--cpu", &cpu.to_string()]);
     }
     let child = made.pong.insert(
@@ -420,18 +421,18 @@ fn measure(
     let pair = Pair {
         kind,
         bytes,
+        in_flight: setup.in_flight,
         group: group.clone(),
         endpoint: endpoint.clone().unwrap_or(info),
     };
     let alive = Arc::new(AtomicU64::new(0));
-    let mut recorder = Recorder {
-        hist: histogram(),
+    let mut recorder = Recorder::new(
+        bytes,
+        rounds + warmup,
         warmup,
-        total: rounds + warmup,
-        done: 0,
-        progress: progress.clone(),
-        alive: alive.clone(),
-    };
+        progress.clone(),
+        alive.clone(),
+    );
     let watchdog = Watchdog::start(alive, child.id(), kind, bytes);
     let outcome = ping(&pair, &mut recorder);
     watchdog.stop();
@@ -511,6 +512,7 @@ pub fn pong(args: &PongArgs) -> Result<()> {
     let pair = Pair {
         kind: args.transport,
         bytes: args.bytes,
+        in_flight: args.in_flight,
         group: args.group.clone(),
         endpoint: args.endpoint.clone().unwrap_or_default(),
     };

@@ -20,8 +20,8 @@ pub fn table(rows: &[Row]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "\n{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}   wake-up",
-        "transport", "payload", "p50 µs", "p90 µs", "p99 µs", "p99.9 µs", "max µs"
+        "\n{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}   wake-up",
+        "transport", "payload", "p50 µs", "p90 µs", "p99 µs", "p99.9 µs", "max µs", "MB/s"
     );
     let mut last = None;
     for r in rows {
@@ -32,7 +32,7 @@ pub fn table(rows: &[Row]) -> String {
         let _ = match &r.result {
             Ok(p) => writeln!(
                 out,
-                "{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}   {}",
+                "{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9.1}   {}",
                 r.kind.name(),
                 label(r.bytes),
                 us(p.p50_ns),
@@ -40,6 +40,7 @@ pub fn table(rows: &[Row]) -> String {
                 us(p.p99_ns),
                 us(p.p999_ns),
                 us(p.max_ns),
+                r.bytes_per_s / 1e6,
                 r.kind.wake_up()
             ),
             Err(why) => writeln!(out, "{:<15} {:>9}   {why}", r.kind.name(), label(r.bytes)),
@@ -104,7 +105,7 @@ pub fn ratios(rows: &[Row]) -> String {
     header + &out
 }
 
-pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64) -> String {
+pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64, in_flight: u64) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "# caravan bench transport");
     let _ = writeln!(out, "# cpu: {}", machine.cpu);
@@ -113,17 +114,21 @@ pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64) -> String 
     let _ = writeln!(out, "# placement: {}", machine.placement);
     let _ = writeln!(
         out,
-        "# one-way latency = round trip / 2 in ns; {rounds} round trips after {warmup} warm-up"
+        "# one-way latency = round trip / 2 in ns; {rounds} round trips after {warmup} warm-up; {in_flight} in flight"
     );
     let _ = writeln!(
         out,
-        "transport,wake_up,payload_bytes,rounds,p50_ns,p90_ns,p99_ns,p999_ns,max_ns,mean_ns,status"
+        "# throughput = payload bytes moved per second, both ways (each echo is a message too)"
+    );
+    let _ = writeln!(
+        out,
+        "transport,wake_up,payload_bytes,in_flight,rounds,p50_ns,p90_ns,p99_ns,p999_ns,max_ns,mean_ns,throughput_bytes_per_s,status"
     );
     for r in rows {
         let _ = match &r.result {
             Ok(p) => writeln!(
                 out,
-                "{},{},{},{},{},{},{},{},{},{:.0},ok",
+                "{},{},{},{in_flight},{},{},{},{},{},{},{:.0},{:.0},ok",
                 r.kind.name(),
                 r.kind.wake_up(),
                 r.bytes,
@@ -133,11 +138,12 @@ pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64) -> String 
                 p.p99_ns,
                 p.p999_ns,
                 p.max_ns,
-                r.mean_ns
+                r.mean_ns,
+                r.bytes_per_s
             ),
             Err(why) => writeln!(
                 out,
-                "{},{},{},{},,,,,,,{}",
+                "{},{},{},{in_flight},{},,,,,,,,{}",
                 r.kind.name(),
                 r.kind.wake_up(),
                 r.bytes,

@@ -91,24 +91,24 @@ pub fn ping(pair: &Pair, rec: &mut Recorder, shm: bool) -> Result<()> {
         None
     };
     let fixed = ZBytes::from(vec![0u8; pair.bytes]);
-    for seq in 0..rec.total() {
-        let sent_at = Instant::now();
-        match &provider {
-            Some(provider) => {
-                let mut buf = provider
-                    .alloc(pair.bytes)
-                    .with_policy::<BlockOn<GarbageCollect>>()
-                    .wait()
-                    .map_err(|e| anyhow!("zenoh shared memory: {e:?}"))?;
-                mark(&mut buf, seq);
-                z(publisher.put(buf).wait())?;
-            }
-            None => z(publisher.put(fixed.clone()).wait())?,
+    // Sent and not echoed yet: when each was sent, oldest first.
+    let mut sent_at = std::collections::VecDeque::new();
+    let total = rec.total();
+    let mut next = 0;
+    for seq in 0..total {
+        // Keep `in_flight` messages on their way (one: a round trip at a time).
+        while next < total && next < seq + pair.in_flight {
+            sent_at.push_back(Instant::now());
+            put(&publisher, provider.as_ref(), &fixed, pair.bytes, next)?;
+            next += 1;
         }
         let Some(sample) = z(echoes.recv_timeout(ECHO_TIMEOUT))? else {
             bail!("no echo of round {seq} within {ECHO_TIMEOUT:?}");
         };
-        let rtt = sent_at.elapsed();
+        let rtt = sent_at
+            .pop_front()
+            .map(|t: Instant| t.elapsed())
+            .unwrap_or_default();
         let payload = sample.payload();
         match (shm, payload.as_shm()) {
             (true, Some(buf)) => {
@@ -133,6 +133,29 @@ pub fn ping(pair: &Pair, rec: &mut Recorder, shm: bool) -> Result<()> {
     drop(echoes);
     z(session.close().wait())?;
     Ok(())
+}
+
+/// Puts message `seq`: the same payload every time, or (`provider`) one allocated in zenoh's
+/// shared memory and marked.
+fn put(
+    publisher: &zenoh::pubsub::Publisher<'_>,
+    provider: Option<&zenoh::shm::ShmProvider<zenoh::shm::PosixShmProviderBackend>>,
+    fixed: &ZBytes,
+    bytes: usize,
+    seq: u64,
+) -> Result<()> {
+    match provider {
+        Some(provider) => {
+            let mut buf = provider
+                .alloc(bytes)
+                .with_policy::<BlockOn<GarbageCollect>>()
+                .wait()
+                .map_err(|e| anyhow!("zenoh shared memory: {e:?}"))?;
+            mark(&mut buf, seq);
+            z(publisher.put(buf).wait())
+        }
+        None => z(publisher.put(fixed.clone()).wait()),
+    }
 }
 
 pub fn pong(pair: &Pair, shm: bool) -> Result<()> {
