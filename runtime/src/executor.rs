@@ -66,6 +66,8 @@ pub(crate) struct Executor<'a> {
     pub status: &'a Publisher<NodeStatus>,
     pub epoch: Instant,
     pub epoch_offset_ns: u64,
+    /// How long to look for the next message or grant before sleeping ([`crate::spin`]).
+    pub spin: Duration,
 }
 
 fn interrupted(result: WaitSetRunResult) -> bool {
@@ -162,7 +164,24 @@ impl Executor<'_> {
             };
             // A node stepped by messages also wakes when a message delayed by a link arrives.
             let arrival = self.shared.next_arrival_ns.get();
-            let result = if listener.is_some() && arrival != u64::MAX {
+            // Spin, then park: a notification found while spinning saves the wake-up.
+            let spun = match &listener {
+                Some(l) if !self.spin.is_zero() && arrival == u64::MAX && wake_ns.is_none() => {
+                    crate::spin::spin_for(self.spin, || {
+                        let notified = l.try_wait(|_| {});
+                        notified
+                            .map(|n| (n > 0).then_some(()))
+                            .map_err(|e| Error::transport("listener", e))
+                    })?
+                    .is_some()
+                }
+                _ => false,
+            };
+            let result = if spun {
+                // Only to see to the status interval and signals; the step is due already.
+                ws.wait_and_process_once_with_timeout(on_event, Duration::ZERO)
+                    .map_err(|e| Error::transport("waitset wait", e))?
+            } else if listener.is_some() && arrival != u64::MAX {
                 let timeout = Duration::from_nanos(arrival.saturating_sub(crate::wall_clock_ns()));
                 let result = ws
                     .wait_and_process_once_with_timeout(on_event, timeout)
@@ -183,6 +202,7 @@ impl Executor<'_> {
                 ws.wait_and_process_once(on_event)
                     .map_err(|e| Error::transport("waitset wait", e))?
             };
+            fired |= spun;
             if interrupted(result) {
                 break Ok(());
             }
@@ -234,7 +254,7 @@ impl Executor<'_> {
         let mut state = Step::new();
         let mut next_status_ns = 0;
         let outcome = loop {
-            let grant = match client.wait_for_grant(&ws)? {
+            let grant = match client.wait_for_grant(&ws, self.spin)? {
                 GrantOutcome::Step(grant) => grant,
                 GrantOutcome::Stop | GrantOutcome::Terminated => break Ok(()),
             };

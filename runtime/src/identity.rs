@@ -18,6 +18,9 @@ pub mod env_vars {
     pub const RATE: &str = "CARAVAN_RATE";
     /// Overrides the node's default trigger with a topic whose messages step the node.
     pub const ON: &str = "CARAVAN_ON";
+    /// How long the node looks for its next message or grant before it sleeps, e.g. `50us`
+    /// (see [`crate::spin`]); unset or `0s`: it sleeps at once.
+    pub const SPIN: &str = "CARAVAN_SPIN";
     /// Wall-clock ns at the group's start; realtime simulated time counts from it.
     pub const EPOCH_NS: &str = "CARAVAN_EPOCH_NS";
     /// The group's random seed; nodes derive their own streams from it.
@@ -53,6 +56,9 @@ pub struct NodeIdentity {
     pub clock: ClockMode,
     pub rate_override: Option<String>,
     pub on_override: Option<String>,
+    /// How long the node spins for its next message or grant before it sleeps (see
+    /// [`crate::spin`]); zero, the default, sleeps at once. At most [`crate::MAX_SPIN`].
+    pub spin: std::time::Duration,
     /// Wall-clock ns at which the group's time started (realtime).
     pub epoch_ns: Option<u64>,
     pub seed: u64,
@@ -75,6 +81,7 @@ impl NodeIdentity {
             clock: ClockMode::Realtime,
             rate_override: None,
             on_override: None,
+            spin: std::time::Duration::ZERO,
             epoch_ns: None,
             seed: 0,
             launch_dir: PathBuf::from("."),
@@ -124,6 +131,12 @@ impl NodeIdentity {
         }
         id.rate_override = optional(env_vars::RATE);
         id.on_override = optional(env_vars::ON);
+        if let Some(spin) = optional(env_vars::SPIN) {
+            id.spin = crate::parse_spin(&spin).map_err(|e| Error::Env {
+                var: env_vars::SPIN,
+                message: e.to_string(),
+            })?;
+        }
         if let Some(seed) = optional(env_vars::SEED) {
             id.seed = seed.parse().map_err(|_| Error::Env {
                 var: env_vars::SEED,

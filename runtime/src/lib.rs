@@ -35,6 +35,7 @@ pub mod pattern;
 mod publisher;
 mod rate;
 pub mod relay;
+pub mod spin;
 mod stats;
 mod subscriber;
 pub mod tap;
@@ -52,6 +53,7 @@ pub use node::{Node, NodeBuilder};
 pub use params::parse_params;
 pub use publisher::{Loan, Publisher};
 pub use rate::{MAX_DURATION, MIN_PERIOD, Trigger, parse_duration, parse_rate, seconds};
+pub use spin::{MAX_SPIN, parse_spin};
 pub use stats::StepStats;
 pub use subscriber::{Received, Subscriber};
 

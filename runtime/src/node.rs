@@ -31,6 +31,12 @@ impl NodeBuilder {
         self
     }
 
+    /// Spins up to `spin` for the next message or grant before sleeping (see [`crate::spin`]).
+    pub fn spin(mut self, spin: Duration) -> Self {
+        self.identity.spin = spin;
+        self
+    }
+
     pub fn host(mut self, host: &str) -> Self {
         self.identity.host = host.to_string();
         self
@@ -193,6 +199,7 @@ impl Node {
             status: &self.status,
             epoch: self.started,
             epoch_offset_ns: self.epoch_offset_ns,
+            spin: self.identity.spin.min(crate::MAX_SPIN),
         };
         let result = match self.identity.clock {
             ClockMode::Realtime => executor.run_realtime(&trigger, step),

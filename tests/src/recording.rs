@@ -81,3 +81,34 @@ pub fn messages(bytes: &[u8], topic: &str) -> Vec<Vec<u8>> {
         .map(|m| m.data.into_owned())
         .collect()
 }
+
+/// Every message of a recording in file order, as (channel id, topic, log time, bytes): the
+/// order across topics and the channel ids count, not only each topic's messages.
+pub fn all_messages(bytes: &[u8]) -> Vec<(u16, String, u64, Vec<u8>)> {
+    mcap::MessageStream::new(bytes)
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            (
+                m.channel.id,
+                m.channel.topic.clone(),
+                m.log_time,
+                m.data.into_owned(),
+            )
+        })
+        .collect()
+}
+
+/// Asserts two recordings' messages (see [`all_messages`]) are the same, naming the first
+/// difference.
+pub fn assert_same_messages(a: &[(u16, String, u64, Vec<u8>)], b: &[(u16, String, u64, Vec<u8>)]) {
+    assert_eq!(a.len(), b.len(), "different numbers of messages");
+    for (x, y) in a.iter().zip(b) {
+        assert!(
+            x == y,
+            "first difference: {:?} against {:?}",
+            (x.0, &x.1, x.2),
+            (y.0, &y.1, y.2)
+        );
+    }
+}

@@ -4,8 +4,9 @@ use caravan_tests::workspace_bin;
 use std::collections::BTreeSet;
 use std::process::Command;
 
-const TRANSPORTS: [&str; 10] = [
+const TRANSPORTS: [&str; 11] = [
     "caravan-event",
+    "caravan-spin",
     "caravan-poll",
     "caravan-bridged",
     "iceoryx2-event",
@@ -47,11 +48,12 @@ fn bench_transport_quick_writes_csv_and_plot() {
     let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<&str> = lines.next().expect("CSV header").split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
-    let (transport, bytes, p50, status) = (
+    let (transport, bytes, p50, status, cpu) = (
         col("transport"),
         col("payload_bytes"),
         col("p50_ns"),
         col("status"),
+        col("cpu_ns_per_message"),
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     let sizes: BTreeSet<u64> = rows.iter().map(|r| r[bytes].parse().unwrap()).collect();
@@ -66,6 +68,8 @@ fn bench_transport_quick_writes_csv_and_plot() {
             if row[status] == "ok" || t != "udp" {
                 assert_eq!(row[status], "ok", "{row:?}");
                 assert!(row[p50].parse::<u64>().unwrap() > 0, "{row:?}");
+                // Both sides run for every message, so each costs some CPU.
+                assert!(row[cpu].parse::<f64>().unwrap() > 0.0, "{row:?}");
             } else {
                 assert!(row[status].starts_with("unsupported"), "{row:?}");
             }

@@ -5,23 +5,10 @@
 use caravan_tests::{PINGPONG, Scenario, recording};
 use serde_json::Value;
 
-/// Every message of the recording in file order, as (channel id, topic, log time, bytes):
-/// the order across topics and the channel ids count, not only each topic's messages.
+/// Every message of the scenario's recording ([`recording::all_messages`]).
 fn all_messages(s: &Scenario) -> Vec<(u16, String, u64, Vec<u8>)> {
     let dir = s.run_dirs().pop().expect("a run directory");
-    let bytes = recording::read(&dir.join("record.mcap"));
-    mcap::MessageStream::new(&bytes)
-        .unwrap()
-        .map(|m| {
-            let m = m.unwrap();
-            (
-                m.channel.id,
-                m.channel.topic.clone(),
-                m.log_time,
-                m.data.into_owned(),
-            )
-        })
-        .collect()
+    recording::all_messages(&recording::read(&dir.join("record.mcap")))
 }
 
 fn run(tag: &str, extra: &[&str]) -> (Scenario, Value) {
@@ -47,15 +34,7 @@ fn overlapping_ticks_records_the_same_messages_as_one_tick_at_a_time() {
             "{topic}: nothing recorded"
         );
     }
-    assert_eq!(with_overlap.len(), without_overlap.len());
-    for (a, b) in with_overlap.iter().zip(&without_overlap) {
-        assert!(
-            a == b,
-            "first difference: {:?} against {:?}",
-            (a.0, &a.1, a.2),
-            (b.0, &b.1, b.2)
-        );
-    }
+    recording::assert_same_messages(&with_overlap, &without_overlap);
     // The same advances and steps; only the run with overlap may start a step early.
     assert_eq!(with["advances"], without["advances"], "{with} {without}");
     assert_eq!(with["steps"], without["steps"], "{with} {without}");

@@ -257,6 +257,7 @@ impl InGroup {
             host: ProcessSpec::DEFAULT_HOST.into(),
             rate: None,
             on: None,
+            spin: None,
             params: serde_json::json!({}),
             restart: Restart::Never,
             restart_backoff: ProcessSpec::DEFAULT_BACKOFF,

@@ -99,7 +99,11 @@ impl Client {
     ///
     /// `waitset` must have [`Self::grant_listener`] attached (once: attaching costs system
     /// calls, and every step waits here).
-    pub fn wait_for_grant(&self, waitset: &WaitSet<ipc::Service>) -> Result<GrantOutcome, Error> {
+    pub fn wait_for_grant(
+        &self,
+        waitset: &WaitSet<ipc::Service>,
+        spin: Duration,
+    ) -> Result<GrantOutcome, Error> {
         loop {
             while let Some(sample) = self
                 .grants
@@ -115,6 +119,9 @@ impl Client {
                     Some(done) if grant.now_ns < done.now_ns => {}
                     _ => return Ok(GrantOutcome::Step(grant)),
                 }
+            }
+            if super::spin_on(&self.grants, &self.grant_listener, spin, "grant")? {
+                continue;
             }
             let result = waitset
                 .wait_and_process_once_with_timeout(

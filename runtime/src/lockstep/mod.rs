@@ -18,6 +18,7 @@
 
 mod advance;
 mod client;
+mod members;
 mod overlap;
 mod scheduler;
 
@@ -64,6 +65,32 @@ fn subscriber<T: caravan_schemas::Message>(
         .buffer_size(256)
         .create()
         .map_err(|e| Error::transport(name, e))
+}
+
+/// Spin, then park: looks in shared memory for up to `spin` for something on `sub`; true if it
+/// came, so the caller need not sleep on `listener` (whose notifications are then taken, or
+/// they would fill its socket).
+fn spin_on<T: caravan_schemas::Message>(
+    sub: &Sub<T>,
+    listener: &iceoryx2::port::listener::Listener<ipc::Service>,
+    spin: std::time::Duration,
+    name: &str,
+) -> Result<bool, Error> {
+    if spin.is_zero() {
+        return Ok(false);
+    }
+    let has = || {
+        let has = sub.has_samples();
+        has.map(|h| h.then_some(()))
+            .map_err(|e| Error::transport(name, e))
+    };
+    if crate::spin::spin_for(spin, has)?.is_none() {
+        return Ok(false);
+    }
+    listener
+        .try_wait(|_| {})
+        .map_err(|e| Error::transport(name, e))?;
+    Ok(true)
 }
 
 fn send<T: caravan_schemas::Message>(port: &Pub<T>, value: T, name: &str) -> Result<(), Error> {

@@ -1,57 +1,19 @@
 //! The scheduler: owns simulated time, grants steps and collects their reports.
 
 use super::advance::{Advance, ScheduleStats, Watchdog};
+use super::members::{Flight, Member};
 use super::overlap::{self, Footprint};
-use super::{Pub, Sub, publisher, send, subscriber};
+use super::{Sub, publisher, send, spin_on, subscriber};
 use crate::Error;
 use crate::transport;
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
 use iceoryx2::port::listener::Listener;
-use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::time::{Duration, Instant};
 
 /// How long a node may take to report a step before its grant is repeated.
 const REGRANT_AFTER: Duration = Duration::from_secs(1);
-
-struct Member {
-    name: String,
-    /// False after the process died, until it says hello again (a restart).
-    active: bool,
-    period_ns: u64,
-    /// Whether it steps when it joins: it has a period, or (neither a period nor triggers)
-    /// it is scheduled by its own wake-ups and steps once to ask for the first.
-    steps_on_joining: bool,
-    /// The topics it touches, for overlapping it with nodes of another time.
-    footprint: Footprint,
-    /// Steps reported since it joined: a node overlaps only after its first, in which many
-    /// nodes still open ports.
-    steps: u64,
-    /// A node of a later time started while this one stepped.
-    overlapped: bool,
-    /// When it was last granted a step (wall clock).
-    granted_at: Instant,
-    /// Wall time from its last grant to its report: the longest-running nodes are granted
-    /// first, so the step that bounds the advance starts soonest.
-    last_step: Duration,
-    grant: Pub<Grant>,
-    grant_notifier: Notifier<ipc::Service>,
-}
-
-/// One time being stepped.
-struct Flight {
-    now_ns: u64,
-    /// Every node stepping at this time.
-    due: BTreeSet<usize>,
-    /// Due, not granted yet: waiting for nodes of the earlier time it shares topics with.
-    held: BTreeSet<usize>,
-    /// Granted, report not in yet.
-    waiting: BTreeSet<usize>,
-    published: BTreeSet<u64>,
-    /// Last (re)grant of the waiting nodes, for repeating lost grants.
-    granted_at: Instant,
-}
 
 /// Owns simulated time for a group. The launcher runs one; tests can run one directly.
 pub struct Scheduler {
@@ -75,6 +37,8 @@ pub struct Scheduler {
     known_topics: BTreeSet<u64>,
     /// How long one wait may last before `watchdog` is consulted.
     poll: Duration,
+    /// How long a wait for reports spins before it sleeps ([`crate::spin`]).
+    spin: Duration,
     now_ns: u64,
     /// The last time that finished.
     last_finished_ns: Option<u64>,
@@ -105,10 +69,16 @@ impl Scheduler {
             overlap_until: None,
             known_topics: BTreeSet::new(),
             poll: Duration::from_millis(100),
+            spin: Duration::ZERO,
             now_ns: 0,
             last_finished_ns: None,
             stats: ScheduleStats::default(),
         })
+    }
+
+    /// Spins up to `spin` for the nodes' reports before sleeping (at most [`crate::MAX_SPIN`]).
+    pub fn set_spin(&mut self, spin: Duration) {
+        self.spin = spin.min(crate::MAX_SPIN);
     }
 
     pub fn tick_ns(&self) -> u64 {
@@ -583,6 +553,9 @@ impl Scheduler {
     }
 
     fn wait_on(&self, hello: bool) -> Result<(), Error> {
+        if !hello && spin_on(&self.done, &self.done_listener, self.spin, proto::DONE)? {
+            return Ok(());
+        }
         let listener = if hello {
             &self.hello_listener
         } else {

@@ -93,6 +93,11 @@ pub fn duration(item: &Item) -> Result<Duration, String> {
     caravan::parse_duration(&string(item)?).map_err(|e| e.to_string())
 }
 
+/// A node's spin budget (`spin = "50us"`): a duration of at most [`caravan::MAX_SPIN`].
+pub fn spin(item: &Item) -> Result<Duration, String> {
+    caravan::parse_spin(&string(item)?).map_err(|e| e.to_string())
+}
+
 pub fn positive_duration(item: &Item) -> Result<Duration, String> {
     let d = duration(item)?;
     if d.is_zero() {

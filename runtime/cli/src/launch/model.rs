@@ -51,6 +51,10 @@ pub struct GroupSpec {
     /// Lockstep: wall time every process has, from its start, to join the schedule; the group
     /// fails when one has not (a program that never joins would stall it forever).
     pub join_timeout: Duration,
+    /// How long each node, and the lockstep scheduler, spins for its next message, grant or
+    /// report before it sleeps ([`caravan::spin`]); a process's own `spin` overrides it. Zero,
+    /// the default, sleeps at once.
+    pub spin: Duration,
 }
 
 impl GroupSpec {
@@ -193,6 +197,9 @@ pub struct ProcessSpec {
     pub rate: Option<String>,
     /// The topic whose messages trigger a step.
     pub on: Option<String>,
+    /// How long the node spins for its next message or grant before it sleeps
+    /// ([`caravan::spin`]); `None`: the group's `spin`.
+    pub spin: Option<Duration>,
     /// Free-form parameters; always a JSON object.
     pub params: serde_json::Value,
     pub restart: Restart,

@@ -9,6 +9,7 @@ use super::suggest;
 use caravan::ClockMode;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
+use std::time::Duration;
 use toml_edit::Item;
 
 /// The keys a launch file may have at the top; `include` is resolved before checking.
@@ -26,6 +27,7 @@ const GROUP_KEYS: &[&str] = &[
     "grace",
     "step_timeout",
     "join_timeout",
+    "spin",
 ];
 const HOST_KEYS: &[&str] = &[
     "cpu_slowdown",
@@ -53,6 +55,7 @@ const PROCESS_KEYS: &[&str] = &[
     "host",
     "rate",
     "on",
+    "spin",
     "params",
     "restart",
     "restart_backoff",
@@ -77,6 +80,7 @@ impl Checker<'_> {
             grace: GroupSpec::DEFAULT_GRACE,
             step_timeout: GroupSpec::DEFAULT_STEP_TIMEOUT,
             join_timeout: GroupSpec::DEFAULT_JOIN_TIMEOUT,
+            spin: Duration::ZERO,
         };
         let Some(s) = self.table(root, "group", "group".into(), Some(GROUP_KEYS)) else {
             if root.get("group").is_none() {
@@ -109,6 +113,7 @@ impl Checker<'_> {
         group.join_timeout = self
             .get(&s, "join_timeout", positive_duration)
             .unwrap_or(GroupSpec::DEFAULT_JOIN_TIMEOUT);
+        group.spin = self.get(&s, "spin", spin).unwrap_or_default();
         group
     }
 
@@ -399,6 +404,7 @@ impl Checker<'_> {
             host: host.unwrap_or_else(|| ProcessSpec::DEFAULT_HOST.to_string()),
             rate,
             on,
+            spin: self.get(s, "spin", spin),
             params: self.params(s),
             restart: self.get(s, "restart", restart).unwrap_or_default(),
             restart_backoff: self

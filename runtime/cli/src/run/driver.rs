@@ -29,6 +29,8 @@ pub struct DriverConfig {
     pub record_path: PathBuf,
     pub patterns: Vec<String>,
     pub tick: Duration,
+    /// Lockstep: how long the scheduler spins for a report before it sleeps.
+    pub spin: Duration,
     /// Lockstep: let the next tick's nodes overlap the current one's (see `GroupSpec`).
     pub overlap: bool,
     pub duration: Option<Duration>,
@@ -150,6 +152,7 @@ fn run_lockstep(
     finish: &Receiver<()>,
 ) -> Result<(u64, caravan::lockstep::ScheduleStats)> {
     let mut scheduler = Scheduler::new(&cfg.iceoryx, cfg.tick)?;
+    scheduler.set_spin(cfg.spin);
     let watchdog = |_: &[&str]| {
         if control.stop.load(Ordering::Relaxed) {
             return Err("the group is stopping".to_string());

@@ -111,6 +111,7 @@ pub fn run_group(
                 lf.group.record.clone()
             },
             tick: lf.group.tick,
+            spin: lf.group.spin,
             overlap: lf.group.overlap,
             duration: lf.group.duration,
             expected: {
@@ -224,6 +225,12 @@ fn group_environment(lf: &LaunchFile) -> Result<BTreeMap<String, String>> {
         caravan::env_vars::SEED.to_string(),
         lf.group.seed.to_string(),
     );
+    if !lf.group.spin.is_zero() {
+        env.insert(
+            caravan::env_vars::SPIN.to_string(),
+            format!("{}ns", lf.group.spin.as_nanos()),
+        );
+    }
     if let Some(net) = network::resolve(lf) {
         env.insert(
             caravan::env_vars::NETWORK.to_string(),

@@ -108,6 +108,9 @@ impl Planned {
         if let Some(on) = &spec.on {
             cmd.env(caravan::env_vars::ON, on);
         }
+        if let Some(spin) = spec.spin {
+            cmd.env(caravan::env_vars::SPIN, format!("{}ns", spin.as_nanos()));
+        }
         cmd
     }
 }

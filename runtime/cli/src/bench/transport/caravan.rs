@@ -21,6 +21,9 @@ fn node(pair: &Pair, name: &str) -> Result<Node> {
         Kind::CaravanBridged => super::bridged::config_path(pair, name),
         _ => pair.temp_path("toml"),
     });
+    if pair.kind == Kind::CaravanSpin {
+        identity.spin = pair.spin;
+    }
     Ok(Node::new(identity)?)
 }
 

@@ -10,8 +10,10 @@
 
 mod bridged;
 mod caravan;
+mod cpu;
 mod iceoryx2_raw;
 mod payload;
+mod pin;
 mod plot;
 mod recorder;
 pub mod report;
@@ -41,6 +43,9 @@ pub use payload::SIZES;
 pub enum Kind {
     /// Caravan topics; the node sleeps until a message event wakes it (`Node::run` on message)
     CaravanEvent,
+    /// Caravan topics; the node spins up to `--spin` for the next message, then sleeps until an
+    /// event wakes it (the launch key `spin`)
+    CaravanSpin,
     /// Caravan topics, polled in a spin loop (benchmark-only; Caravan nodes do not spin)
     CaravanPoll,
     /// Caravan topics between two hosts on this machine: shared memory on each, the hosts'
@@ -63,8 +68,9 @@ pub enum Kind {
 }
 
 impl Kind {
-    pub const ALL: [Kind; 10] = [
+    pub const ALL: [Kind; 11] = [
         Kind::CaravanEvent,
+        Kind::CaravanSpin,
         Kind::CaravanPoll,
         Kind::CaravanBridged,
         Kind::Iceoryx2Event,
@@ -79,6 +85,7 @@ impl Kind {
     pub fn name(self) -> &'static str {
         match self {
             Kind::CaravanEvent => "caravan-event",
+            Kind::CaravanSpin => "caravan-spin",
             Kind::CaravanPoll => "caravan-poll",
             Kind::CaravanBridged => "caravan-bridged",
             Kind::Iceoryx2Event => "iceoryx2-event",
@@ -96,6 +103,7 @@ impl Kind {
         match self {
             Kind::CaravanPoll | Kind::Iceoryx2Poll => "busy-poll (benchmark only)",
             Kind::CaravanEvent | Kind::Iceoryx2Event => "event (iceoryx2 WaitSet)",
+            Kind::CaravanSpin => "spin then event (iceoryx2 WaitSet)",
             Kind::CaravanBridged => "event (iceoryx2 WaitSet) via relays",
             Kind::Uds | Kind::Tcp | Kind::Udp => "blocking read",
             Kind::Zenoh | Kind::ZenohShm => "zenoh subscriber channel",
@@ -105,7 +113,11 @@ impl Kind {
     fn uses_iceoryx2(self) -> bool {
         matches!(
             self,
-            Kind::CaravanEvent | Kind::CaravanPoll | Kind::Iceoryx2Event | Kind::Iceoryx2Poll
+            Kind::CaravanEvent
+                | Kind::CaravanSpin
+                | Kind::CaravanPoll
+                | Kind::Iceoryx2Event
+                | Kind::Iceoryx2Poll
         )
     }
 }
@@ -130,9 +142,12 @@ pub struct TransportArgs {
     pub sizes: Vec<usize>,
     /// Messages in flight: the measuring side keeps this many sent and not yet echoed, so the
     /// topics stream (latency is then under load). Above 1 only for caravan-event,
-    /// caravan-bridged and zenoh, whose topics become lossless with this depth
+    /// caravan-spin, caravan-bridged and zenoh, whose topics become lossless with this depth
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
     pub in_flight: u64,
+    /// How long caravan-spin's nodes spin for the next message before they sleep (at most 1ms)
+    #[arg(long, default_value = "50us", value_parser = spin_arg)]
+    pub spin: Duration,
     /// Let the scheduler place both sides (default: the measuring side on the first CPU this
     /// process may use, the echoing side on the second)
     #[arg(long)]
@@ -147,6 +162,8 @@ pub struct PongArgs {
     bytes: usize,
     #[arg(long, default_value_t = 1)]
     in_flight: u64,
+    #[arg(long, default_value = "0s", value_parser = spin_arg)]
+    spin: Duration,
     #[arg(long)]
     group: String,
     /// Where to listen (zenoh): a zenoh endpoint such as tcp/127.0.0.1:7447
@@ -163,6 +180,8 @@ pub struct Pair {
     pub bytes: usize,
     /// Messages in flight (1: one round trip at a time).
     pub in_flight: u64,
+    /// How long a Caravan node spins for the next message before it sleeps.
+    pub spin: Duration,
     /// Unique per measurement: iceoryx2 group, socket file name.
     pub group: String,
     /// What the pong side reported when ready (a port), or what it was told (zenoh endpoint).
@@ -174,6 +193,10 @@ impl Pair {
     fn temp_path(&self, ext: &str) -> PathBuf {
         temp_path(&self.group, ext)
     }
+}
+
+fn spin_arg(text: &str) -> std::result::Result<Duration, String> {
+    ::caravan::parse_spin(text).map_err(|e| e.to_string())
 }
 
 fn temp_path(group: &str, ext: &str) -> PathBuf {
@@ -226,6 +249,8 @@ pub struct Row {
     pub mean_ns: f64,
     /// Payload bytes moved per second, both ways ([`recorder::Measured::bytes_per_s`]).
     pub bytes_per_s: f64,
+    /// CPU time of both sides per message, ns ([`recorder::Measured::cpu_ns_per_message`]).
+    pub cpu_ns_per_message: Option<f64>,
 }
 
 pub fn run(args: &TransportArgs) -> Result<()> {
@@ -242,12 +267,17 @@ pub fn run(args: &TransportArgs) -> Result<()> {
     if let Some(bad) = sizes.iter().find(|s| !SIZES.contains(s)) {
         bail!("payload size {bad} is not one of {SIZES:?}");
     }
-    let streams = [Kind::CaravanEvent, Kind::CaravanBridged, Kind::Zenoh];
+    let streams = [
+        Kind::CaravanEvent,
+        Kind::CaravanSpin,
+        Kind::CaravanBridged,
+        Kind::Zenoh,
+    ];
     if let Some(k) = kinds.iter().find(|k| !streams.contains(k))
         && args.in_flight > 1
     {
         bail!(
-            "--in-flight {} is offered for caravan-event, caravan-bridged and zenoh only, not {}; choose them with --transports",
+            "--in-flight {} is offered for caravan-event, caravan-spin, caravan-bridged and zenoh only, not {}; choose them with --transports",
             args.in_flight,
             k.name()
         );
@@ -286,13 +316,19 @@ pub fn run(args: &TransportArgs) -> Result<()> {
                 rounds,
                 warmup,
                 in_flight: args.in_flight,
+                spin: args.spin,
                 pong_cpu,
             };
             let result = measure(kind, bytes, &setup, &progress);
-            let (result, mean_ns, bytes_per_s) = match result {
-                Ok(Some(m)) => (Ok(percentiles(&m.hist)), m.hist.mean(), m.bytes_per_s),
-                Ok(None) => (Err(unsupported(kind, bytes)), 0.0, 0.0),
-                Err(e) => (Err(format!("failed: {e:#}")), 0.0, 0.0),
+            let (result, mean_ns, bytes_per_s, cpu) = match result {
+                Ok(Some(m)) => (
+                    Ok(percentiles(&m.hist)),
+                    m.hist.mean(),
+                    m.bytes_per_s,
+                    m.cpu_ns_per_message,
+                ),
+                Ok(None) => (Err(unsupported(kind, bytes)), 0.0, 0.0, None),
+                Err(e) => (Err(format!("failed: {e:#}")), 0.0, 0.0, None),
             };
             if let Err(why) = &result {
                 progress.suspend(|| eprintln!("{} {}: {why}", kind.name(), bytes));
@@ -304,6 +340,7 @@ pub fn run(args: &TransportArgs) -> Result<()> {
                 result,
                 mean_ns,
                 bytes_per_s,
+                cpu_ns_per_message: cpu,
             });
         }
     }
@@ -357,6 +394,7 @@ struct Setup {
     rounds: u64,
     warmup: u64,
     in_flight: u64,
+    spin: Duration,
     pong_cpu: Option<usize>,
 }
 
@@ -404,7 +442,8 @@ fn measure(
     cmd.args(["bench", "transport-pong", "--group", &group])
         .args(["--transport", kind.name()])
         .args(["--bytes", &bytes.to_string()])
-        .args(["--in-flight", &setup.in_flight.to_string()]);
+        .args(["--in-flight", &setup.in_flight.to_string()])
+        .args(["--spin", &format!("{}ns", setup.spin.as_nanos())]);
     if let Some(e) = endpoint.as_ref().filter(|_| kind != Kind::CaravanBridged) {
         cmd.args(["--endpoint", e]);
     }
@@ -422,16 +461,24 @@ fn measure(
         kind,
         bytes,
         in_flight: setup.in_flight,
+        spin: setup.spin,
         group: group.clone(),
         endpoint: endpoint.clone().unwrap_or(info),
     };
     let alive = Arc::new(AtomicU64::new(0));
+    // Both sides' CPU: this process, the echoing one and (between hosts) the relays.
+    let pids = [Some(std::process::id()), Some(child.id())]
+        .into_iter()
+        .chain([made.relays.as_ref().map(Child::id)])
+        .flatten()
+        .collect();
     let mut recorder = Recorder::new(
         bytes,
         rounds + warmup,
         warmup,
         progress.clone(),
         alive.clone(),
+        cpu::CpuMeter::new(pids),
     );
     let watchdog = Watchdog::start(alive, child.id(), kind, bytes);
     let outcome = ping(&pair, &mut recorder);
@@ -492,7 +539,9 @@ pub(super) fn await_ready(stdout: std::process::ChildStdout) -> Result<String> {
 
 fn ping(pair: &Pair, rec: &mut Recorder) -> Result<()> {
     match pair.kind {
-        Kind::CaravanEvent | Kind::CaravanBridged => caravan::ping_event(pair, rec),
+        Kind::CaravanEvent | Kind::CaravanSpin | Kind::CaravanBridged => {
+            caravan::ping_event(pair, rec)
+        }
         Kind::CaravanPoll => caravan::ping_poll(pair, rec),
         Kind::Iceoryx2Event => iceoryx2_raw::ping(pair, rec, false),
         Kind::Iceoryx2Poll => iceoryx2_raw::ping(pair, rec, true),
@@ -513,11 +562,12 @@ pub fn pong(args: &PongArgs) -> Result<()> {
         kind: args.transport,
         bytes: args.bytes,
         in_flight: args.in_flight,
+        spin: args.spin,
         group: args.group.clone(),
         endpoint: args.endpoint.clone().unwrap_or_default(),
     };
     match pair.kind {
-        Kind::CaravanEvent | Kind::CaravanBridged => caravan::pong_event(&pair),
+        Kind::CaravanEvent | Kind::CaravanSpin | Kind::CaravanBridged => caravan::pong_event(&pair),
         Kind::CaravanPoll => caravan::pong_poll(&pair),
         Kind::Iceoryx2Event => iceoryx2_raw::pong(&pair, false),
         Kind::Iceoryx2Poll => iceoryx2_raw::pong(&pair, true),
@@ -526,38 +576,6 @@ pub fn pong(args: &PongArgs) -> Result<()> {
         Kind::Udp => udp::pong(&pair),
         Kind::Zenoh => zenoh_peer::pong(&pair, false),
         Kind::ZenohShm => zenoh_peer::pong(&pair, true),
-    }
-}
-
-/// CPU affinity of the two sides.
-mod pin {
-    use anyhow::{Result, bail};
-
-    /// The first two CPUs this process may run on, if it may run on two.
-    pub fn two_cpus() -> Option<(usize, usize)> {
-        // SAFETY: cpu_set_t is plain data; sched_getaffinity fills it.
-        let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
-        let rc = unsafe { libc::sched_getaffinity(0, size_of::<libc::cpu_set_t>(), &mut set) };
-        if rc != 0 {
-            return None;
-        }
-        let mut allowed =
-            (0..libc::CPU_SETSIZE as usize).filter(|&c| unsafe { libc::CPU_ISSET(c, &set) });
-        Some((allowed.next()?, allowed.next()?))
-    }
-
-    /// Pins the calling process (and the threads it starts later) to `cpu`.
-    pub fn to(cpu: usize) -> Result<()> {
-        // SAFETY: cpu_set_t is plain data, set up with the libc helpers.
-        let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
-        unsafe { libc::CPU_SET(cpu, &mut set) };
-        if unsafe { libc::sched_setaffinity(0, size_of::<libc::cpu_set_t>(), &set) } != 0 {
-            bail!(
-                "cannot pin to CPU {cpu}: {}",
-                std::io::Error::last_os_error()
-            );
-        }
-        Ok(())
     }
 }
 

@@ -13,9 +13,9 @@ const RIGHT: f64 = 230.0;
 const TOP: f64 = 76.0;
 const BOTTOM: f64 = 60.0;
 
-const COLORS: [&str; 10] = [
-    "#d62728", "#ff7f0e", "#bcbd22", "#1f77b4", "#17becf", "#2ca02c", "#9467bd", "#8c564b",
-    "#e377c2", "#7f7f7f",
+const COLORS: [&str; 11] = [
+    "#d62728", "#393b79", "#ff7f0e", "#bcbd22", "#1f77b4", "#17becf", "#2ca02c", "#9467bd",
+    "#8c564b", "#e377c2", "#7f7f7f",
 ];
 
 fn escape(s: &str) -> String {

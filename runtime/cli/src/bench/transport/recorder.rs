@@ -1,6 +1,7 @@
 //! What one measurement collects: the one-way latency of each measured round trip, and how many
 //! bytes moved per second while they ran.
 
+use super::cpu::CpuMeter;
 use anyhow::{Result, bail};
 use hdrhistogram::Histogram;
 use indicatif::ProgressBar;
@@ -19,6 +20,8 @@ pub struct Recorder {
     measured: Option<(Instant, Instant)>,
     progress: ProgressBar,
     alive: Arc<AtomicU64>,
+    /// The CPU time of both sides over the measured round trips.
+    cpu: CpuMeter,
 }
 
 /// A finished measurement.
@@ -27,17 +30,20 @@ pub struct Measured {
     /// Payload bytes moved per second over the measured round trips, both ways (each echo is
     /// a message too): with one message in flight, the payload over the one-way latency.
     pub bytes_per_s: f64,
+    /// CPU time both sides spent per message (a round trip is two), ns; `None` if unknown.
+    pub cpu_ns_per_message: Option<f64>,
 }
 
 impl Recorder {
     /// `total` round trips of `bytes`, the first `warmup` of them not measured; `alive` counts
-    /// them for the watchdog.
+    /// them for the watchdog; `cpu` measures the processes of both sides.
     pub fn new(
         bytes: usize,
         total: u64,
         warmup: u64,
         progress: ProgressBar,
         alive: Arc<AtomicU64>,
+        cpu: CpuMeter,
     ) -> Self {
         Self {
             hist: caravan_report::bench::histogram(),
@@ -48,6 +54,7 @@ impl Recorder {
             measured: None,
             progress,
             alive,
+            cpu,
         }
     }
 
@@ -66,6 +73,7 @@ impl Recorder {
         self.done += 1;
         if self.done == self.warmup {
             self.measured = Some((now, now));
+            self.cpu.start();
         } else if let Some((_, last)) = &mut self.measured {
             *last = now;
         }
@@ -83,10 +91,16 @@ impl Recorder {
         let seconds = self
             .measured
             .map_or(0.0, |(from, to)| (to - from).as_secs_f64());
-        let moved = 2.0 * (self.total - self.warmup) as f64 * self.bytes as f64;
+        let messages = 2.0 * (self.total - self.warmup) as f64;
+        let moved = messages * self.bytes as f64;
         Ok(Measured {
             hist: self.hist,
             bytes_per_s: if seconds > 0.0 { moved / seconds } else { 0.0 },
+            cpu_ns_per_message: self
+                .cpu
+                .elapsed_ns()
+                .filter(|_| messages > 0.0)
+                .map(|ns| ns as f64 / messages),
         })
     }
 }
@@ -97,7 +111,14 @@ mod tests {
 
     #[test]
     fn only_rounds_after_the_warm_up_are_measured() {
-        let mut rec = Recorder::new(1000, 5, 2, ProgressBar::hidden(), Arc::default());
+        let mut rec = Recorder::new(
+            1000,
+            5,
+            2,
+            ProgressBar::hidden(),
+            Arc::default(),
+            CpuMeter::new(vec![]),
+        );
         for _ in 0..5 {
             rec.record(Duration::from_micros(100));
             std::thread::sleep(Duration::from_millis(1));
@@ -114,7 +135,14 @@ mod tests {
 
     #[test]
     fn a_measurement_cut_short_is_an_error() {
-        let mut rec = Recorder::new(16, 5, 1, ProgressBar::hidden(), Arc::default());
+        let mut rec = Recorder::new(
+            16,
+            5,
+            1,
+            ProgressBar::hidden(),
+            Arc::default(),
+            CpuMeter::new(vec![]),
+        );
         rec.record(Duration::from_micros(1));
         assert!(rec.finish().is_err());
     }

@@ -20,8 +20,16 @@ pub fn table(rows: &[Row]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "\n{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}   wake-up",
-        "transport", "payload", "p50 µs", "p90 µs", "p99 µs", "p99.9 µs", "max µs", "MB/s"
+        "\n{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}   wake-up",
+        "transport",
+        "payload",
+        "p50 µs",
+        "p90 µs",
+        "p99 µs",
+        "p99.9 µs",
+        "max µs",
+        "MB/s",
+        "CPU µs/msg"
     );
     let mut last = None;
     for r in rows {
@@ -32,7 +40,7 @@ pub fn table(rows: &[Row]) -> String {
         let _ = match &r.result {
             Ok(p) => writeln!(
                 out,
-                "{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9.1}   {}",
+                "{:<15} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9.1} {:>9}   {}",
                 r.kind.name(),
                 label(r.bytes),
                 us(p.p50_ns),
@@ -41,6 +49,8 @@ pub fn table(rows: &[Row]) -> String {
                 us(p.p999_ns),
                 us(p.max_ns),
                 r.bytes_per_s / 1e6,
+                r.cpu_ns_per_message
+                    .map_or_else(|| "-".into(), |ns| us(ns as u64)),
                 r.kind.wake_up()
             ),
             Err(why) => writeln!(out, "{:<15} {:>9}   {why}", r.kind.name(), label(r.bytes)),
@@ -62,6 +72,8 @@ pub fn ratios(rows: &[Row]) -> String {
         (Kind::CaravanEvent, Kind::Iceoryx2Event),
         (Kind::CaravanPoll, Kind::Iceoryx2Poll),
         (Kind::CaravanEvent, Kind::Uds),
+        (Kind::CaravanSpin, Kind::Uds),
+        (Kind::CaravanSpin, Kind::CaravanEvent),
         (Kind::CaravanEvent, Kind::Zenoh),
         (Kind::CaravanEvent, Kind::ZenohShm),
         // Between hosts: what the bridge adds to one host's path, and to zenoh's own.
@@ -122,13 +134,17 @@ pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64, in_flight:
     );
     let _ = writeln!(
         out,
-        "transport,wake_up,payload_bytes,in_flight,rounds,p50_ns,p90_ns,p99_ns,p999_ns,max_ns,mean_ns,throughput_bytes_per_s,status"
+        "# cpu per message = CPU time of both sides' processes over the measured round trips / messages (two per round trip)"
+    );
+    let _ = writeln!(
+        out,
+        "transport,wake_up,payload_bytes,in_flight,rounds,p50_ns,p90_ns,p99_ns,p999_ns,max_ns,mean_ns,throughput_bytes_per_s,cpu_ns_per_message,status"
     );
     for r in rows {
         let _ = match &r.result {
             Ok(p) => writeln!(
                 out,
-                "{},{},{},{in_flight},{},{},{},{},{},{},{:.0},{:.0},ok",
+                "{},{},{},{in_flight},{},{},{},{},{},{},{:.0},{:.0},{},ok",
                 r.kind.name(),
                 r.kind.wake_up(),
                 r.bytes,
@@ -139,11 +155,13 @@ pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64, in_flight:
                 p.p999_ns,
                 p.max_ns,
                 r.mean_ns,
-                r.bytes_per_s
+                r.bytes_per_s,
+                r.cpu_ns_per_message
+                    .map_or_else(String::new, |ns| format!("{ns:.0}"))
             ),
             Err(why) => writeln!(
                 out,
-                "{},{},{},{in_flight},{},,,,,,,,{}",
+                "{},{},{},{in_flight},{},,,,,,,,,{}",
                 r.kind.name(),
                 r.kind.wake_up(),
                 r.bytes,

@@ -1,0 +1,48 @@
+//! What the scheduler keeps of each node and of each time being stepped.
+
+use super::Pub;
+use super::overlap::Footprint;
+use caravan_schemas::lockstep::Grant;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::prelude::*;
+use std::collections::BTreeSet;
+use std::time::{Duration, Instant};
+
+/// A node in the schedule.
+pub(super) struct Member {
+    pub(super) name: String,
+    /// False after the process died, until it says hello again (a restart).
+    pub(super) active: bool,
+    pub(super) period_ns: u64,
+    /// Whether it steps when it joins: it has a period, or (neither a period nor triggers)
+    /// it is scheduled by its own wake-ups and steps once to ask for the first.
+    pub(super) steps_on_joining: bool,
+    /// The topics it touches, for overlapping it with nodes of another time.
+    pub(super) footprint: Footprint,
+    /// Steps reported since it joined: a node overlaps only after its first, in which many
+    /// nodes still open ports.
+    pub(super) steps: u64,
+    /// A node of a later time started while this one stepped.
+    pub(super) overlapped: bool,
+    /// When it was last granted a step (wall clock).
+    pub(super) granted_at: Instant,
+    /// Wall time from its last grant to its report: the longest-running nodes are granted
+    /// first, so the step that bounds the advance starts soonest.
+    pub(super) last_step: Duration,
+    pub(super) grant: Pub<Grant>,
+    pub(super) grant_notifier: Notifier<ipc::Service>,
+}
+
+/// One time being stepped.
+pub(super) struct Flight {
+    pub(super) now_ns: u64,
+    /// Every node stepping at this time.
+    pub(super) due: BTreeSet<usize>,
+    /// Due, not granted yet: waiting for nodes of the earlier time it shares topics with.
+    pub(super) held: BTreeSet<usize>,
+    /// Granted, report not in yet.
+    pub(super) waiting: BTreeSet<usize>,
+    pub(super) published: BTreeSet<u64>,
+    /// Last (re)grant of the waiting nodes, for repeating lost grants.
+    pub(super) granted_at: Instant,
+}
