@@ -154,6 +154,8 @@ impl Executor<'_> {
             .map_err(|e| Error::transport("waitset attach", e))?;
         let period_ns = trigger.period().map_or(0, |p| p.as_nanos() as u64);
         let mut next_due_ns = self.since_epoch_ns() + period_ns;
+        // Spinning pays after a step (an answer may come at once), not after a status wake-up.
+        let mut stepped = false;
         let outcome = loop {
             let (mut fired, mut status_due) = (false, false);
             let on_event = |id: WaitSetAttachmentId<ipc::Service>| {
@@ -166,7 +168,12 @@ impl Executor<'_> {
             let arrival = self.shared.next_arrival_ns.get();
             // Spin, then park: a notification found while spinning saves the wake-up.
             let spun = match &listener {
-                Some(l) if !self.spin.is_zero() && arrival == u64::MAX && wake_ns.is_none() => {
+                Some(l)
+                    if stepped
+                        && !self.spin.is_zero()
+                        && arrival == u64::MAX
+                        && wake_ns.is_none() =>
+                {
                     crate::spin::spin_for(self.spin, || {
                         let notified = l.try_wait(|_| {});
                         notified
@@ -211,6 +218,7 @@ impl Executor<'_> {
                     .try_wait(|_| {})
                     .map_err(|e| Error::transport("listener", e))?;
             }
+            stepped = fired;
             if fired {
                 let start_ns = self.since_epoch_ns();
                 let due_ns = if period_ns > 0 { next_due_ns } else { start_ns };

@@ -17,6 +17,10 @@
 //! # Ok(())
 //! # }
 //! ```
+//!
+//! A node sleeps between steps. One that answers requests at once can spin briefly before it
+//! sleeps (launch key `spin`, or [`NodeBuilder::spin`]; see [`spin`]): a reply then arrives
+//! in ~5 µs instead of a ~30 µs wake-up, for some CPU when nothing comes.
 
 mod clock;
 mod entry;

@@ -156,7 +156,7 @@ pub fn ping_poll(pair: &Pair, rec: &mut Recorder) -> Result<()> {
 }
 
 /// BENCHMARK ONLY: spins on `Subscriber::receive` instead of running the node's step loop.
-/// Caravan nodes always sleep until an event or their period; this shows what the transport
+/// Caravan nodes spin at most their bounded `spin`, then sleep; this shows what the transport
 /// costs without the wake-up.
 fn ping_poll_t<T: Message + Bytes>(pair: &Pair, rec: &mut Recorder) -> Result<()> {
     let node = node(pair, "ping")?;

@@ -46,7 +46,8 @@ pub enum Kind {
     /// Caravan topics; the node spins up to `--spin` for the next message, then sleeps until an
     /// event wakes it (the launch key `spin`)
     CaravanSpin,
-    /// Caravan topics, polled in a spin loop (benchmark-only; Caravan nodes do not spin)
+    /// Caravan topics, polled in a spin loop without bound (benchmark only; nodes spin at most
+    /// their `spin`, then sleep)
     CaravanPoll,
     /// Caravan topics between two hosts on this machine: shared memory on each, the hosts'
     /// relays joined by zenoh over TCP on loopback; woken by events
