@@ -166,14 +166,11 @@ impl Executor<'_> {
             };
             // A node stepped by messages also wakes when a message delayed by a link arrives.
             let arrival = self.shared.next_arrival_ns.get();
-            // Spin, then park: a notification found while spinning saves the wake-up.
+            // Spin, then park: a notification found while spinning (a non-blocking read of the
+            // listener's socket; the loop knows the topic's event, not its subscriber) saves
+            // the wake-up.
             let spun = match &listener {
-                Some(l)
-                    if stepped
-                        && !self.spin.is_zero()
-                        && arrival == u64::MAX
-                        && wake_ns.is_none() =>
-                {
+                Some(l) if stepped && !self.spin.is_zero() && arrival == u64::MAX => {
                     crate::spin::spin_for(self.spin, || {
                         let notified = l.try_wait(|_| {});
                         notified

@@ -31,7 +31,8 @@ impl NodeBuilder {
         self
     }
 
-    /// Spins up to `spin` for the next message or grant before sleeping (see [`crate::spin`]).
+    /// Spins up to `spin` for the next message or grant before sleeping (see [`crate::spin`]);
+    /// more than [`crate::MAX_SPIN`] is cut to it (a launch file's or `CARAVAN_SPIN`'s is refused).
     pub fn spin(mut self, spin: Duration) -> Self {
         self.identity.spin = spin;
         self

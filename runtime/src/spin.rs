@@ -3,8 +3,9 @@
 //!
 //! A sleeping process is woken through the kernel (iceoryx2's event is a Unix datagram), which
 //! costs ~25 µs on a VM, more than a Unix socket read. When the next message is expected within
-//! microseconds (a request answered at once, a lockstep hand-off), looking for it in shared
-//! memory for a while finds it without any wake-up. The look is bounded by the node's `spin`
+//! microseconds (a request answered at once, a lockstep hand-off), looking for it for a while
+//! (a lockstep node in the grant topic's shared memory, a realtime one with non-blocking reads
+//! of its listener) finds it without any wake-up. The look is bounded by the node's `spin`
 //! budget (launch key `spin`, at most [`MAX_SPIN`]); after it the node parks as before, so an
 //! idle node costs one budget of CPU per wake-up and nothing in between. The default budget is
 //! zero: no spinning.

@@ -4,31 +4,34 @@
 
 use caravan_tests::{PINGPONG, Scenario, assert_refused, realtime_ping_pong, recording};
 
-fn recorded(s: &Scenario) -> Vec<(u16, String, u64, Vec<u8>)> {
+/// Runs the scenario, which must succeed, and returns its run directory.
+fn run_ok(s: &Scenario) -> std::path::PathBuf {
     let out = s.run(&[]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let dir = s.run_dirs().pop().expect("a run directory");
+    s.run_dirs().pop().expect("a run directory")
+}
+
+fn recorded(s: &Scenario) -> Vec<(u16, String, u64, Vec<u8>)> {
+    let dir = run_ok(s);
     recording::all_messages(&recording::read(&dir.join("record.mcap")))
+}
+
+/// `body` with `spin = "SPIN"` after its line `after`, which must be there.
+fn with_spin(body: &str, after: &str, spin: &str) -> String {
+    assert!(body.contains(after), "no line {after:?} in {body}");
+    body.replacen(after, &format!("{after}spin = \"{spin}\"\n"), 1)
 }
 
 #[test]
 fn a_spinning_lockstep_group_records_the_same_messages_as_a_sleeping_one() {
     let sleeping = recorded(&Scenario::new("spin-off", PINGPONG));
     // The scheduler and every node spin; pong spins longer, by its own key.
-    let spinning = PINGPONG.replacen(
-        "record = [\"demo/*\"]\n",
-        "record = [\"demo/*\"]\nspin = \"200us\"\n",
-        1,
-    );
-    let spinning = spinning.replacen(
-        "on = \"demo/ping\"\n",
-        "on = \"demo/ping\"\nspin = \"1ms\"\n",
-        1,
-    );
+    let spinning = with_spin(PINGPONG, "record = [\"demo/*\"]\n", "200us");
+    let spinning = with_spin(&spinning, "on = \"demo/ping\"\n", "1ms");
     let spinning = recorded(&Scenario::new("spin-on", &spinning));
     assert!(
         spinning.iter().any(|m| m.1 == "demo/pong"),
@@ -39,11 +42,7 @@ fn a_spinning_lockstep_group_records_the_same_messages_as_a_sleeping_one() {
 
 #[test]
 fn a_spinning_realtime_pong_answers_every_ping() {
-    let body = realtime_ping_pong("2s").replacen(
-        "on = \"demo/ping\"\n",
-        "on = \"demo/ping\"\nspin = \"500us\"\n",
-        1,
-    );
+    let body = with_spin(&realtime_ping_pong("2s"), "on = \"demo/ping\"\n", "500us");
     let messages = recorded(&Scenario::new("spin-rt", &body));
     let count = |topic: &str| messages.iter().filter(|m| m.1 == topic).count();
     let (pings, pongs) = (count("demo/ping"), count("demo/pong"));
@@ -65,4 +64,37 @@ fn a_spin_past_a_millisecond_or_not_a_duration_is_refused() {
     let out = s.run(&["--set", "group.spin=2ms"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("longer than"), "{err}");
+}
+
+#[test]
+fn a_process_spin_overrides_the_groups_and_reaches_the_process() {
+    let body = r#"clock = "realtime"
+duration = "1s"
+spin = "1ms"
+
+[[process]]
+name = "group-spin"
+exec = "sh -c 'echo spin=$CARAVAN_SPIN'"
+
+[[process]]
+name = "own-spin"
+exec = "sh -c 'echo spin=$CARAVAN_SPIN'"
+spin = "20us"
+"#;
+    let s = Scenario::new("spin-env", body);
+    let dir = run_ok(&s);
+    let log = |name: &str| {
+        let path = dir.join("logs").join(format!("{name}.log"));
+        std::fs::read_to_string(&path).unwrap_or_else(|e| {
+            let listing: Vec<_> = std::fs::read_dir(&dir)
+                .map(|d| d.flatten().map(|e| e.file_name()).collect())
+                .unwrap_or_default();
+            panic!(
+                "{}: {e}; the run directory holds {listing:?}",
+                path.display()
+            )
+        })
+    };
+    assert_eq!(log("group-spin").trim(), "spin=1000000ns");
+    assert_eq!(log("own-spin").trim(), "spin=20000ns");
 }

@@ -120,22 +120,29 @@ impl Client {
                     _ => return Ok(GrantOutcome::Step(grant)),
                 }
             }
+            // Whether SIGTERM or SIGINT came, after waiting up to `timeout` for a grant.
+            let terminated = |timeout| -> Result<bool, Error> {
+                let result = waitset
+                    .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, timeout)
+                    .map_err(|e| Error::transport("lockstep grant wait", e))?;
+                Ok(matches!(
+                    result,
+                    WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
+                ))
+            };
             if super::spin_on(&self.grants, &self.grant_listener, spin, "grant")? {
+                // A node that keeps finding grants never sleeps in its WaitSet, which is where
+                // a signal is noticed: look without waiting.
+                if terminated(Duration::ZERO)? {
+                    return Ok(GrantOutcome::Terminated);
+                }
                 continue;
             }
-            let result = waitset
-                .wait_and_process_once_with_timeout(
-                    |_| CallbackProgression::Continue,
-                    Duration::from_secs(1),
-                )
-                .map_err(|e| Error::transport("lockstep grant wait", e))?;
+            let stop = terminated(Duration::from_secs(1))?;
             self.grant_listener
                 .try_wait(|_| {})
                 .map_err(|e| Error::transport("grant", e))?;
-            if matches!(
-                result,
-                WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
-            ) {
+            if stop {
                 return Ok(GrantOutcome::Terminated);
             }
             if self.last_done.borrow().is_none() {

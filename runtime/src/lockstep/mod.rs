@@ -68,8 +68,8 @@ fn subscriber<T: caravan_schemas::Message>(
 }
 
 /// Spin, then park: looks in shared memory for up to `spin` for something on `sub`; true if it
-/// came, so the caller need not sleep on `listener` (whose notifications are then taken, or
-/// they would fill its socket).
+/// came, so the caller need not sleep on `listener` (whose notifications are then taken, so
+/// the next wait does not return at once for a message already read).
 fn spin_on<T: caravan_schemas::Message>(
     sub: &Sub<T>,
     listener: &iceoryx2::port::listener::Listener<ipc::Service>,

@@ -25,7 +25,7 @@ mod zenoh_peer;
 use anyhow::{Context, Result, bail};
 use caravan_report::bench::{Percentiles, percentiles};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::ProgressBar;
 use recorder::{Measured, Recorder};
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
@@ -307,7 +307,7 @@ pub fn run(args: &TransportArgs) -> Result<()> {
         args.in_flight,
         if args.quick { " (--quick)" } else { "" }
     );
-    let progress = progress_bar(kinds.len() * sizes.len(), rounds + warmup);
+    let progress = recorder::progress_bar(kinds.len() * sizes.len(), rounds + warmup);
     let mut rows = Vec::new();
     for &bytes in &sizes {
         for &kind in &kinds {
@@ -350,7 +350,13 @@ pub fn run(args: &TransportArgs) -> Result<()> {
     print!("{}", report::table(&rows));
     print!("{}", report::ratios(&rows));
     let csv_path = args.out.join("transport.csv");
-    let csv = report::csv(&machine, &rows, rounds, warmup, args.in_flight);
+    let setup = report::RunSetup {
+        rounds,
+        warmup,
+        in_flight: args.in_flight,
+        spin: args.spin,
+    };
+    let csv = report::csv(&machine, &rows, &setup);
     std::fs::write(&csv_path, csv)
         .with_context(|| format!("cannot write {}", csv_path.display()))?;
     let svg_path = args.out.join("transport.svg");
@@ -375,19 +381,6 @@ fn unsupported(kind: Kind, bytes: usize) -> String {
         ),
         _ => "unsupported".into(),
     }
-}
-
-fn progress_bar(pairs: usize, rounds_per_pair: u64) -> ProgressBar {
-    // Drawn on stderr only when it is a terminal; never in tests or pipes.
-    let bar = ProgressBar::with_draw_target(
-        Some(pairs as u64 * rounds_per_pair),
-        ProgressDrawTarget::stderr(),
-    );
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {percent:>3}% {elapsed_precise} eta {eta} {msg}")
-            .expect("valid progress template"),
-    );
-    bar
 }
 
 /// How every measurement of a run is made.
@@ -468,9 +461,8 @@ fn measure(
     };
     let alive = Arc::new(AtomicU64::new(0));
     // Both sides' CPU: this process, the echoing one and (between hosts) the relays.
-    let pids = [Some(std::process::id()), Some(child.id())]
+    let others = [Some(child.id()), made.relays.as_ref().map(Child::id)]
         .into_iter()
-        .chain([made.relays.as_ref().map(Child::id)])
         .flatten()
         .collect();
     let mut recorder = Recorder::new(
@@ -479,7 +471,7 @@ fn measure(
         warmup,
         progress.clone(),
         alive.clone(),
-        cpu::CpuMeter::new(pids),
+        cpu::CpuMeter::new(others),
     );
     let watchdog = Watchdog::start(alive, child.id(), kind, bytes);
     let outcome = ping(&pair, &mut recorder);

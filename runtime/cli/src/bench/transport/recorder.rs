@@ -4,7 +4,7 @@
 use super::cpu::CpuMeter;
 use anyhow::{Result, bail};
 use hdrhistogram::Histogram;
-use indicatif::ProgressBar;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -22,6 +22,9 @@ pub struct Recorder {
     alive: Arc<AtomicU64>,
     /// The CPU time of both sides over the measured round trips.
     cpu: CpuMeter,
+    /// CPU ns both sides spent, read at the last round trip: before the stop message, so the
+    /// echoing side's shutdown is not counted (and its threads are still there to be read).
+    cpu_spent_ns: Option<u64>,
 }
 
 /// A finished measurement.
@@ -55,6 +58,7 @@ impl Recorder {
             progress,
             alive,
             cpu,
+            cpu_spent_ns: None,
         }
     }
 
@@ -71,6 +75,9 @@ impl Recorder {
                 .saturating_record((rtt.as_nanos() as u64 / 2).max(1));
         }
         self.done += 1;
+        if self.done == self.total {
+            self.cpu_spent_ns = self.cpu.elapsed_ns();
+        }
         if self.done == self.warmup {
             self.measured = Some((now, now));
             self.cpu.start();
@@ -97,12 +104,25 @@ impl Recorder {
             hist: self.hist,
             bytes_per_s: if seconds > 0.0 { moved / seconds } else { 0.0 },
             cpu_ns_per_message: self
-                .cpu
-                .elapsed_ns()
+                .cpu_spent_ns
                 .filter(|_| messages > 0.0)
                 .map(|ns| ns as f64 / messages),
         })
     }
+}
+
+/// The bar of the whole run: every measurement's round trips.
+pub fn progress_bar(pairs: usize, rounds_per_pair: u64) -> ProgressBar {
+    // Drawn on stderr only when it is a terminal; never in tests or pipes.
+    let bar = ProgressBar::with_draw_target(
+        Some(pairs as u64 * rounds_per_pair),
+        ProgressDrawTarget::stderr(),
+    );
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {percent:>3}% {elapsed_precise} eta {eta} {msg}")
+            .expect("valid progress template"),
+    );
+    bar
 }
 
 #[cfg(test)]

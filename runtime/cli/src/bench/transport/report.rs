@@ -117,7 +117,23 @@ pub fn ratios(rows: &[Row]) -> String {
     header + &out
 }
 
-pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64, in_flight: u64) -> String {
+/// How a run was made, for the CSV's comment lines.
+#[derive(Clone, Copy)]
+pub struct RunSetup {
+    pub rounds: u64,
+    pub warmup: u64,
+    pub in_flight: u64,
+    /// caravan-spin's budget.
+    pub spin: std::time::Duration,
+}
+
+pub fn csv(machine: &Machine, rows: &[Row], setup: &RunSetup) -> String {
+    let RunSetup {
+        rounds,
+        warmup,
+        in_flight,
+        spin,
+    } = *setup;
     let mut out = String::new();
     let _ = writeln!(out, "# caravan bench transport");
     let _ = writeln!(out, "# cpu: {}", machine.cpu);
@@ -127,6 +143,10 @@ pub fn csv(machine: &Machine, rows: &[Row], rounds: u64, warmup: u64, in_flight:
     let _ = writeln!(
         out,
         "# one-way latency = round trip / 2 in ns; {rounds} round trips after {warmup} warm-up; {in_flight} in flight"
+    );
+    let _ = writeln!(
+        out,
+        "# caravan-spin: nodes spin up to {spin:?} before they sleep"
     );
     let _ = writeln!(
         out,
