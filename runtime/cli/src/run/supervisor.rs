@@ -109,7 +109,7 @@ impl Planned {
             cmd.env(caravan::env_vars::ON, on);
         }
         if let Some(spin) = spec.spin {
-            cmd.env(caravan::env_vars::SPIN, format!("{}ns", spin.as_nanos()));
+            cmd.env(caravan::env_vars::SPIN, caravan::spin::spin_text(spin));
         }
         cmd
     }

@@ -308,18 +308,17 @@ pub fn run(args: &TransportArgs) -> Result<()> {
         if args.quick { " (--quick)" } else { "" }
     );
     let progress = recorder::progress_bar(kinds.len() * sizes.len(), rounds + warmup);
+    let setup = Setup {
+        rounds,
+        warmup,
+        in_flight: args.in_flight,
+        spin: args.spin,
+        pong_cpu: cpus.map(|(_, c)| c),
+    };
     let mut rows = Vec::new();
     for &bytes in &sizes {
         for &kind in &kinds {
             progress.set_message(format!("{} {}", kind.name(), payload::label(bytes)));
-            let pong_cpu = cpus.map(|(_, c)| c);
-            let setup = Setup {
-                rounds,
-                warmup,
-                in_flight: args.in_flight,
-                spin: args.spin,
-                pong_cpu,
-            };
             let result = measure(kind, bytes, &setup, &progress);
             let (result, mean_ns, bytes_per_s, cpu) = match result {
                 Ok(Some(m)) => (
@@ -350,12 +349,6 @@ pub fn run(args: &TransportArgs) -> Result<()> {
     print!("{}", report::table(&rows));
     print!("{}", report::ratios(&rows));
     let csv_path = args.out.join("transport.csv");
-    let setup = report::RunSetup {
-        rounds,
-        warmup,
-        in_flight: args.in_flight,
-        spin: args.spin,
-    };
     let csv = report::csv(&machine, &rows, &setup);
     std::fs::write(&csv_path, csv)
         .with_context(|| format!("cannot write {}", csv_path.display()))?;
@@ -383,7 +376,7 @@ fn unsupported(kind: Kind, bytes: usize) -> String {
     }
 }
 
-/// How every measurement of a run is made.
+/// How every measurement of a run is made (and the CSV says so).
 struct Setup {
     rounds: u64,
     warmup: u64,
@@ -437,7 +430,7 @@ fn measure(
         .args(["--transport", kind.name()])
         .args(["--bytes", &bytes.to_string()])
         .args(["--in-flight", &setup.in_flight.to_string()])
-        .args(["--spin", &format!("{}ns", setup.spin.as_nanos())]);
+        .args(["--spin", &::caravan::spin::spin_text(setup.spin)]);
     if let Some(e) = endpoint.as_ref().filter(|_| kind != Kind::CaravanBridged) {
         cmd.args(["--endpoint", e]);
     }

@@ -129,16 +129,14 @@ pub fn progress_bar(pairs: usize, rounds_per_pair: u64) -> ProgressBar {
 mod tests {
     use super::*;
 
+    fn recorder(bytes: usize, total: u64, warmup: u64) -> Recorder {
+        let (bar, alive) = (ProgressBar::hidden(), Arc::default());
+        Recorder::new(bytes, total, warmup, bar, alive, CpuMeter::new(vec![]))
+    }
+
     #[test]
     fn only_rounds_after_the_warm_up_are_measured() {
-        let mut rec = Recorder::new(
-            1000,
-            5,
-            2,
-            ProgressBar::hidden(),
-            Arc::default(),
-            CpuMeter::new(vec![]),
-        );
+        let mut rec = recorder(1000, 5, 2);
         for _ in 0..5 {
             rec.record(Duration::from_micros(100));
             std::thread::sleep(Duration::from_millis(1));
@@ -155,14 +153,7 @@ mod tests {
 
     #[test]
     fn a_measurement_cut_short_is_an_error() {
-        let mut rec = Recorder::new(
-            16,
-            5,
-            1,
-            ProgressBar::hidden(),
-            Arc::default(),
-            CpuMeter::new(vec![]),
-        );
+        let mut rec = recorder(16, 5, 1);
         rec.record(Duration::from_micros(1));
         assert!(rec.finish().is_err());
     }

@@ -1,7 +1,7 @@
 //! The table on stdout, the Caravan ratios and the CSV.
 
 use super::payload::label;
-use super::{Kind, Row};
+use super::{Kind, Row, Setup};
 use caravan_report::bench::Machine;
 use std::fmt::Write;
 
@@ -117,23 +117,9 @@ pub fn ratios(rows: &[Row]) -> String {
     header + &out
 }
 
-/// How a run was made, for the CSV's comment lines.
-#[derive(Clone, Copy)]
-pub struct RunSetup {
-    pub rounds: u64,
-    pub warmup: u64,
-    pub in_flight: u64,
-    /// caravan-spin's budget.
-    pub spin: std::time::Duration,
-}
-
-pub fn csv(machine: &Machine, rows: &[Row], setup: &RunSetup) -> String {
-    let RunSetup {
-        rounds,
-        warmup,
-        in_flight,
-        spin,
-    } = *setup;
+pub(super) fn csv(machine: &Machine, rows: &[Row], setup: &Setup) -> String {
+    let (rounds, warmup, in_flight, spin) =
+        (setup.rounds, setup.warmup, setup.in_flight, setup.spin);
     let mut out = String::new();
     let _ = writeln!(out, "# caravan bench transport");
     let _ = writeln!(out, "# cpu: {}", machine.cpu);
