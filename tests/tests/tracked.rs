@@ -41,6 +41,20 @@ fn v4_climbs_a_10_cm_step() {
     assert!(t["max_climb_m"].as_f64().unwrap() > 0.09, "{t}");
 }
 
+/// The reference's highest step: the driver works the flippers (up to reach the edge, down
+/// to carry the front over it) and v4 climbs 20 cm, but not 30 cm.
+#[test]
+fn v4_climbs_20_cm_with_its_flippers_and_not_30() {
+    let t = run("step.toml", &["--set", "args.step=20"]);
+    assert_eq!(t["outcome"], "passed", "{t}");
+    assert!(t["max_climb_m"].as_f64().unwrap() > 0.19, "{t}");
+    // The nose rose well past the push threshold: the flippers had to work.
+    assert!(t["max_tilt_deg"].as_f64().unwrap() > 30.0, "{t}");
+    let t = run("step.toml", &["--set", "args.step=30"]);
+    assert_ne!(t["outcome"], "passed", "{t}");
+    assert!(t["max_x_m"].as_f64().unwrap() < 2.2, "{t}");
+}
+
 /// Writes a terrain with the real generator: 2 m of ground, a 1 m field of 5 cm holes
 /// among ground blocks, 1 m of run-out.
 fn holes_terrain(dir: &std::path::Path) -> std::path::PathBuf {

@@ -10,6 +10,8 @@
 //!   effort-interface PID.
 //! - **Motor**: rapier's velocity motor, solved with the contacts: no explicit torque; the
 //!   effort is the motor's impulse over the step.
+//! - **Servo**: rapier's motor pulling to a position, solved with the contacts: a spring of
+//!   the given stiffness to q* and a damper to ω* (default 0), at most the URDF's effort.
 //! - **Effort**: τ = τ*.
 //!
 //! Every loop runs every physics step on the state measured after the previous step, so the
@@ -115,7 +117,26 @@ pub enum Control {
     Motor {
         damping: f64,
     },
+    Servo {
+        stiffness: f64,
+        damping: f64,
+    },
     Effort,
+}
+
+/// What rapier's joint motor is set to, each step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotorSetting {
+    /// Position target, rad or m; used when `stiffness` > 0.
+    pub position: f64,
+    /// Speed target, rad/s or m/s.
+    pub velocity: f64,
+    /// Spring to the position target, N·m/rad (N/m); 0 for a pure velocity motor.
+    pub stiffness: f64,
+    /// Damping of the speed error, as the actuator's spec gives it.
+    pub damping: f64,
+    /// Largest effort, N·m or N.
+    pub max_effort: f64,
 }
 
 /// One joint's actuator.
@@ -146,6 +167,12 @@ impl Actuator {
                 integral: 0.0,
             },
             ActuatorSpec::Motor { damping, .. } => Control::Motor { damping: *damping },
+            ActuatorSpec::Servo {
+                stiffness, damping, ..
+            } => Control::Servo {
+                stiffness: *stiffness,
+                damping: *damping,
+            },
             ActuatorSpec::Effort { .. } => Control::Effort,
             ActuatorSpec::None { .. } => return None,
         };
@@ -202,7 +229,7 @@ impl Actuator {
                 bound(m.output.torque)
             }
             // The engine sets the motor ([`Self::motor`]) and reads its effort back.
-            Control::Motor { .. } => return 0.0,
+            Control::Motor { .. } | Control::Servo { .. } => return 0.0,
             Control::Effort => bound(effort_ff),
             Control::Velocity { kp, ki, integral } => {
                 let target = or(t.velocity, 0.0).clamp(-l.velocity, l.velocity);
@@ -238,20 +265,31 @@ impl Actuator {
         tau
     }
 
-    /// A motor's speed target (clamped to the joint's limit; none commanded: hold still),
-    /// its damping and its maximum effort; `None` for other actuators.
-    pub fn motor(&self) -> Option<(f64, f64, f64)> {
-        let Control::Motor { damping } = self.control else {
-            return None;
-        };
+    /// What rapier's motor is set to: a velocity motor's speed target (clamped to the
+    /// joint's limit; none commanded: hold still), a servo's position target (clamped to the
+    /// limits; none commanded: the joint's zero) and feed-forward speed; `None` for other
+    /// actuators.
+    pub fn motor(&self) -> Option<MotorSetting> {
         let l = self.limits;
-        let v = self.target.velocity;
-        let v = if v.is_nan() {
-            0.0
-        } else {
-            v.clamp(-l.velocity, l.velocity)
-        };
-        Some((v, damping, l.effort))
+        let or = |v: f64, default: f64| if v.is_nan() { default } else { v };
+        let velocity = or(self.target.velocity, 0.0).clamp(-l.velocity, l.velocity);
+        match self.control {
+            Control::Motor { damping } => Some(MotorSetting {
+                position: 0.0,
+                velocity,
+                stiffness: 0.0,
+                damping,
+                max_effort: l.effort,
+            }),
+            Control::Servo { stiffness, damping } => Some(MotorSetting {
+                position: or(self.target.position, 0.0).clamp(l.lower, l.upper),
+                velocity,
+                stiffness,
+                damping,
+                max_effort: l.effort,
+            }),
+            _ => None,
+        }
     }
 
     /// After the step: a DC motor integrates the joint speed into its angle.

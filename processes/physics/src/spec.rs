@@ -106,6 +106,21 @@ pub enum ActuatorSpec {
         #[serde(default = "default_motor_damping")]
         damping: f64,
     },
+    /// rapier's motor as a position servo, solved with the contacts like `motor`: it pulls
+    /// the joint to its position target (never commanded: the URDF's zero) as a spring of
+    /// `stiffness` and a damper of `damping` on the speed error (the velocity target is its
+    /// feed-forward, default 0), with at most the URDF's effort. Stable at any step for
+    /// however light the link (a flipper carrying wheels, a gripper's finger). Takes position
+    /// (and velocity) targets.
+    Servo {
+        joints: Vec<String>,
+        /// N·m/rad (N/m), > 0.
+        #[serde(default = "default_servo_stiffness")]
+        stiffness: f64,
+        /// N·m·s/rad (N·s/m), ≥ 0.
+        #[serde(default = "default_servo_damping")]
+        damping: f64,
+    },
     /// The commanded effort, bounded by the URDF's.
     Effort { joints: Vec<String> },
     /// A passive joint: no actuator (the default for every joint).
@@ -117,6 +132,12 @@ fn default_motor_damping() -> f64 {
 }
 fn default_velocity_kp() -> f64 {
     1.0
+}
+fn default_servo_stiffness() -> f64 {
+    1000.0
+}
+fn default_servo_damping() -> f64 {
+    50.0
 }
 fn default_position_kp() -> f64 {
     100.0
@@ -131,6 +152,7 @@ impl ActuatorSpec {
             ActuatorSpec::DcMotor { joints, .. }
             | ActuatorSpec::Velocity { joints, .. }
             | ActuatorSpec::Motor { joints, .. }
+            | ActuatorSpec::Servo { joints, .. }
             | ActuatorSpec::Position { joints, .. }
             | ActuatorSpec::Effort { joints }
             | ActuatorSpec::None { joints } => joints,
@@ -149,6 +171,14 @@ impl ActuatorSpec {
                     return Err(format!("damping must be positive, got {damping}"));
                 }
                 &[]
+            }
+            ActuatorSpec::Servo {
+                stiffness, damping, ..
+            } => {
+                if !(stiffness.is_finite() && *stiffness > 0.0) {
+                    return Err(format!("stiffness must be positive, got {stiffness}"));
+                }
+                &[("damping", *damping)]
             }
             ActuatorSpec::Position { kp, ki, kd, .. } => &[("kp", *kp), ("ki", *ki), ("kd", *kd)],
             ActuatorSpec::Effort { .. } | ActuatorSpec::None { .. } => &[],

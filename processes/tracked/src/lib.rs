@@ -1,8 +1,10 @@
 //! The tracked rescue robot of `shared/reference/tracked-robot.md` as a Caravan scenario:
 //! tracks made of rows of (gear) wheels, driven across Random Step Environment terrain.
 //!
+//! - [`climb`]: the operator's flipper sequence for climbing a step;
 //! - [`crossing`]: a crossing's outcome (passed, stuck, flipped) from the true pose;
 //! - [`diff_drive`]: the drive controller's limits, wheel speeds and wheel odometry;
+//! - [`flippers`]: the flipper command topic and the drive's speed-limited flipper targets;
 //! - [`passability`]: a sweep's crossings pooled into the passability table;
 //! - [`report`]: the `tracked` report section;
 //! - [`running_gear`]: the wheels of the four running-gear variants;
@@ -10,8 +12,10 @@
 //! - [`rse`]: the Random Step Environment generator (blocks, primitives, softness);
 //! - [`rse_world`]: a terrain as a world file of boxes, and its picture.
 
+pub mod climb;
 pub mod crossing;
 pub mod diff_drive;
+pub mod flippers;
 pub mod passability;
 pub mod report;
 pub mod rse;

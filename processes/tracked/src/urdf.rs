@@ -1,11 +1,12 @@
 //! The robot description (URDF) of a running-gear variant, generated from
-//! [`crate::running_gear`]: a chassis box, two flippers fixed at [`FLIPPER_ANGLE_DEG`] about
-//! the front main wheels' axes, and every wheel a link on a continuous joint about y, its rim
-//! a cylinder and its teeth boxes.
+//! [`crate::running_gear`]: a chassis box, two flippers on revolute joints about the front
+//! main wheels' axes (0 in line with the main track, positive raises the tip, within
+//! [`FLIPPER_RANGE_DEG`]; or fixed at an angle, for trying poses), and every wheel a link on
+//! a continuous joint about y, its rim a cylinder and its teeth capsules.
 //!
-//! The flippers are fixed: the reference's runs do not move them, and a movable flipper (a
-//! 0.3 kg arm carrying nine wheels) made rapier's impulse-joint solver diverge within 0.1 s;
-//! its multibody solver holds one, at a tenth of the speed.
+//! A flipper (a 0.3 kg arm carrying nine wheels) needs the physics' multibody joints: rapier's
+//! impulse-joint solver diverged within 0.1 s. The physics holds it with a `servo` actuator
+//! and the drive sends its angle (30° by default, [`FLIPPER_ANGLE_DEG`]).
 //!
 //! Every wheel joint has the reference's limits (effort 140 N·m, velocity 14 rad/s); every
 //! wheel link its friction (`<gazebo><mu1>100</mu1><mu2>50</mu2>`; Caravan's physics takes
@@ -20,6 +21,11 @@ use std::fmt::Write;
 pub const TOTAL_MASS_KG: f64 = 20.0;
 /// The chassis box, m: length, width, height (chosen: the main tracks' length, between them).
 pub const CHASSIS_M: [f64; 3] = [0.44, 0.14, 0.10];
+/// The chassis' centre of mass from the box's centre, m: 5 cm forward and 3 cm down (chosen:
+/// the real robot carries its arm folded over the front and its batteries low in the hull).
+/// With the mass in the middle no flipper motion gets the 20 cm step: the main track is too
+/// short to carry the centre of mass over the edge before the robot rears past upright.
+pub const CHASSIS_COM_M: [f64; 3] = [0.05, 0.0, -0.03];
 /// Each flipper arm's mass, kg (chosen; the arm has no collider, its wheels touch).
 pub const FLIPPER_MASS_KG: f64 = 0.3;
 /// The reference's wheel joint limits for its big wheels: effort N·m, velocity rad/s. A
@@ -32,6 +38,24 @@ pub const WHEEL_MU: [f64; 2] = [100.0, 50.0];
 /// The flippers' angle above the main tracks' line, degrees (their tips up; chosen so that
 /// a flipper's tip clears a 20 cm step).
 pub const FLIPPER_ANGLE_DEG: f64 = 30.0;
+/// A movable flipper's range, degrees above the main tracks' line: from tip down (pushing the
+/// body up) to upright (chosen).
+pub const FLIPPER_RANGE_DEG: [f64; 2] = [-90.0, 90.0];
+/// A movable flipper's motor: effort N·m and speed rad/s (chosen: lifts the robot's front
+/// with room to spare, a quarter turn in 1.6 s).
+pub const FLIPPER_EFFORT_NM: f64 = 60.0;
+pub const FLIPPER_VELOCITY_RAD_S: f64 = 1.0;
+
+/// How the flippers are joined to the chassis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Flippers {
+    /// Fixed at this angle above the main tracks' line, degrees.
+    Fixed(f64),
+    /// On revolute joints `left_flipper_joint` and `right_flipper_joint` about the front
+    /// wheels' axis: position 0 in line with the main track, positive raises the tip, within
+    /// [`FLIPPER_RANGE_DEG`].
+    Movable,
+}
 
 /// Inertia of a solid box of `m` kg and full sizes `s`: (ixx, iyy, izz).
 fn box_inertia(m: f64, s: [f64; 3]) -> [f64; 3] {
@@ -39,12 +63,12 @@ fn box_inertia(m: f64, s: [f64; 3]) -> [f64; 3] {
     [m * (y + z) / 12.0, m * (x + z) / 12.0, m * (x + y) / 12.0]
 }
 
-fn inertial(out: &mut String, m: f64, i: [f64; 3]) {
+fn inertial(out: &mut String, m: f64, i: [f64; 3], at: [f64; 3]) {
     let _ = writeln!(
         out,
-        "    <inertial><mass value=\"{m}\"/><inertia ixx=\"{:.9}\" iyy=\"{:.9}\" izz=\"{:.9}\" \
+        "    <inertial><origin xyz=\"{} {} {}\"/><mass value=\"{m}\"/><inertia ixx=\"{:.9}\" iyy=\"{:.9}\" izz=\"{:.9}\" \
          ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>",
-        i[0], i[1], i[2]
+        at[0], at[1], at[2], i[0], i[1], i[2]
     );
 }
 
@@ -55,7 +79,7 @@ fn wheel_link(out: &mut String, w: &Wheel) {
     let (m, r, h) = (running_gear::WHEEL_MASS_KG, w.radius_m, w.width_m);
     // Solid cylinder about y.
     let across = m * (3.0 * r * r + h * h) / 12.0;
-    inertial(out, m, [across, m * r * r / 2.0, across]);
+    inertial(out, m, [across, m * r * r / 2.0, across], [0.0; 3]);
     let rim = w.radius_m - w.teeth.map_or(0.0, |t| t.depth_m);
     let _ = writeln!(
         out,
@@ -113,14 +137,14 @@ fn wheel_joint(out: &mut String, w: &Wheel) {
     );
 }
 
-/// The URDF text of `variant`, flippers at [`FLIPPER_ANGLE_DEG`].
+/// The URDF text of `variant`, with movable flippers.
 pub fn urdf(variant: Variant) -> String {
-    urdf_with_flippers(variant, FLIPPER_ANGLE_DEG)
+    urdf_with_flippers(variant, Flippers::Movable)
 }
 
-/// The URDF text of `variant` with the flippers' tips raised by `flipper_angle_deg` above the
-/// main track's line (0 = in line, 90 = upright), for trying other flipper poses.
-pub fn urdf_with_flippers(variant: Variant, flipper_angle_deg: f64) -> String {
+/// The URDF text of `variant` with the given flippers: fixed with their tips raised by an
+/// angle above the main track's line (0 = in line, 90 = upright), or movable.
+pub fn urdf_with_flippers(variant: Variant, flippers_joint: Flippers) -> String {
     let wheels = running_gear::wheels(variant);
     let flippers = 2.0 * FLIPPER_MASS_KG;
     let chassis_kg = TOTAL_MASS_KG - flippers - running_gear::WHEEL_MASS_KG * wheels.len() as f64;
@@ -134,7 +158,12 @@ pub fn urdf_with_flippers(variant: Variant, flipper_angle_deg: f64) -> String {
         variant.name()
     );
     let _ = writeln!(out, "  <link name=\"base_link\">");
-    inertial(&mut out, chassis_kg, box_inertia(chassis_kg, CHASSIS_M));
+    inertial(
+        &mut out,
+        chassis_kg,
+        box_inertia(chassis_kg, CHASSIS_M),
+        CHASSIS_COM_M,
+    );
     let [x, y, z] = CHASSIS_M;
     let _ = writeln!(
         out,
@@ -143,6 +172,7 @@ pub fn urdf_with_flippers(variant: Variant, flipper_angle_deg: f64) -> String {
     let (px, pz) = running_gear::flipper_pivot();
     for side in Side::BOTH {
         let name = format!("{}_flipper", side.name());
+        debug_assert!(flipper_joints().contains(&format!("{name}_joint")));
         let _ = writeln!(out, "  <link name=\"{name}\">");
         inertial(
             &mut out,
@@ -151,16 +181,28 @@ pub fn urdf_with_flippers(variant: Variant, flipper_angle_deg: f64) -> String {
                 FLIPPER_MASS_KG,
                 [running_gear::FLIPPER_LENGTH_M, 0.02, 0.04],
             ),
+            [0.0; 3],
         );
         let _ = writeln!(out, "  </link>");
+        let y = side.sign() * running_gear::FLIPPER_Y_M;
         // A rotation about y by −angle lifts the flipper's tip (x forward, z up).
-        let _ = writeln!(
-            out,
-            "  <joint name=\"{name}_joint\" type=\"fixed\"><parent link=\"base_link\"/>\
-             <child link=\"{name}\"/><origin xyz=\"{px} {} {pz}\" rpy=\"0 {:.9} 0\"/></joint>",
-            side.sign() * running_gear::FLIPPER_Y_M,
-            -flipper_angle_deg.to_radians()
-        );
+        let _ = match flippers_joint {
+            Flippers::Fixed(angle) => writeln!(
+                out,
+                "  <joint name=\"{name}_joint\" type=\"fixed\"><parent link=\"base_link\"/>\
+                 <child link=\"{name}\"/><origin xyz=\"{px} {y} {pz}\" rpy=\"0 {:.9} 0\"/></joint>",
+                -angle.to_radians()
+            ),
+            Flippers::Movable => writeln!(
+                out,
+                "  <joint name=\"{name}_joint\" type=\"revolute\"><parent link=\"base_link\"/>\
+                 <child link=\"{name}\"/><origin xyz=\"{px} {y} {pz}\"/><axis xyz=\"0 -1 0\"/>\
+                 <limit lower=\"{:.9}\" upper=\"{:.9}\" effort=\"{FLIPPER_EFFORT_NM}\" \
+                 velocity=\"{FLIPPER_VELOCITY_RAD_S}\"/></joint>",
+                FLIPPER_RANGE_DEG[0].to_radians(),
+                FLIPPER_RANGE_DEG[1].to_radians()
+            ),
+        };
     }
     for w in &wheels {
         wheel_link(&mut out, w);
@@ -168,6 +210,14 @@ pub fn urdf_with_flippers(variant: Variant, flipper_angle_deg: f64) -> String {
     }
     out.push_str("</robot>\n");
     out
+}
+
+/// The flippers' joint names, left first.
+pub fn flipper_joints() -> Vec<String> {
+    Side::BOTH
+        .iter()
+        .map(|s| format!("{}_flipper_joint", s.name()))
+        .collect()
 }
 
 /// The name of every wheel joint of a side, in the order of [`running_gear::wheels`].
@@ -207,6 +257,34 @@ mod tests {
                 d.mass()
             );
         }
+    }
+
+    #[test]
+    fn flippers_are_revolute_about_the_front_axis_and_the_mass_sits_forward_and_low() {
+        let d = parse(Variant::V4);
+        for side in ["left", "right"] {
+            let j = &d.joints[d.joint(&format!("{side}_flipper_joint")).unwrap()];
+            assert_eq!(j.kind, JointKind::Revolute);
+            assert!((j.limits.lower - FLIPPER_RANGE_DEG[0].to_radians()).abs() < 1e-9);
+            assert!((j.limits.upper - FLIPPER_RANGE_DEG[1].to_radians()).abs() < 1e-9);
+            let (px, pz) = running_gear::flipper_pivot();
+            let at = j.origin.translation.vector;
+            assert!((at.x - px).abs() < 1e-12 && (at.z - pz).abs() < 1e-12);
+        }
+        let base = d.link("base_link").unwrap();
+        let com = d.links[base]
+            .inertial
+            .as_ref()
+            .unwrap()
+            .origin
+            .translation
+            .vector;
+        assert_eq!([com.x, com.y, com.z], CHASSIS_COM_M);
+        // Fixed flippers, for trying poses, are not joints a drive can move.
+        let fixed = urdf_with_flippers(Variant::V4, Flippers::Fixed(40.0));
+        let d = caravan_world::description::parse(&fixed, "v4.urdf", std::path::Path::new("."))
+            .unwrap();
+        assert!(d.joints.iter().all(|j| j.kind != JointKind::Revolute));
     }
 
     #[test]

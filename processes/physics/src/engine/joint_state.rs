@@ -4,7 +4,7 @@
 
 use super::rapier::prelude::*;
 use super::shapes;
-use crate::actuator::JointReading;
+use crate::actuator::{JointReading, MotorSetting};
 use caravan_world::description::{Joint, JointKind};
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 
@@ -92,20 +92,30 @@ impl JointIo {
         mb.link_mut(id).map(|l| &mut l.joint.data)
     }
 
-    /// Sets rapier's velocity motor: target speed, damping, maximum effort.
+    /// Sets rapier's motor: a velocity motor, or a servo pulling to a position.
     pub fn set_motor(
         &self,
         impulse: &mut ImpulseJointSet,
         multibody: &mut MultibodyJointSet,
-        (speed, damping, max_effort): (f64, f64, f64),
+        m: MotorSetting,
     ) {
         let axis = self.motor_axis();
-        if let Some(data) = self.data_mut(impulse, multibody) {
-            let _ = data
-                .set_motor_model(axis, MotorModel::ForceBased)
-                .set_motor_velocity(axis, speed as Real, damping as Real)
-                .set_motor_max_force(axis, max_effort as Real);
-        }
+        let Some(data) = self.data_mut(impulse, multibody) else {
+            return;
+        };
+        let data = data.set_motor_model(axis, MotorModel::ForceBased);
+        let data = if m.stiffness > 0.0 {
+            data.set_motor(
+                axis,
+                m.position as Real,
+                m.velocity as Real,
+                m.stiffness as Real,
+                m.damping as Real,
+            )
+        } else {
+            data.set_motor_velocity(axis, m.velocity as Real, m.damping as Real)
+        };
+        let _ = data.set_motor_max_force(axis, m.max_effort as Real);
     }
 
     /// The effort rapier's motor applied over the last step, N·m or N: its last substep's

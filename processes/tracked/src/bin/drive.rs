@@ -2,7 +2,9 @@
 //! `caravan_tracked::diff_drive`). Every step it takes the latest `robot/i/cmd_vel` (forward
 //! speed and turn rate, body frame), limits it, and sends every wheel joint of a side the
 //! same speed on `robot/i/joint_command`, with the flippers' angle; it integrates wheel
-//! odometry from `robot/i/joint_states` onto `robot/i/odometry`. Params: `robot`, `urdf`,
+//! odometry from `robot/i/joint_states` onto `robot/i/odometry`. The flippers start at
+//! `flipper_angle_rad` and move to the angles asked on `robot/i/flipper_command` at no more
+//! than their joints' speed limit (`caravan_tracked::flippers`). Params: `robot`, `urdf`,
 //! `flipper_angle_rad`, `limits` (see the crate docs). Give it `rate = "50Hz"`.
 
 use caravan::{Node, NodeIdentity, Trigger};
@@ -10,6 +12,7 @@ use caravan_schemas::{
     JointCommand, JointState, JointValue, Name, Odometry, Quaternion, Twist, Vector3, topics,
 };
 use caravan_tracked::diff_drive::{DiffDrive, DriveLimits, WheelOdometry, circumscribed_radius};
+use caravan_tracked::flippers::{FlipperRamp, flipper_command};
 use caravan_world::description::{JointKind, load_description};
 use serde::Deserialize;
 use std::process::ExitCode;
@@ -27,11 +30,16 @@ struct Params {
     /// Its description: continuous joints named `left_…` and `right_…` are the sides' wheels;
     /// revolute joints named `…flipper_joint` the flippers.
     urdf: String,
-    /// The flippers' angle, rad (negative raises their tips).
-    #[serde(default)]
+    /// The flippers' angle until the operator asks for another, rad above the main track's
+    /// line (positive raises their tips; default 30°).
+    #[serde(default = "flipper_rest")]
     flipper_angle_rad: f64,
     #[serde(default)]
     limits: DriveLimits,
+}
+
+fn flipper_rest() -> f64 {
+    caravan_tracked::urdf::FLIPPER_ANGLE_DEG.to_radians()
 }
 
 struct Ready {
@@ -39,8 +47,8 @@ struct Ready {
     limits: DriveLimits,
     left: Vec<String>,
     right: Vec<String>,
-    flippers: Vec<String>,
-    flipper_angle_rad: f64,
+    /// Each flipper joint's name and its target's ramp.
+    flippers: Vec<(String, FlipperRamp)>,
 }
 
 fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
@@ -77,8 +85,14 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
         limits,
         left,
         right,
-        flippers: named(JointKind::Revolute, &|n| n.ends_with("flipper_joint")),
-        flipper_angle_rad: p.flipper_angle_rad,
+        flippers: named(JointKind::Revolute, &|n| n.ends_with("flipper_joint"))
+            .into_iter()
+            .map(|n| {
+                let l = d.joints[d.joint(&n).expect("listed from d")].limits;
+                let ramp = FlipperRamp::at(p.flipper_angle_rad, l.velocity, [l.lower, l.upper]);
+                (n, ramp)
+            })
+            .collect(),
     })
 }
 
@@ -91,8 +105,9 @@ fn mean_angle(state: &JointState, names: &[String]) -> f64 {
     sum / names.len() as f64
 }
 
-fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
+fn run(mut node: Node, mut r: Ready) -> Result<(), caravan::Error> {
     let cmd_vel = node.subscriber(&topics::cmd_vel(r.robot))?;
+    let flipper_cmd = node.subscriber(&flipper_command(r.robot))?;
     let joint_states = node.subscriber(&topics::joint_states(r.robot))?;
     let command = node.publisher(&topics::joint_command(r.robot))?;
     let odometry = node.publisher(&topics::odometry(r.robot))?;
@@ -121,11 +136,24 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
                 effort: f64::NAN,
             });
         }
-        for name in &r.flippers {
+        if let Some(asked) = flipper_cmd.latest()? {
+            for (name, ramp) in &mut r.flippers {
+                let goal = asked
+                    .joints
+                    .as_slice()
+                    .iter()
+                    .find(|j| j.name.as_str() == name);
+                if let Some(goal) = goal.filter(|j| j.position.is_finite()) {
+                    ramp.goal_rad = goal.position;
+                }
+            }
+        }
+        for (name, ramp) in &mut r.flippers {
+            let (position, velocity) = ramp.update(dt);
             let _ = cmd.joints.push(JointValue {
                 name: Name::new(name),
-                position: r.flipper_angle_rad,
-                velocity: 0.0,
+                position,
+                velocity,
                 effort: f64::NAN,
             });
         }

@@ -1,9 +1,15 @@
 //! `caravan-tracked-driver`: the experiment's operator. It drives robot `robot` straight
 //! ahead: `robot/i/cmd_vel` asks for `speed_m_s` from `start_s` until `stop_s`, then for a
-//! stop. Params: `robot`, `speed_m_s` (default 0.3), `start_s` (0.5), `stop_s` (never).
+//! stop. Params: `robot`, `speed_m_s` (default 0.3), `start_s` (0.5), `stop_s` (never), and
+//! `climb`: with `climb = { enabled = true }` it also works the flippers through the
+//! step-climbing sequence of `caravan_tracked::climb` (its angles are keys of the same table)
+//! from the robot's pitch (`robot/i/ground_truth`), on `robot/i/flipper_command`.
 
 use caravan::{Node, NodeIdentity, Trigger};
-use caravan_schemas::{Twist, Vector3, topics};
+use caravan_schemas::{JointCommand, JointValue, Name, Twist, Vector3, topics};
+use caravan_tracked::climb::{Climb, ClimbParams, nose_up_deg};
+use caravan_tracked::flippers::flipper_command;
+use caravan_tracked::urdf::{FLIPPER_RANGE_DEG, flipper_joints};
 use serde::Deserialize;
 use std::process::ExitCode;
 
@@ -25,6 +31,9 @@ struct Params {
     /// When to ask for a stop, s > `start_s`.
     #[serde(default = "never")]
     stop_s: f64,
+    /// Work the flippers to climb steps (angles in degrees; see `caravan_tracked::climb`).
+    #[serde(default)]
+    climb: ClimbParams,
 }
 
 fn speed() -> f64 {
@@ -50,13 +59,40 @@ fn setup(p: Params, _: &NodeIdentity) -> Result<Params, String> {
             p.start_s, p.stop_s
         ));
     }
+    p.climb.validate(FLIPPER_RANGE_DEG)?;
     Ok(p)
 }
 
 fn run(mut node: Node, p: Params) -> Result<(), caravan::Error> {
     let cmd_vel = node.publisher(&topics::cmd_vel(p.robot))?;
+    let mut flippers = match p.climb.enabled {
+        true => Some((
+            Climb::new(p.climb),
+            node.subscriber(&topics::ground_truth(p.robot))?,
+            node.publisher(&flipper_command(p.robot))?,
+        )),
+        false => None,
+    };
+    let names = flipper_joints();
     let trigger = node.trigger(Trigger::every_hz(50.0))?;
     node.run(trigger, |step| {
+        if let Some((climb, truth, out)) = &mut flippers
+            && let Some(pose) = truth.latest()?
+        {
+            let angle = climb
+                .update(nose_up_deg(&pose.pose.orientation))
+                .to_radians();
+            let mut cmd = caravan_schemas::placement_new::<JointCommand>();
+            for name in &names {
+                let _ = cmd.joints.push(JointValue {
+                    name: Name::new(name),
+                    position: angle,
+                    velocity: f64::NAN,
+                    effort: f64::NAN,
+                });
+            }
+            out.publish(&cmd)?;
+        }
         let t = step.now().as_secs_f64();
         let v = if t >= p.start_s && t < p.stop_s {
             p.speed_m_s

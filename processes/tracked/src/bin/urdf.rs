@@ -2,6 +2,7 @@
 //! variant (see `caravan_tracked::urdf`), `v1.urdf` … `v4.urdf` in `--out`.
 
 use caravan_tracked::running_gear::Variant;
+use caravan_tracked::urdf::Flippers;
 use clap::Parser;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -15,27 +16,28 @@ struct Args {
     /// Only this variant (v1, v2, v3 or v4); default all four.
     #[arg(long, value_parser = Variant::parse)]
     variant: Option<Variant>,
-    /// The flippers' angle above the track's line, degrees in [0, 90].
-    #[arg(long, default_value_t = caravan_tracked::urdf::FLIPPER_ANGLE_DEG)]
-    flipper_angle: f64,
+    /// Fix the flippers at this angle above the track's line, degrees in [0, 90], instead of
+    /// on revolute joints (the default, for trying poses).
+    #[arg(long)]
+    flipper_angle: Option<f64>,
 }
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    if !(0.0..=90.0).contains(&args.flipper_angle) {
-        eprintln!(
-            "caravan-tracked-urdf: --flipper-angle: {} is outside [0, 90] degrees",
-            args.flipper_angle
-        );
+    if let Some(a) = args.flipper_angle.filter(|a| !(0.0..=90.0).contains(a)) {
+        eprintln!("caravan-tracked-urdf: --flipper-angle: {a} is outside [0, 90] degrees");
         return ExitCode::from(2);
     }
+    let flippers = args
+        .flipper_angle
+        .map_or(Flippers::Movable, Flippers::Fixed);
     let variants = args.variant.map_or(Variant::ALL.to_vec(), |v| vec![v]);
     for v in variants {
         let path = args.out.join(format!("{}.urdf", v.name()));
         let written = std::fs::create_dir_all(&args.out).and_then(|()| {
             std::fs::write(
                 &path,
-                caravan_tracked::urdf::urdf_with_flippers(v, args.flipper_angle),
+                caravan_tracked::urdf::urdf_with_flippers(v, flippers),
             )
         });
         if let Err(e) = written {
