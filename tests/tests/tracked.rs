@@ -2,7 +2,7 @@
 //! shipped launch files, under a unique group name; the `tracked` report section must show
 //! it moving as commanded, level on flat ground, and over a 10 cm step.
 
-use caravan_tests::{run_scenario, workspace_bin};
+use caravan_tests::{launch_with_set, run_scenario, workspace_bin};
 use serde_json::Value;
 
 /// Runs `launch/tracked/<file>` with `extra` arguments; returns the `tracked` section.
@@ -53,6 +53,29 @@ fn v4_climbs_20_cm_with_its_flippers_and_not_30() {
     let t = run("step.toml", &["--set", "args.step=30"]);
     assert_ne!(t["outcome"], "passed", "{t}");
     assert!(t["max_x_m"].as_f64().unwrap() < 2.2, "{t}");
+}
+
+#[test]
+fn bad_flipper_params_fail_the_launch_naming_the_key() {
+    for (set, key) in [
+        (
+            "process.driver.params.climb.push_deg=-120.0",
+            "climb.push_deg",
+        ),
+        (
+            "process.driver.params.climb.crest_deg=5.0",
+            "climb.crest_deg",
+        ),
+        ("process.driver.params.climb.speed=1.0", "speed"),
+        (
+            "process.drive.params.flipper_angle_rad=\"up\"",
+            "flipper_angle_rad",
+        ),
+    ] {
+        let (code, err) = launch_with_set("tracked/step.toml", "2s", set);
+        assert_ne!(code, 0, "{set}: {err}");
+        assert!(err.contains(key) && err.contains("driv"), "{set}: {err}");
+    }
 }
 
 /// Writes a terrain with the real generator: 2 m of ground, a 1 m field of 5 cm holes

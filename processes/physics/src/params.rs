@@ -264,6 +264,13 @@ mod tests {
             "{e}"
         );
         let e = parse(json!({"robots": [{"urdf": "a.urdf",
+            "actuators": [{"type": "servo", "joints": ["j"], "stiffness": 0.0}]}]}))
+        .unwrap_err();
+        assert!(
+            e.contains("'robots[0].actuators[0]'") && e.contains("stiffness"),
+            "{e}"
+        );
+        let e = parse(json!({"robots": [{"urdf": "a.urdf",
             "actuators": [{"type": "torque", "joints": ["j"]}]}]}))
         .unwrap_err();
         assert!(e.contains("torque"), "{e}");

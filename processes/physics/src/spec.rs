@@ -98,7 +98,7 @@ pub enum ActuatorSpec {
     /// rapier's velocity motor on the joint, solved with the contacts (implicitly, as
     /// Gazebo's velocity-controlled joints under ODE): it holds the target speed with at most
     /// the URDF's effort, stable at any step for however light the link. Takes velocity
-    /// targets.
+    /// targets. Its `effort` reads 0 on multibody joints (below).
     Motor {
         joints: Vec<String>,
         /// rapier's motor damping (acceleration-based), 1/s, > 0: how hard the speed error
@@ -111,7 +111,8 @@ pub enum ActuatorSpec {
     /// `stiffness` and a damper of `damping` on the speed error (the velocity target is its
     /// feed-forward, default 0), with at most the URDF's effort. Stable at any step for
     /// however light the link (a flipper carrying wheels, a gripper's finger). Takes position
-    /// (and velocity) targets.
+    /// (and velocity) targets. Like `motor`, its `effort` in `joint_states` reads 0 on
+    /// multibody joints: rapier does not report the impulses of their internal constraints.
     Servo {
         joints: Vec<String>,
         /// N·m/rad (N/m), > 0.

@@ -128,7 +128,8 @@ impl JointIo {
     ) -> f64 {
         let axis = self.motor_axis() as usize;
         self.data_mut(impulse, multibody)
-            .map_or(0.0, |d| d.motors[axis].impulse as f64 * per_second)
+            // rapier's motor impulse acts against the joint's positive direction.
+            .map_or(0.0, |d| -d.motors[axis].impulse as f64 * per_second)
     }
 
     /// The joint axis in the world frame.

@@ -199,6 +199,35 @@ fn an_arm_holding_a_pose_carries_its_weight_in_its_joint_torques() {
 }
 
 #[test]
+fn a_servo_holds_zero_then_a_pose_and_its_effort_carries_the_weight() {
+    // Impulse joints: rapier reports no motor impulse for multibody joints.
+    let mut s = sim(
+        serde_json::json!([{ "urdf": "arm3.urdf", "base": "fixed", "poses": [[2.0, 2.0, 0.0]],
+        "joints": "impulse",
+        "actuators": [{ "type": "servo", "joints": ["*"], "stiffness": 20000.0, "damping": 400.0 }],
+        "link_states": true }]),
+    );
+    // Never commanded: the URDF's zero, sagging by torque over stiffness only.
+    run(&mut s, 2.0);
+    let at_rest: Vec<f64> = s.joints(0).map(|j| j.1).collect();
+    assert!(at_rest.iter().all(|q| q.abs() < 5e-3), "{at_rest:?}");
+    let q = [0.3, -0.5, 0.4];
+    hold(&mut s, q);
+    let measured: Vec<f64> = s.joints(0).map(|j| j.1).collect();
+    let frames = link_frames(&s);
+    let expected = torques_of(&frames, &gravity_forces(&frames)).map(|t| -t);
+    for j in 0..3 {
+        // A spring: it sits where its torque balances the load.
+        let sag = expected[j] / 20000.0;
+        assert!(
+            (measured[j] + sag - q[j]).abs() < 1e-3,
+            "joint {j}: {measured:?} vs {q:?}, sag {sag}"
+        );
+    }
+    assert_close(efforts(&s), expected, "a servo's static torques");
+}
+
+#[test]
 fn a_wrench_on_the_third_link_adds_j_transpose_f() {
     let mut s = arm();
     let q = [0.2, -0.3, 0.5];
