@@ -2,9 +2,9 @@
 //! `caravan_tracked::diff_drive`). Every step it takes the latest `robot/i/cmd_vel` (forward
 //! speed and turn rate, body frame), limits it, and sends every wheel joint of a side the
 //! same speed on `robot/i/joint_command`, with the flippers' angle; it integrates wheel
-//! odometry from `robot/i/joint_states` onto `robot/i/odometry`. The flippers start at
-//! `flipper_angle_rad` and move to the angles asked on `robot/i/flipper_command` at no more
-//! than their joints' speed limit (`caravan_tracked::flippers`). Params: `robot`, `urdf`,
+//! odometry from `robot/i/joint_states` onto `robot/i/odometry`. The flippers go from the
+//! robot's start pose (in line) to `flipper_angle_rad`, then to the angles asked on
+//! `robot/i/flipper_command`, at no more than their joints' speed limit (`caravan_tracked::flippers`). Params: `robot`, `urdf`,
 //! `flipper_angle_rad`, `limits` (see the crate docs). Give it `rate = "50Hz"`.
 
 use caravan::{Node, NodeIdentity, Trigger};
@@ -89,7 +89,9 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
             .into_iter()
             .map(|n| {
                 let l = d.joints[d.joint(&n).expect("listed from d")].limits;
-                let ramp = FlipperRamp::at(p.flipper_angle_rad, l.velocity, [l.lower, l.upper]);
+                // From the pose the robot starts in (the URDF's zero) to the asked angle.
+                let mut ramp = FlipperRamp::at(0.0, l.velocity, [l.lower, l.upper]);
+                ramp.goal_rad = p.flipper_angle_rad;
                 (n, ramp)
             })
             .collect(),
