@@ -50,6 +50,13 @@ fn v4_climbs_20_cm_with_its_flippers_and_not_30() {
     assert!(t["max_climb_m"].as_f64().unwrap() > 0.19, "{t}");
     // The nose rose well past the push threshold: the flippers had to work.
     assert!(t["max_tilt_deg"].as_f64().unwrap() > 30.0, "{t}");
+    // And it ends level on top, the flippers raised again (base 0.093 m above the step).
+    let last = t["track"].as_array().unwrap().last().unwrap().clone();
+    let (z, tilt) = (last[3].as_f64().unwrap(), last[4].as_f64().unwrap());
+    assert!(
+        (z - 0.293).abs() < 0.02 && tilt < 5.0,
+        "ends at z {z}, tilt {tilt}: {t}"
+    );
     let t = run("step.toml", &["--set", "args.step=30"]);
     assert_ne!(t["outcome"], "passed", "{t}");
     assert!(t["max_x_m"].as_f64().unwrap() < 2.2, "{t}");

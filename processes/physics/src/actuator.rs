@@ -133,7 +133,7 @@ pub struct MotorSetting {
     pub velocity: f64,
     /// Spring to the position target, N·m/rad (N/m); 0 for a pure velocity motor.
     pub stiffness: f64,
-    /// Damping of the speed error, as the actuator's spec gives it.
+    /// Damping of the speed error, ≥ 0: rapier's force-based motor damping, N·m·s/rad (N·s/m).
     pub damping: f64,
     /// Largest effort, N·m or N.
     pub max_effort: f64,

@@ -111,7 +111,8 @@ pub enum ActuatorSpec {
     /// `stiffness` and a damper of `damping` on the speed error (the velocity target is its
     /// feed-forward, default 0), with at most the URDF's effort. Stable at any step for
     /// however light the link (a flipper carrying wheels, a gripper's finger). Takes position
-    /// (and velocity) targets. Like `motor`, its `effort` in `joint_states` reads 0 on
+    /// (and velocity) targets; an infinite position clears the target back to 0. Like
+    /// `motor`, its `effort` in `joint_states` reads 0 on
     /// multibody joints: rapier does not report the impulses of their internal constraints.
     Servo {
         joints: Vec<String>,

@@ -3,8 +3,9 @@
 //! land on the step; once the nose has risen by `lift_deg`, turn them down so they carry the
 //! front across the edge while the main tracks follow; once the pitch has passed `crest_deg`
 //! and come back down by `settle_deg` (the body is tipping onto the step), or has fallen back
-//! below `lift_deg` by `settle_deg` (a low step, already climbed), raise them again for the
-//! next one. The reference's real robot climbs 20 cm this way; fixed flippers cannot.
+//! below `lift_deg` by `settle_deg` (a low step, already climbed), raise them again, and
+//! watch for the next step once the body is level (below `lift_deg` by `settle_deg`). The
+//! reference's real robot climbs 20 cm this way; fixed flippers cannot.
 
 use caravan_schemas::Quaternion;
 use serde::Deserialize;
@@ -27,7 +28,8 @@ pub struct ClimbParams {
     /// Flipper angle while approaching, degrees in the flipper's range (default 50).
     #[serde(default = "approach")]
     pub approach_deg: f64,
-    /// Flipper angle while the front is carried over the edge, degrees (default −45).
+    /// Flipper angle while the front is carried over the edge, degrees in the flipper's range
+    /// (default −45).
     #[serde(default = "push")]
     pub push_deg: f64,
     /// Nose-up pitch that starts the push, degrees > 0 (default 15).
@@ -85,16 +87,19 @@ impl ClimbParams {
                 ));
             }
         }
-        let ordered = 0.0 < self.settle_deg
-            && self.settle_deg < self.lift_deg
-            && self.lift_deg < self.crest_deg
-            && self.crest_deg < 90.0;
-        if !ordered {
-            return Err(format!(
-                "keys 'climb.settle_deg' < 'climb.lift_deg' < 'climb.crest_deg' < 90 (all > 0) \
-                 must hold, got {}, {} and {}",
-                self.settle_deg, self.lift_deg, self.crest_deg
-            ));
+        // 0 < settle < lift < crest < 90, each checked against the one below it.
+        let chain = [
+            ("settle_deg", self.settle_deg, 0.0),
+            ("lift_deg", self.lift_deg, self.settle_deg),
+            ("crest_deg", self.crest_deg, self.lift_deg),
+        ];
+        for (key, v, below) in chain {
+            if !(v.is_finite() && below < v && v < 90.0) {
+                return Err(format!(
+                    "key 'climb.{key}': {v} must lie between {below} and 90 degrees \
+                     (0 < settle_deg < lift_deg < crest_deg < 90)"
+                ));
+            }
         }
         Ok(())
     }
@@ -107,12 +112,16 @@ pub enum Phase {
     Approach,
     /// Flippers down; the highest pitch seen so far, degrees.
     Push { peak_deg: f64 },
+    /// Flippers raised again, waiting for the body to level before watching for a step.
+    Settle,
 }
 
 /// The sequence's state.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Climb {
+    /// Its angles.
     pub params: ClimbParams,
+    /// Where it is.
     pub phase: Phase,
 }
 
@@ -127,6 +136,7 @@ impl Climb {
     /// The flipper angle to ask for, degrees, given the body's nose-up pitch, degrees.
     pub fn update(&mut self, pitch_deg: f64) -> f64 {
         let p = self.params;
+        let level = pitch_deg < p.lift_deg - p.settle_deg;
         self.phase = match self.phase {
             Phase::Approach if pitch_deg > p.lift_deg => Phase::Push {
                 peak_deg: pitch_deg,
@@ -134,17 +144,19 @@ impl Climb {
             Phase::Push { peak_deg } => {
                 let peak_deg = peak_deg.max(pitch_deg);
                 let over = peak_deg > p.crest_deg && pitch_deg < p.crest_deg - p.settle_deg;
-                let back = pitch_deg < p.lift_deg - p.settle_deg;
-                if over || back {
+                if level {
                     Phase::Approach
+                } else if over {
+                    Phase::Settle
                 } else {
                     Phase::Push { peak_deg }
                 }
             }
+            Phase::Settle if level => Phase::Approach,
             phase => phase,
         };
         match self.phase {
-            Phase::Approach => p.approach_deg,
+            Phase::Approach | Phase::Settle => p.approach_deg,
             Phase::Push { .. } => p.push_deg,
         }
     }
@@ -164,9 +176,15 @@ mod tests {
         for pitch in [25.0, 38.0, 45.0, 36.0, 41.0, 21.0] {
             assert_eq!(c.update(pitch), -45.0, "{pitch}");
         }
-        // Tipping onto the step.
-        assert_eq!(c.update(19.0), 50.0);
+        // Tipping onto the step: flippers up, and they stay up while the body levels.
+        for pitch in [19.0, 17.0, 16.0, 8.0] {
+            assert_eq!(c.update(pitch), 50.0, "{pitch}");
+            assert_eq!(c.phase, Phase::Settle);
+        }
+        // Level: watching for the next step.
+        assert_eq!(c.update(3.0), 50.0);
         assert_eq!(c.phase, Phase::Approach);
+        assert_eq!(c.update(16.0), -45.0);
     }
 
     #[test]
@@ -206,7 +224,11 @@ mod tests {
             crest_deg: 10.0,
             ..ClimbParams::default()
         };
-        assert!(bad.validate(range).unwrap_err().contains("climb.crest_deg"));
+        let e = bad.validate(range).unwrap_err();
+        assert!(
+            e.contains("'climb.crest_deg'") && !e.contains("'climb.lift_deg'"),
+            "{e}"
+        );
         let bad = ClimbParams {
             approach_deg: f64::NAN,
             ..ClimbParams::default()

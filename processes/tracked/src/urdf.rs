@@ -35,15 +35,16 @@ pub const WHEEL_EFFORT_NM: f64 = 140.0;
 pub const WHEEL_VELOCITY_RAD_S: f64 = 14.0;
 /// The reference's anisotropic friction of the wheels (mu1 along, mu2 across).
 pub const WHEEL_MU: [f64; 2] = [100.0, 50.0];
-/// The flippers' angle above the main tracks' line, degrees (their tips up; chosen so that
-/// a flipper's tip clears a 20 cm step).
+/// The flippers' resting angle above the main tracks' line, degrees: where the drive holds
+/// them unless the operator asks otherwise (their tips up, off flat ground; chosen).
 pub const FLIPPER_ANGLE_DEG: f64 = 30.0;
 /// A movable flipper's range, degrees above the main tracks' line: from tip down (pushing the
 /// body up) to upright (chosen).
 pub const FLIPPER_RANGE_DEG: [f64; 2] = [-90.0, 90.0];
-/// A movable flipper's motor: effort N·m and speed rad/s (chosen: lifts the robot's front
-/// with room to spare, a quarter turn in 1.6 s).
+/// A movable flipper's largest torque, N·m (chosen: lifts the robot's front with room to
+/// spare).
 pub const FLIPPER_EFFORT_NM: f64 = 60.0;
+/// A movable flipper's largest speed, rad/s (chosen: a quarter turn in 1.6 s).
 pub const FLIPPER_VELOCITY_RAD_S: f64 = 1.0;
 
 /// How the flippers are joined to the chassis.

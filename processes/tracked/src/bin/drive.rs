@@ -72,6 +72,23 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
             d.file
         ));
     }
+    let mut flippers = Vec::new();
+    for j in d.joints.iter() {
+        if j.kind != JointKind::Revolute || !j.name.ends_with("flipper_joint") {
+            continue;
+        }
+        let l = j.limits;
+        if !(l.lower <= p.flipper_angle_rad && p.flipper_angle_rad <= l.upper) {
+            return Err(format!(
+                "key 'flipper_angle_rad': {} is outside {}'s range [{}, {}] rad",
+                p.flipper_angle_rad, j.name, l.lower, l.upper
+            ));
+        }
+        // From the pose the robot starts in (the URDF's zero) to the asked angle.
+        let mut ramp = FlipperRamp::at(0.0, l.velocity, [l.lower, l.upper]);
+        ramp.goal_rad = p.flipper_angle_rad;
+        flippers.push((j.name.clone(), ramp));
+    }
     let mut limits = p.limits;
     if limits.wheel_radius_m == 0.0 {
         let first = d.joint(&left[0]).map(|j| d.joints[j].child);
@@ -85,16 +102,7 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
         limits,
         left,
         right,
-        flippers: named(JointKind::Revolute, &|n| n.ends_with("flipper_joint"))
-            .into_iter()
-            .map(|n| {
-                let l = d.joints[d.joint(&n).expect("listed from d")].limits;
-                // From the pose the robot starts in (the URDF's zero) to the asked angle.
-                let mut ramp = FlipperRamp::at(0.0, l.velocity, [l.lower, l.upper]);
-                ramp.goal_rad = p.flipper_angle_rad;
-                (n, ramp)
-            })
-            .collect(),
+        flippers,
     })
 }
 
