@@ -13,8 +13,9 @@ use serde::Deserialize;
 /// The body's nose-up pitch, degrees, from its orientation (x forward, z up; a rotation
 /// about y that lifts x is positive, the opposite of ROS's pitch sign).
 pub fn nose_up_deg(q: &Quaternion) -> f64 {
-    let s = 2.0 * (q.w * q.y - q.z * q.x);
-    -s.clamp(-1.0, 1.0).asin().to_degrees()
+    let q = nalgebra::Quaternion::new(q.w, q.x, q.y, q.z);
+    let (_, pitch, _) = nalgebra::UnitQuaternion::new_normalize(q).euler_angles();
+    -pitch.to_degrees()
 }
 
 /// The sequence's angles, degrees. Flipper angles are above the main track's line (positive

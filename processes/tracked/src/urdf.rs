@@ -172,8 +172,7 @@ pub fn urdf_with_flippers(variant: Variant, flippers_joint: Flippers) -> String 
     );
     let (px, pz) = running_gear::flipper_pivot();
     for side in Side::BOTH {
-        let name = format!("{}_flipper", side.name());
-        debug_assert!(flipper_joints().contains(&format!("{name}_joint")));
+        let name = flipper_link(side);
         let _ = writeln!(out, "  <link name=\"{name}\">");
         inertial(
             &mut out,
@@ -213,11 +212,16 @@ pub fn urdf_with_flippers(variant: Variant, flippers_joint: Flippers) -> String 
     out
 }
 
+/// A flipper's link name; its joint is this plus `_joint`.
+fn flipper_link(side: Side) -> String {
+    format!("{}_flipper", side.name())
+}
+
 /// The flippers' joint names, left first.
 pub fn flipper_joints() -> Vec<String> {
     Side::BOTH
-        .iter()
-        .map(|s| format!("{}_flipper_joint", s.name()))
+        .into_iter()
+        .map(|s| format!("{}_joint", flipper_link(s)))
         .collect()
 }
 

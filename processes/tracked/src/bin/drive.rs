@@ -4,8 +4,9 @@
 //! same speed on `robot/i/joint_command`, with the flippers' angle; it integrates wheel
 //! odometry from `robot/i/joint_states` onto `robot/i/odometry`. The flippers go from the
 //! robot's start pose (in line) to `flipper_angle_rad`, then to the angles asked on
-//! `robot/i/flipper_command`, at no more than their joints' speed limit (`caravan_tracked::flippers`). Params: `robot`, `urdf`,
-//! `flipper_angle_rad`, `limits` (see the crate docs). Give it `rate = "50Hz"`.
+//! `robot/i/flipper_command`, at no more than their joints' speed limit
+//! (`caravan_tracked::flippers`). Params: `robot`, `urdf`, `flipper_angle_rad`, `limits` (see
+//! the crate docs). Give it `rate = "50Hz"`.
 
 use caravan::{Node, NodeIdentity, Trigger};
 use caravan_schemas::{

@@ -65,13 +65,14 @@ fn setup(p: Params, _: &NodeIdentity) -> Result<Params, String> {
 
 fn run(mut node: Node, p: Params) -> Result<(), caravan::Error> {
     let cmd_vel = node.publisher(&topics::cmd_vel(p.robot))?;
-    let mut flippers = match p.climb.enabled {
-        true => Some((
+    let mut flippers = if p.climb.enabled {
+        Some((
             Climb::new(p.climb),
             node.subscriber(&topics::ground_truth(p.robot))?,
             node.publisher(&flipper_command(p.robot))?,
-        )),
-        false => None,
+        ))
+    } else {
+        None
     };
     let names = flipper_joints();
     let trigger = node.trigger(Trigger::every_hz(50.0))?;
