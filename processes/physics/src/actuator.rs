@@ -12,6 +12,8 @@
 //!   effort is the motor's impulse over the step.
 //! - **Servo**: rapier's motor pulling to a position, solved with the contacts: a spring of
 //!   the given stiffness to q* and a damper to ω* (default 0), at most the URDF's effort.
+//! - **Kinematic**: no torque; the joint is moved at ω* (or to q* at up to its velocity
+//!   limit), whatever the load.
 //! - **Effort**: τ = τ*.
 //!
 //! Every loop runs every physics step on the state measured after the previous step, so the
@@ -121,6 +123,7 @@ pub enum Control {
         stiffness: f64,
         damping: f64,
     },
+    Kinematic,
     Effort,
 }
 
@@ -173,6 +176,7 @@ impl Actuator {
                 stiffness: *stiffness,
                 damping: *damping,
             },
+            ActuatorSpec::Kinematic { .. } => Control::Kinematic,
             ActuatorSpec::Effort { .. } => Control::Effort,
             ActuatorSpec::None { .. } => return None,
         };
@@ -190,6 +194,11 @@ impl Actuator {
             Control::DcMotor(m) => m.motor.reflected_inertia(),
             _ => 0.0,
         }
+    }
+
+    /// Whether the engine moves this joint kinematically.
+    pub fn is_kinematic(&self) -> bool {
+        matches!(self.control, Control::Kinematic)
     }
 
     /// The DC motor's firmware, when its tick is due at `now_ns`.
@@ -228,8 +237,9 @@ impl Actuator {
                 m.output = motor::torque(&m.motor, m.pid.output(), m.speed);
                 bound(m.output.torque)
             }
-            // The engine sets the motor ([`Self::motor`]) and reads its effort back.
-            Control::Motor { .. } | Control::Servo { .. } => return 0.0,
+            // The engine sets the motor ([`Self::motor`]) and reads its effort back, or moves
+            // a kinematic joint ([`Self::kinematic_velocity`]).
+            Control::Motor { .. } | Control::Servo { .. } | Control::Kinematic => return 0.0,
             Control::Effort => bound(effort_ff),
             Control::Velocity { kp, ki, integral } => {
                 let target = or(t.velocity, 0.0).clamp(-l.velocity, l.velocity);
@@ -290,6 +300,25 @@ impl Actuator {
             }),
             _ => None,
         }
+    }
+
+    /// The speed a kinematic joint moves at over the next step of `dt` s, from its state
+    /// `now`: to the position target in one step if the velocity limit allows (else at the
+    /// limit toward it), else the velocity target, else 0; `None` for other actuators.
+    pub fn kinematic_velocity(&self, now: JointReading, dt: f64) -> Option<f64> {
+        if !self.is_kinematic() {
+            return None;
+        }
+        let l = self.limits;
+        let t = self.target;
+        let speed = if !t.position.is_nan() {
+            (t.position.clamp(l.lower, l.upper) - now.position) / dt
+        } else if !t.velocity.is_nan() {
+            t.velocity
+        } else {
+            0.0
+        };
+        Some(speed.clamp(-l.velocity, l.velocity))
     }
 
     /// After the step: a DC motor integrates the joint speed into its angle.

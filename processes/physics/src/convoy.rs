@@ -64,6 +64,7 @@ pub fn simulation(
                 spec: &spec,
                 pose: StartPose::Planar { x, y, yaw },
                 reflected_inertia: reflected.clone(),
+                kinematic: Vec::new(),
                 sensed: Vec::new(),
             },
             actuators: actuators.clone(),

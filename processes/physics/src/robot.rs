@@ -89,6 +89,9 @@ pub struct RobotSetup<'a> {
     /// Inertia added to each joint's child link about the joint axis (an actuator's rotor
     /// seen through its gear), kg·m²; one per joint.
     pub reflected_inertia: Vec<f64>,
+    /// Joints moved kinematically ([`crate::spec::ActuatorSpec::Kinematic`]); one per joint,
+    /// or empty for none.
+    pub kinematic: Vec<bool>,
     /// Fixed joints that carry a force–torque sensor (description indices), from
     /// [`RobotSpec::sensed_joints`]: not welded.
     pub sensed: Vec<usize>,
@@ -114,6 +117,11 @@ impl RobotSetup<'_> {
         let joint = &self.description.joints[j];
         let extra = self.reflected_inertia.get(j).copied().unwrap_or(0.0);
         (joint.kind != JointKind::Fixed && extra > 0.0).then_some((joint.axis, extra))
+    }
+
+    /// Whether joint `j` is moved kinematically.
+    pub(crate) fn is_kinematic(&self, j: usize) -> bool {
+        self.kinematic.get(j).copied().unwrap_or(false)
     }
 }
 

@@ -139,12 +139,17 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                 .iter()
                 .map(|a| a.as_ref().map_or(0.0, Actuator::reflected_inertia))
                 .collect();
+            let kinematic = actuators
+                .iter()
+                .map(|a| a.as_ref().is_some_and(Actuator::is_kinematic))
+                .collect();
             builds.push(RobotBuild {
                 setup: RobotSetup {
                     description: d,
                     spec,
                     pose: start_pose(p),
                     reflected_inertia,
+                    kinematic,
                     sensed: sensed.clone(),
                 },
                 actuators: actuators.clone(),

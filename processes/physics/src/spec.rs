@@ -106,14 +106,14 @@ pub enum ActuatorSpec {
         #[serde(default = "default_motor_damping")]
         damping: f64,
     },
-    /// rapier's motor as a position servo, solved with the contacts like `motor`: it pulls
+    /// A position servo: it pulls
     /// the joint to its position target (never commanded: the URDF's zero) as a spring of
     /// `stiffness` and a damper of `damping` on the speed error (the velocity target is its
     /// feed-forward, default 0), with at most the URDF's effort. Stable at any step for
     /// however light the link (a flipper carrying wheels, a gripper's finger). Takes position
-    /// (and velocity) targets; an infinite position clears the target back to 0. Like
-    /// `motor`, its `effort` in `joint_states` reads 0 on
-    /// multibody joints: rapier does not report the impulses of their internal constraints.
+    /// (and velocity) targets; an infinite position clears the target back to 0. On impulse
+    /// joints it is rapier's motor, solved with the contacts; on multibody joints rapier's
+    /// implicit joint spring and damper, its effort bound held while the joint is still.
     Servo {
         joints: Vec<String>,
         /// N·m/rad (N/m), > 0.
@@ -123,6 +123,17 @@ pub enum ActuatorSpec {
         #[serde(default = "default_servo_damping")]
         damping: f64,
     },
+    /// The joint moves exactly as commanded, whatever the load: an ideal velocity source
+    /// (Gazebo's `JointVelocityCmd`), for joints whose motors never saturate. A velocity
+    /// target is held as given; a position target is reached at up to the URDF's velocity
+    /// limit and held (never commanded: stand still). Targets are clamped to the URDF's
+    /// limits. rapier's kinematic multibody joint: the joint leaves the dynamics, so the
+    /// multibody's mass matrix to solve shrinks by one row per joint (a tracked robot's
+    /// 36 wheels: 44 rows to 8). Multibody robots only, and rapier 0.36 then solves no joint
+    /// limits or motors in that multibody: no joint may take a `motor`, and joint limits
+    /// are held only by the clamped targets of kinematic and `servo` joints, so every other
+    /// joint with limits (revolute, prismatic) is refused. Its `effort` reads 0.
+    Kinematic { joints: Vec<String> },
     /// The commanded effort, bounded by the URDF's.
     Effort { joints: Vec<String> },
     /// A passive joint: no actuator (the default for every joint).
@@ -156,6 +167,7 @@ impl ActuatorSpec {
             | ActuatorSpec::Motor { joints, .. }
             | ActuatorSpec::Servo { joints, .. }
             | ActuatorSpec::Position { joints, .. }
+            | ActuatorSpec::Kinematic { joints }
             | ActuatorSpec::Effort { joints }
             | ActuatorSpec::None { joints } => joints,
         }
@@ -183,7 +195,9 @@ impl ActuatorSpec {
                 &[("damping", *damping)]
             }
             ActuatorSpec::Position { kp, ki, kd, .. } => &[("kp", *kp), ("ki", *ki), ("kd", *kd)],
-            ActuatorSpec::Effort { .. } | ActuatorSpec::None { .. } => &[],
+            ActuatorSpec::Kinematic { .. }
+            | ActuatorSpec::Effort { .. }
+            | ActuatorSpec::None { .. } => &[],
         };
         for (key, v) in gains {
             if !(v.is_finite() && *v >= 0.0) {
@@ -385,7 +399,61 @@ impl RobotSpec {
                 }
             }
         }
+        self.check_kinematic(d, &out)?;
         Ok(out)
+    }
+
+    /// A multibody with kinematic joints: rapier 0.36 builds its limit and motor constraints
+    /// against the full mass matrix while the kinematic joints have left it (it panics), so
+    /// no joint may take a motor, and every limited joint must hold its limits by clamped
+    /// targets (kinematic or servo).
+    fn check_kinematic(
+        &self,
+        d: &RobotDescription,
+        assigned: &[Option<&ActuatorSpec>],
+    ) -> Result<(), String> {
+        let is_kinematic =
+            |a: &Option<&ActuatorSpec>| matches!(a, Some(ActuatorSpec::Kinematic { .. }));
+        let Some(k) = self
+            .actuators
+            .iter()
+            .position(|a| matches!(a, ActuatorSpec::Kinematic { .. }))
+        else {
+            return Ok(());
+        };
+        if !assigned.iter().any(is_kinematic) {
+            return Ok(());
+        }
+        if self.joint_model() != JointModel::Multibody {
+            return Err(format!(
+                "'actuators[{k}]': a kinematic actuator needs joints = \"multibody\" (rapier's \
+                 kinematic multibody joints)"
+            ));
+        }
+        for (j, a) in assigned.iter().enumerate() {
+            let name = &d.joints[j].name;
+            match a {
+                Some(ActuatorSpec::Motor { .. }) => {
+                    return Err(format!(
+                        "'actuators[{k}]': joint '{name}' of {} takes a motor, which rapier \
+                         cannot solve in a multibody with kinematic joints; make it kinematic, \
+                         or use a servo, position or velocity actuator",
+                        d.file
+                    ));
+                }
+                Some(ActuatorSpec::Kinematic { .. } | ActuatorSpec::Servo { .. }) => {}
+                _ if matches!(d.joints[j].kind, JointKind::Revolute | JointKind::Prismatic) => {
+                    return Err(format!(
+                        "'actuators[{k}]': joint '{name}' of {} has limits, which rapier cannot \
+                         hold in a multibody with kinematic joints; make it kinematic or a servo \
+                         (their targets are clamped to the limits)",
+                        d.file
+                    ));
+                }
+                _ => {}
+            }
+        }
+        Ok(())
     }
 }
 

@@ -92,13 +92,18 @@ impl JointIo {
         mb.link_mut(id).map(|l| &mut l.joint.data)
     }
 
-    /// Sets rapier's motor: a velocity motor, or a servo pulling to a position.
+    /// Sets rapier's motor: a velocity motor, or a servo pulling to a position (on a
+    /// multibody joint, its implicit spring: [`Self::set_spring`]).
     pub fn set_motor(
         &self,
         impulse: &mut ImpulseJointSet,
         multibody: &mut MultibodyJointSet,
         m: MotorSetting,
     ) {
+        if m.stiffness > 0.0 && self.multibody.is_some() {
+            self.set_spring(multibody, m);
+            return;
+        }
         let axis = self.motor_axis();
         let Some(data) = self.data_mut(impulse, multibody) else {
             return;
@@ -118,6 +123,41 @@ impl JointIo {
         let _ = data.set_motor_max_force(axis, m.max_effort as Real);
     }
 
+    /// A servo on a multibody joint: rapier's implicit joint spring and damper, which (unlike
+    /// a motor) needs no constraint, so it works beside kinematic joints and its effort can
+    /// be read. The damper pulls toward rest, so the spring's rest leads the target by
+    /// `damping·ω*/stiffness` (the damper's pull toward the target speed), and stays within
+    /// `max_effort/stiffness` of the joint: the effort bound, exact while the joint is still.
+    fn set_spring(&self, multibody: &mut MultibodyJointSet, m: MotorSetting) {
+        let Some((mb, id)) = self.multibody.and_then(|h| multibody.get_mut(h)) else {
+            return;
+        };
+        let q = self.reading.position;
+        let reach = m.max_effort / m.stiffness;
+        let lead = m.damping * m.velocity / m.stiffness;
+        let rest = q + (m.position + lead - q).clamp(-reach, reach);
+        let axis = self.motor_axis() as usize;
+        let Some(link) = mb.link_mut(id) else {
+            return;
+        };
+        link.joint
+            .set_spring(axis, m.stiffness as Real, rest as Real);
+        let dof = link.assembly_id();
+        mb.damping_mut()[dof] = m.damping as Real;
+    }
+
+    /// Moves a kinematic multibody joint at `speed` (rad/s or m/s) over the next step: its
+    /// generalized velocity, which the solver leaves alone.
+    pub fn set_kinematic_velocity(&self, multibody: &mut MultibodyJointSet, speed: f64) {
+        let Some((mb, id)) = self.multibody.and_then(|h| multibody.get_mut(h)) else {
+            return;
+        };
+        let Some(dof) = mb.link(id).map(|l| l.assembly_id()) else {
+            return;
+        };
+        mb.generalized_velocity_mut()[dof] = speed as Real;
+    }
+
     /// The effort rapier's motor applied over the last step, N·m or N: its last substep's
     /// impulse times the substeps, over the step.
     pub fn motor_effort(
@@ -127,6 +167,16 @@ impl JointIo {
         per_second: f64,
     ) -> f64 {
         let axis = self.motor_axis() as usize;
+        if let Some((mb, id)) = self.multibody.and_then(|h| multibody.get(h))
+            && let Some(link) = mb.link(id)
+            && link.joint.spring(axis).0 > 0.0
+        {
+            // The spring and damper's force at the state after the step.
+            let (k, rest) = link.joint.spring(axis);
+            let d = mb.damping()[link.assembly_id()] as f64;
+            let r = self.reading;
+            return k as f64 * (rest as f64 - r.position) - d * r.velocity;
+        }
         self.data_mut(impulse, multibody)
             // rapier's motor impulse acts against the joint's positive direction.
             .map_or(0.0, |d| -d.motors[axis].impulse as f64 * per_second)

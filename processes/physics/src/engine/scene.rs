@@ -281,6 +281,7 @@ fn add_robot(
     let d = r.description;
     let plan = RobotPlan::with_sensed(d, &r.sensed);
     let multibody = r.spec.joint_model() == JointModel::Multibody;
+    let with_kinematic = r.kinematic.iter().any(|&k| k);
     let base = base_pose(r, &plan);
     let friction_of = |l: usize| d.links[l].friction.unwrap_or(DEFAULT_FRICTION);
     let self_filter = if r.spec.self_collide {
@@ -404,7 +405,13 @@ fn add_robot(
         if let Some(j) = &body_plan.joint {
             let joint = &d.joints[j.joint];
             let parent = bodies[j.parent_body];
+            let kinematic = r.is_kinematic(j.joint);
             let mut generic = shapes::joint(joint, &j.frame);
+            if with_kinematic {
+                // rapier cannot hold limits in a multibody with kinematic joints; the
+                // actuators' targets are clamped to them (see `ActuatorSpec::Kinematic`).
+                generic.limit_axes = JointAxesMask::empty();
+            }
             if let Some(m) = r.spec.force_torque_softness
                 && r.sensed.contains(&j.joint)
             {
@@ -416,17 +423,18 @@ fn add_robot(
             // A sensed fixed joint is an impulse joint even in a multibody: a multibody
             // holds its joints without forces to read.
             joints[j.joint] = Some(if multibody && joint.kind.is_movable() {
-                JointHandle::Multibody(
-                    physics
-                        .multibody_joints
-                        .insert(parent, handle, generic, true)
-                        .ok_or_else(|| {
-                            format!(
-                                "joint '{}' of {}: rapier refused it in a multibody",
-                                joint.name, d.file
-                            )
-                        })?,
-                )
+                let set = &mut physics.multibody_joints;
+                let inserted = if kinematic {
+                    set.insert_kinematic(parent, handle, generic, true)
+                } else {
+                    set.insert(parent, handle, generic, true)
+                };
+                JointHandle::Multibody(inserted.ok_or_else(|| {
+                    format!(
+                        "joint '{}' of {}: rapier refused it in a multibody",
+                        joint.name, d.file
+                    )
+                })?)
             } else {
                 JointHandle::Impulse(physics.impulse_joints.insert(parent, handle, generic, true))
             });

@@ -244,6 +244,10 @@ impl Simulation {
                         io.set_motor(joints, &mut physics.multibody_joints, motor);
                         continue;
                     }
+                    if let Some(speed) = a.kinematic_velocity(io.reading, dt) {
+                        io.set_kinematic_velocity(&mut physics.multibody_joints, speed);
+                        continue;
+                    }
                     let tau = a.torque(io.reading, dt);
                     io.push(bodies, tau, &mut self.loads);
                 }

@@ -200,31 +200,66 @@ fn an_arm_holding_a_pose_carries_its_weight_in_its_joint_torques() {
 
 #[test]
 fn a_servo_holds_zero_then_a_pose_and_its_effort_carries_the_weight() {
-    // Impulse joints: rapier reports no motor impulse for multibody joints.
-    let mut s = sim(
-        serde_json::json!([{ "urdf": "arm3.urdf", "base": "fixed", "poses": [[2.0, 2.0, 0.0]],
-        "joints": "impulse",
-        "actuators": [{ "type": "servo", "joints": ["*"], "stiffness": 20000.0, "damping": 400.0 }],
-        "link_states": true }]),
-    );
-    // Never commanded: the URDF's zero, sagging by torque over stiffness only.
-    run(&mut s, 2.0);
-    let at_rest: Vec<f64> = s.joints(0).map(|j| j.1).collect();
-    assert!(at_rest.iter().all(|q| q.abs() < 5e-3), "{at_rest:?}");
-    let q = [0.3, -0.5, 0.4];
-    hold(&mut s, q);
-    let measured: Vec<f64> = s.joints(0).map(|j| j.1).collect();
-    let frames = link_frames(&s);
-    let expected = torques_of(&frames, &gravity_forces(&frames)).map(|t| -t);
-    for j in 0..3 {
-        // A spring: it sits where its torque balances the load.
-        let sag = expected[j] / 20000.0;
+    // Impulse joints: rapier's motor; multibody joints: rapier's implicit joint spring.
+    for model in ["impulse", "multibody"] {
+        let mut s = sim(serde_json::json!([{ "urdf": "arm3.urdf", "base": "fixed",
+            "poses": [[2.0, 2.0, 0.0]], "joints": model,
+            "actuators": [{ "type": "servo", "joints": ["*"], "stiffness": 20000.0, "damping": 400.0 }],
+            "link_states": true }]));
+        // Never commanded: the URDF's zero, sagging by torque over stiffness only.
+        run(&mut s, 2.0);
+        let at_rest: Vec<f64> = s.joints(0).map(|j| j.1).collect();
         assert!(
-            (measured[j] + sag - q[j]).abs() < 1e-3,
-            "joint {j}: {measured:?} vs {q:?}, sag {sag}"
+            at_rest.iter().all(|q| q.abs() < 5e-3),
+            "{model}: {at_rest:?}"
+        );
+        let q = [0.3, -0.5, 0.4];
+        hold(&mut s, q);
+        let measured: Vec<f64> = s.joints(0).map(|j| j.1).collect();
+        let frames = link_frames(&s);
+        let expected = torques_of(&frames, &gravity_forces(&frames)).map(|t| -t);
+        for j in 0..3 {
+            // A spring: it sits where its torque balances the load.
+            let sag = expected[j] / 20000.0;
+            assert!(
+                (measured[j] + sag - q[j]).abs() < 1e-3,
+                "{model}, joint {j}: {measured:?} vs {q:?}, sag {sag}"
+            );
+        }
+        assert_close(
+            efforts(&s),
+            expected,
+            &format!("a servo's static torques ({model})"),
         );
     }
-    assert_close(efforts(&s), expected, "a servo's static torques");
+}
+
+#[test]
+fn a_kinematic_arm_moves_at_its_speed_limit_and_holds_a_pose_without_sag() {
+    let mut s = sim(serde_json::json!([{ "urdf": "arm3.urdf", "base": "fixed",
+        "poses": [[2.0, 2.0, 0.0]], "joints": "multibody",
+        "actuators": [{ "type": "kinematic", "joints": ["*"] }] }]));
+    // Never commanded: it stands still at zero under gravity.
+    run(&mut s, 0.5);
+    assert!(s.joints(0).all(|j| j.1.abs() < 1e-6), "stands still");
+    // 2 rad at the URDF's 5 rad/s, clamped to its 2.5 rad limit: 0.4 s, then held.
+    let targets = [2.0, -3.0, 0.4].map(|position| Target {
+        position,
+        ..Target::default()
+    });
+    s.set_targets(0, &targets);
+    run(&mut s, 0.2);
+    let halfway = s.joints(0).next().unwrap().1;
+    assert!((halfway - 1.0).abs() < 0.01, "5 rad/s for 0.2 s: {halfway}");
+    run(&mut s, 2.0);
+    for ((name, q, speed, effort), want) in s.joints(0).zip([2.0, -2.5, 0.4]) {
+        assert!((q - want).abs() < 1e-4, "{name}: {q} vs {want}");
+        // Still, but for the single-precision poses' rounding.
+        assert!(
+            speed.abs() < 1e-2 && effort == 0.0,
+            "{name}: {speed}, {effort}"
+        );
+    }
 }
 
 #[test]

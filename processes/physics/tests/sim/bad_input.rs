@@ -133,3 +133,44 @@ fn the_binary_reports_bad_params_without_panicking() {
     );
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn kinematic_joints_refuse_what_rapier_cannot_solve_beside_them() {
+    let cases = [
+        // Impulse joints cannot be kinematic.
+        (
+            serde_json::json!({ "urdf": "overlap.urdf", "joints": "impulse",
+                "actuators": [{ "type": "kinematic", "joints": ["*"] }] }),
+            "needs joints = \"multibody\"",
+        ),
+        // A motor beside a kinematic joint.
+        (
+            serde_json::json!({ "urdf": "overlap.urdf", "joints": "multibody",
+                "actuators": [{ "type": "kinematic", "joints": ["left_a_joint"] },
+                    { "type": "motor", "joints": ["right_a_joint"] }] }),
+            "joint 'right_a_joint'",
+        ),
+        // A limited joint whose limits nothing would hold.
+        (
+            serde_json::json!({ "urdf": "arm3.urdf", "base": "fixed", "joints": "multibody",
+                "actuators": [{ "type": "kinematic", "joints": ["upper_joint"] },
+                    { "type": "position", "joints": ["fore_joint", "hand_joint"] }] }),
+            "joint 'fore_joint'",
+        ),
+    ];
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
+    for (robot, says) in cases {
+        let mut robot = robot;
+        robot["poses"] = serde_json::json!([[2.0, 2.0, 0.0]]);
+        let params: Params = caravan::parse_params(
+            "physics",
+            &serde_json::json!({ "world": "empty.toml", "robots": [robot] }),
+        )
+        .unwrap();
+        let e = error(&params, &dir);
+        assert!(
+            e.contains("'robots[0].actuators[0]'") && e.contains(says),
+            "{e}"
+        );
+    }
+}

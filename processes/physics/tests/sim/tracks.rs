@@ -1,5 +1,5 @@
 //! What rows of overlapping wheels need: no contacts between a robot's own links, rapier's
-//! velocity motors on the wheels, a world's own friction.
+//! velocity motors or kinematic joints on the wheels, a world's own friction.
 
 use caravan_physics::actuator::Target;
 use caravan_physics::{Params, Simulation, load};
@@ -99,4 +99,32 @@ fn a_motor_holds_a_light_wheel_at_its_speed_with_a_long_step() {
     s.advance_to(3_000_000_000, u64::MAX);
     let (_, _, speed, _) = s.joints(0).next().unwrap();
     assert!((speed - 20.0).abs() < 1e-3, "{speed}");
+}
+
+#[test]
+fn kinematic_wheels_roll_a_multibody_at_their_rim_speed_and_no_faster_than_the_limit() {
+    let mut s = sim(
+        serde_json::json!({ "urdf": "overlap.urdf", "joints": "multibody",
+            "poses": [[1.0, 2.0, 0.0]], "actuators": [{ "type": "kinematic", "joints": ["*"] }] }),
+        2_000_000,
+    );
+    spin(&mut s, 4.0);
+    s.advance_to(3_000_000_000, u64::MAX);
+    let x0 = s.pose(0).x;
+    s.advance_to(5_000_000_000, u64::MAX);
+    let moved = s.pose(0).x - x0;
+    assert!((moved - 0.4).abs() < 0.02, "moved {moved} m");
+    assert!(s.twist(0).angular.y.abs() < 0.05, "rolls level");
+    for (name, _, speed, effort) in s.joints(0) {
+        // Exactly the target, whatever the load: the solver leaves the joint alone.
+        assert!((speed - 4.0).abs() < 1e-4, "{name}: {speed} rad/s");
+        assert_eq!(effort, 0.0, "{name}");
+    }
+    spin(&mut s, 50.0);
+    s.advance_to(5_100_000_000, u64::MAX);
+    let (_, _, speed, _) = s.joints(0).next().unwrap();
+    assert!(
+        (speed - 20.0).abs() < 1e-4,
+        "clamped to the URDF's 20 rad/s: {speed}"
+    );
 }
