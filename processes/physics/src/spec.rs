@@ -432,6 +432,10 @@ impl RobotSpec {
         }
         for (j, a) in assigned.iter().enumerate() {
             let name = &d.joints[j].name;
+            // The entry that gave this joint its actuator, else the kinematic one.
+            let k = a
+                .and_then(|a| self.actuators.iter().position(|x| std::ptr::eq(x, a)))
+                .unwrap_or(k);
             match a {
                 Some(ActuatorSpec::Motor { .. }) => {
                     return Err(format!(

@@ -1,6 +1,7 @@
 //! The tracked rescue robot of `shared/reference/tracked-robot.md` as a Caravan scenario:
 //! tracks made of rows of (gear) wheels, driven across Random Step Environment terrain.
 //!
+//! - [`braking`]: the braking distance after the operator's stop;
 //! - [`climb`]: the operator's flipper sequence for climbing a step;
 //! - [`crossing`]: a crossing's outcome (passed, stuck, flipped) from the true pose;
 //! - [`diff_drive`]: the drive controller's limits, wheel speeds and wheel odometry;
@@ -12,6 +13,7 @@
 //! - [`rse`]: the Random Step Environment generator (blocks, primitives, softness);
 //! - [`rse_world`]: a terrain as a world file of boxes, and its picture.
 
+pub mod braking;
 pub mod climb;
 pub mod crossing;
 pub mod diff_drive;

@@ -1,8 +1,9 @@
 //! The `tracked` report section: the crossing's outcome (see [`crate::crossing`]), how far
-//! and how fast the robot went, from the recorded `robot/0/ground_truth`.
+//! and how fast the robot went, from the recorded `robot/0/ground_truth`, and its braking
+//! distance after a stop asked on the recorded `robot/0/cmd_vel` (see [`crate::braking`]).
 //!
 //! JSON: `{goal_x_m, outcome, passed, stuck, flipped, passed_at_s, max_x_m, max_tilt_deg, max_climb_m,
-//! top_speed_m_s, samples}`.
+//! top_speed_m_s, stop_s, braking_distance_m, samples, track}`.
 
 use crate::crossing::{Outcome, Sample, classify};
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
@@ -10,6 +11,8 @@ use serde::Deserialize;
 
 /// The ground-truth topic of the scenario's robot.
 pub const TRUTH_TOPIC: &str = "robot/0/ground_truth";
+/// The operator's velocity command to it.
+pub const CMD_VEL_TOPIC: &str = "robot/0/cmd_vel";
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -70,7 +73,13 @@ impl ReportPlugin for TrackedReport {
         let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
         let mut samples = Vec::new();
         let mut top_speed: f64 = 0.0;
-        for m in run.messages()?.iter().filter(|m| m.topic == TRUTH_TOPIC) {
+        let messages = run.messages()?;
+        let commands: Vec<(f64, f64)> = messages
+            .iter()
+            .filter(|m| m.topic == CMD_VEL_TOPIC)
+            .map(|m| (m.stamp_ns() as f64 * 1e-9, num(&m.json["linear"]["x"])))
+            .collect();
+        for m in messages.iter().filter(|m| m.topic == TRUTH_TOPIC) {
             let p = &m.json["pose"]["position"];
             let q = &m.json["pose"]["orientation"];
             let v = &m.json["twist"]["linear"];
@@ -86,6 +95,8 @@ impl ReportPlugin for TrackedReport {
                 "no ground truth on {TRUTH_TOPIC} in the recording (physics `ground_truth = true`)"
             )
         })?;
+        let stop_s = crate::braking::stop_time(&commands);
+        let braking_m = stop_s.and_then(|t| crate::braking::braking_distance(&samples, t));
         let json = serde_json::json!({
             "goal_x_m": self.params.goal_x_m,
             "outcome": c.outcome,
@@ -98,6 +109,10 @@ impl ReportPlugin for TrackedReport {
             "max_tilt_deg": c.max_tilt_deg,
             "max_climb_m": c.max_climb_m,
             "top_speed_m_s": top_speed,
+            // When the operator asked for a stop, and how far the base went after it
+            // (null: no stop, or still moving when the run ended).
+            "stop_s": stop_s,
+            "braking_distance_m": braking_m,
             "samples": samples.len(),
             // Every 0.1 s: [t s, x, y, z m, tilt °], for plots and the terrain picture.
             "track": track(&samples, 0.1),
@@ -114,6 +129,11 @@ impl ReportPlugin for TrackedReport {
             c.max_tilt_deg,
             top_speed
         );
+        if let (Some(t), Some(d)) = (stop_s, braking_m) {
+            markdown.push_str(&format!(
+                "Stop asked at {t:.2} s: braking distance {d:.3} m.\n"
+            ));
+        }
         if let Some((grid, name)) = &self.terrain {
             let path: Vec<(f64, f64)> = samples
                 .iter()

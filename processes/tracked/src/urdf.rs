@@ -8,8 +8,9 @@
 //! impulse-joint solver diverged within 0.1 s. The physics holds it with a `servo` actuator
 //! and the drive sends its angle (30° by default, [`FLIPPER_ANGLE_DEG`]).
 //!
-//! Every wheel joint has the reference's limits (effort 140 N·m, velocity 14 rad/s); every
-//! wheel link its friction (`<gazebo><mu1>100</mu1><mu2>50</mu2>`; Caravan's physics takes
+//! Every wheel joint has the reference's limits (effort 140 N·m, velocity 14 rad/s; the
+//! launch files turn the wheels kinematically, as motors that never saturate, so only the
+//! velocity limit binds); every wheel link its friction (`<gazebo><mu1>100</mu1><mu2>50</mu2>`; Caravan's physics takes
 //! mu1 and the smaller of the two surfaces' coefficients, as ODE does, so the terrain's
 //! friction decides the grip). The robot weighs [`TOTAL_MASS_KG`] in every variant.
 

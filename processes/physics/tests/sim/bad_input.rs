@@ -136,11 +136,13 @@ fn the_binary_reports_bad_params_without_panicking() {
 
 #[test]
 fn kinematic_joints_refuse_what_rapier_cannot_solve_beside_them() {
+    // (robot, the entry named, what the message says)
     let cases = [
         // Impulse joints cannot be kinematic.
         (
             serde_json::json!({ "urdf": "overlap.urdf", "joints": "impulse",
                 "actuators": [{ "type": "kinematic", "joints": ["*"] }] }),
+            0,
             "needs joints = \"multibody\"",
         ),
         // A motor beside a kinematic joint.
@@ -148,6 +150,7 @@ fn kinematic_joints_refuse_what_rapier_cannot_solve_beside_them() {
             serde_json::json!({ "urdf": "overlap.urdf", "joints": "multibody",
                 "actuators": [{ "type": "kinematic", "joints": ["left_a_joint"] },
                     { "type": "motor", "joints": ["right_a_joint"] }] }),
+            1,
             "joint 'right_a_joint'",
         ),
         // A limited joint whose limits nothing would hold.
@@ -155,11 +158,12 @@ fn kinematic_joints_refuse_what_rapier_cannot_solve_beside_them() {
             serde_json::json!({ "urdf": "arm3.urdf", "base": "fixed", "joints": "multibody",
                 "actuators": [{ "type": "kinematic", "joints": ["upper_joint"] },
                     { "type": "position", "joints": ["fore_joint", "hand_joint"] }] }),
+            1,
             "joint 'fore_joint'",
         ),
     ];
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
-    for (robot, says) in cases {
+    for (robot, entry, says) in cases {
         let mut robot = robot;
         robot["poses"] = serde_json::json!([[2.0, 2.0, 0.0]]);
         let params: Params = caravan::parse_params(
@@ -169,7 +173,7 @@ fn kinematic_joints_refuse_what_rapier_cannot_solve_beside_them() {
         .unwrap();
         let e = error(&params, &dir);
         assert!(
-            e.contains("'robots[0].actuators[0]'") && e.contains(says),
+            e.contains(&format!("'robots[0].actuators[{entry}]'")) && e.contains(says),
             "{e}"
         );
     }
