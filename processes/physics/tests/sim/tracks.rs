@@ -27,21 +27,27 @@ fn spin(s: &mut Simulation, speed: f64) {
     s.set_targets(0, &targets);
 }
 
-#[test]
-fn overlapping_wheels_on_motors_roll_the_robot_at_their_rim_speed() {
+/// The overlap robot on `joints` with `actuator` on every wheel, every wheel at 4 rad/s for
+/// 5 s: it rolls level at the rim speed (4 rad/s × 5 cm: 0.2 m/s, so 0.4 m in the last 2 s).
+fn rolls_at_rim_speed(joints: &str, actuator: &str) -> Simulation {
     let mut s = sim(
-        serde_json::json!({ "urdf": "overlap.urdf", "joints": "impulse",
-            "poses": [[1.0, 2.0, 0.0]], "actuators": [{ "type": "motor", "joints": ["*"] }] }),
+        serde_json::json!({ "urdf": "overlap.urdf", "joints": joints,
+            "poses": [[1.0, 2.0, 0.0]], "actuators": [{ "type": actuator, "joints": ["*"] }] }),
         2_000_000,
     );
     spin(&mut s, 4.0);
     s.advance_to(3_000_000_000, u64::MAX);
     let x0 = s.pose(0).x;
     s.advance_to(5_000_000_000, u64::MAX);
-    // 4 rad/s × 5 cm: 0.2 m/s, so 0.4 m in the last 2 s.
     let moved = s.pose(0).x - x0;
-    assert!((moved - 0.4).abs() < 0.02, "moved {moved} m");
-    assert!(s.twist(0).angular.y.abs() < 0.05, "rolls level");
+    assert!((moved - 0.4).abs() < 0.02, "{actuator}: moved {moved} m");
+    assert!(s.twist(0).angular.y.abs() < 0.05, "{actuator}: rolls level");
+    s
+}
+
+#[test]
+fn overlapping_wheels_on_motors_roll_the_robot_at_their_rim_speed() {
+    let s = rolls_at_rim_speed("impulse", "motor");
     for (name, _, speed, effort) in s.joints(0) {
         assert!((speed - 4.0).abs() < 0.05, "{name}: {speed} rad/s");
         assert!(
@@ -103,18 +109,7 @@ fn a_motor_holds_a_light_wheel_at_its_speed_with_a_long_step() {
 
 #[test]
 fn kinematic_wheels_roll_a_multibody_at_their_rim_speed_and_no_faster_than_the_limit() {
-    let mut s = sim(
-        serde_json::json!({ "urdf": "overlap.urdf", "joints": "multibody",
-            "poses": [[1.0, 2.0, 0.0]], "actuators": [{ "type": "kinematic", "joints": ["*"] }] }),
-        2_000_000,
-    );
-    spin(&mut s, 4.0);
-    s.advance_to(3_000_000_000, u64::MAX);
-    let x0 = s.pose(0).x;
-    s.advance_to(5_000_000_000, u64::MAX);
-    let moved = s.pose(0).x - x0;
-    assert!((moved - 0.4).abs() < 0.02, "moved {moved} m");
-    assert!(s.twist(0).angular.y.abs() < 0.05, "rolls level");
+    let mut s = rolls_at_rim_speed("multibody", "kinematic");
     for (name, _, speed, effort) in s.joints(0) {
         // Exactly the target, whatever the load: the solver leaves the joint alone.
         assert!((speed - 4.0).abs() < 1e-4, "{name}: {speed} rad/s");
