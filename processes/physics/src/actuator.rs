@@ -10,8 +10,9 @@
 //!   effort-interface PID.
 //! - **Motor**: rapier's velocity motor, solved with the contacts: no explicit torque; the
 //!   effort is the motor's impulse over the step.
-//! - **Servo**: rapier's motor pulling to a position, solved with the contacts: a spring of
-//!   the given stiffness to q* and a damper to ω* (default 0), at most the URDF's effort.
+//! - **Servo**: a spring of the given stiffness to q* and a damper to ω* (default 0), solved
+//!   with the step, the spring at most the URDF's effort: rapier's motor on impulse joints,
+//!   its implicit joint spring on multibody joints.
 //! - **Kinematic**: no torque; the joint is moved at ω* (or to q* at up to its velocity
 //!   limit), whatever the load.
 //! - **Effort**: τ = τ*.
@@ -136,7 +137,8 @@ pub struct MotorSetting {
     pub velocity: f64,
     /// Spring to the position target, N·m/rad (N/m); 0 for a pure velocity motor.
     pub stiffness: f64,
-    /// Damping of the speed error, ≥ 0: rapier's force-based motor damping, N·m·s/rad (N·s/m).
+    /// Damping of the speed error, ≥ 0, N·m·s/rad (N·s/m): rapier's force-based motor damping,
+    /// or a multibody joint's damping under its spring.
     pub damping: f64,
     /// Largest effort, N·m or N.
     pub max_effort: f64,
@@ -304,7 +306,9 @@ impl Actuator {
 
     /// The speed a kinematic joint moves at over the next step of `dt` s, from its state
     /// `now`: to the position target in one step if the velocity limit allows (else at the
-    /// limit toward it), else the velocity target, else 0; `None` for other actuators.
+    /// limit toward it), else the velocity target, else 0; never past the joint's position
+    /// limits (nothing else holds them: see `ActuatorSpec::Kinematic`); `None` for other
+    /// actuators.
     pub fn kinematic_velocity(&self, now: JointReading, dt: f64) -> Option<f64> {
         if !self.is_kinematic() {
             return None;
@@ -312,13 +316,18 @@ impl Actuator {
         let l = self.limits;
         let t = self.target;
         let speed = if !t.position.is_nan() {
-            (t.position.clamp(l.lower, l.upper) - now.position) / dt
+            (t.position - now.position) / dt
         } else if !t.velocity.is_nan() {
             t.velocity
         } else {
             0.0
         };
-        Some(speed.clamp(-l.velocity, l.velocity))
+        let within = (l.lower - now.position) / dt..=(l.upper - now.position) / dt;
+        Some(
+            speed
+                .clamp(*within.start(), *within.end())
+                .clamp(-l.velocity, l.velocity),
+        )
     }
 
     /// After the step: a DC motor integrates the joint speed into its angle.

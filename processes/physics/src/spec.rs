@@ -98,7 +98,8 @@ pub enum ActuatorSpec {
     /// rapier's velocity motor on the joint, solved with the contacts (implicitly, as
     /// Gazebo's velocity-controlled joints under ODE): it holds the target speed with at most
     /// the URDF's effort, stable at any step for however light the link. Takes velocity
-    /// targets. Its `effort` reads 0 on multibody joints (below).
+    /// targets. Its `effort` reads 0 on multibody joints: rapier does not report the impulses
+    /// of a multibody's internal constraints.
     Motor {
         joints: Vec<String>,
         /// rapier's motor damping (acceleration-based), 1/s, > 0: how hard the speed error
@@ -106,14 +107,14 @@ pub enum ActuatorSpec {
         #[serde(default = "default_motor_damping")]
         damping: f64,
     },
-    /// A position servo: it pulls
-    /// the joint to its position target (never commanded: the URDF's zero) as a spring of
-    /// `stiffness` and a damper of `damping` on the speed error (the velocity target is its
-    /// feed-forward, default 0), with at most the URDF's effort. Stable at any step for
-    /// however light the link (a flipper carrying wheels, a gripper's finger). Takes position
-    /// (and velocity) targets; an infinite position clears the target back to 0. On impulse
-    /// joints it is rapier's motor, solved with the contacts; on multibody joints rapier's
-    /// implicit joint spring and damper, its effort bound held while the joint is still.
+    /// A position servo: it pulls the joint to its position target (never commanded: the
+    /// URDF's zero) as a spring of `stiffness` and a damper of `damping` on the speed error
+    /// (the velocity target is its feed-forward, default 0), the spring with at most the
+    /// URDF's effort. Stable at any step for however light the link (a flipper carrying
+    /// wheels, a gripper's finger). Takes position (and velocity) targets; an infinite
+    /// position clears the target back to 0. On impulse joints it is rapier's motor, solved
+    /// with the contacts; on multibody joints rapier's implicit joint spring and damper (the
+    /// damper unbounded), which reads its effort.
     Servo {
         joints: Vec<String>,
         /// N·m/rad (N/m), > 0.
@@ -366,7 +367,8 @@ impl RobotSpec {
         &'a self,
         d: &RobotDescription,
     ) -> Result<Vec<Option<&'a ActuatorSpec>>, String> {
-        let mut out = vec![None; d.joints.len()];
+        // The entry that last named each joint, `none` entries included.
+        let mut entry = vec![None; d.joints.len()];
         for (k, a) in self.actuators.iter().enumerate() {
             if a.joints().is_empty() {
                 return Err(format!("'actuators[{k}].joints' is empty"));
@@ -392,51 +394,45 @@ impl RobotSpec {
                     vec![j]
                 };
                 for j in chosen {
-                    out[j] = match a {
-                        ActuatorSpec::None { .. } => None,
-                        _ => Some(a),
-                    };
+                    entry[j] = Some(k);
                 }
             }
         }
-        self.check_kinematic(d, &out)?;
-        Ok(out)
+        self.check_kinematic(d, &entry)?;
+        Ok(entry
+            .iter()
+            .map(|k| match &self.actuators[(*k)?] {
+                ActuatorSpec::None { .. } => None,
+                a => Some(a),
+            })
+            .collect())
     }
 
     /// A multibody with kinematic joints: rapier 0.36 builds its limit and motor constraints
     /// against the full mass matrix while the kinematic joints have left it (it panics), so
     /// no joint may take a motor, and every limited joint must hold its limits by clamped
     /// targets (kinematic or servo).
-    fn check_kinematic(
-        &self,
-        d: &RobotDescription,
-        assigned: &[Option<&ActuatorSpec>],
-    ) -> Result<(), String> {
-        let is_kinematic =
-            |a: &Option<&ActuatorSpec>| matches!(a, Some(ActuatorSpec::Kinematic { .. }));
-        let Some(k) = self
-            .actuators
+    fn check_kinematic(&self, d: &RobotDescription, entry: &[Option<usize>]) -> Result<(), String> {
+        let spec = |k: Option<usize>| k.map(|k| &self.actuators[k]);
+        let Some(k) = entry
             .iter()
-            .position(|a| matches!(a, ActuatorSpec::Kinematic { .. }))
+            .copied()
+            .find(|&k| matches!(spec(k), Some(ActuatorSpec::Kinematic { .. })))
+            .flatten()
         else {
             return Ok(());
         };
-        if !assigned.iter().any(is_kinematic) {
-            return Ok(());
-        }
         if self.joint_model() != JointModel::Multibody {
             return Err(format!(
                 "'actuators[{k}]': a kinematic actuator needs joints = \"multibody\" (rapier's \
                  kinematic multibody joints)"
             ));
         }
-        for (j, a) in assigned.iter().enumerate() {
+        for (j, &own) in entry.iter().enumerate() {
             let name = &d.joints[j].name;
             // The entry that gave this joint its actuator, else the kinematic one.
-            let k = a
-                .and_then(|a| self.actuators.iter().position(|x| std::ptr::eq(x, a)))
-                .unwrap_or(k);
-            match a {
+            let k = own.unwrap_or(k);
+            match spec(own) {
                 Some(ActuatorSpec::Motor { .. }) => {
                     return Err(format!(
                         "'actuators[{k}]': joint '{name}' of {} takes a motor, which rapier \

@@ -26,7 +26,7 @@ pub struct ClimbParams {
     /// Work the flippers (default false: they stay at the drive's angle).
     #[serde(default)]
     pub enabled: bool,
-    /// Flipper angle while approaching, degrees in the flipper's range (default 50).
+    /// Flipper angle while approaching, degrees in the flipper's range (default 45).
     #[serde(default = "approach")]
     pub approach_deg: f64,
     /// Flipper angle while the front is carried over the edge, degrees in the flipper's range
@@ -45,8 +45,9 @@ pub struct ClimbParams {
     pub settle_deg: f64,
 }
 
+// The middle of the band where v4 climbs 20 cm with either wheel model (docs/tracked.md).
 fn approach() -> f64 {
-    50.0
+    45.0
 }
 fn push() -> f64 {
     -45.0
@@ -167,9 +168,17 @@ impl Climb {
 mod tests {
     use super::*;
 
+    /// Round numbers for the sequence's tests: approach at 50°.
+    fn params() -> ClimbParams {
+        ClimbParams {
+            approach_deg: 50.0,
+            ..ClimbParams::default()
+        }
+    }
+
     #[test]
     fn flippers_go_down_when_the_nose_rises_and_up_again_past_the_crest() {
-        let mut c = Climb::new(ClimbParams::default());
+        let mut c = Climb::new(params());
         assert_eq!(c.update(0.0), 50.0);
         assert_eq!(c.update(14.0), 50.0);
         assert_eq!(c.update(16.0), -45.0);
@@ -205,7 +214,7 @@ mod tests {
 
     #[test]
     fn a_low_step_ends_the_push_once_the_body_is_level_again() {
-        let mut c = Climb::new(ClimbParams::default());
+        let mut c = Climb::new(params());
         c.update(18.0);
         assert_eq!(c.update(22.0), -45.0);
         assert_eq!(c.update(6.0), -45.0);

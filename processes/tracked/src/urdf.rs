@@ -9,10 +9,11 @@
 //! and the drive sends its angle (30° by default, [`FLIPPER_ANGLE_DEG`]).
 //!
 //! Every wheel joint has the reference's limits (effort 140 N·m, velocity 14 rad/s; the
-//! launch files turn the wheels kinematically, as motors that never saturate, so only the
-//! velocity limit binds); every wheel link its friction (`<gazebo><mu1>100</mu1><mu2>50</mu2>`; Caravan's physics takes
-//! mu1 and the smaller of the two surfaces' coefficients, as ODE does, so the terrain's
-//! friction decides the grip). The robot weighs [`TOTAL_MASS_KG`] in every variant.
+//! launch files turn the wheels kinematically by default, as motors that never saturate, so
+//! only the velocity limit binds); every wheel link its friction
+//! (`<gazebo><mu1>100</mu1><mu2>50</mu2>`; Caravan's physics takes mu1 and the smaller of the
+//! two surfaces' coefficients, as ODE does, so the terrain's friction decides the grip). The
+//! robot weighs [`TOTAL_MASS_KG`] in every variant.
 
 use crate::running_gear::{self, Carrier, Side, Variant, Wheel};
 use std::fmt::Write;

@@ -132,14 +132,15 @@ impl JointIo {
         let Some((mb, id)) = self.multibody.and_then(|h| multibody.get_mut(h)) else {
             return;
         };
-        let q = self.reading.position;
-        let reach = m.max_effort / m.stiffness;
-        let lead = m.damping * m.velocity / m.stiffness;
-        let rest = q + (m.position + lead - q).clamp(-reach, reach);
         let axis = self.motor_axis() as usize;
         let Some(link) = mb.link_mut(id) else {
             return;
         };
+        // rapier's own coordinate, the one its spring acts on.
+        let q = link.joint.coords()[axis] as f64;
+        let reach = m.max_effort / m.stiffness;
+        let lead = m.damping * m.velocity / m.stiffness;
+        let rest = q + (m.position + lead - q).clamp(-reach, reach);
         link.joint
             .set_spring(axis, m.stiffness as Real, rest as Real);
         let dof = link.assembly_id();
@@ -173,9 +174,9 @@ impl JointIo {
         {
             // The spring and damper's force at the state after the step.
             let (k, rest) = link.joint.spring(axis);
+            let q = link.joint.coords()[axis];
             let d = mb.damping()[link.assembly_id()] as f64;
-            let r = self.reading;
-            return k as f64 * (rest as f64 - r.position) - d * r.velocity;
+            return (k * (rest - q)) as f64 - d * self.reading.velocity;
         }
         self.data_mut(impulse, multibody)
             // rapier's motor impulse acts against the joint's positive direction.
@@ -187,7 +188,7 @@ impl JointIo {
         *bodies[self.body1].rotation() * self.axis1
     }
 
-    /// Reads position and speed from the bodies; continuous joints keep counting turns.
+    /// Reads position and speed from the bodies; revolute and continuous joints count turns.
     pub fn read(&mut self, bodies: &RigidBodySet, multibodies: &MultibodyJointSet) {
         let (b1, b2) = (&bodies[self.body1], &bodies[self.body2]);
         let axis_w = self.world_axis(bodies);
@@ -215,13 +216,10 @@ impl JointIo {
             _ => {
                 let q = joint_w.rotation.inverse() * child.rotation;
                 let angle = 2.0 * q.imag().dot(&self.axis).atan2(q.w);
-                let angle = wrap(angle);
-                let position = if self.kind == JointKind::Continuous {
-                    let previous = self.reading.position;
-                    previous + wrap(angle - wrap(previous))
-                } else {
-                    angle
-                };
+                // Turns are counted (for a revolute joint whose limits pass ±π too), so a
+                // target beyond π is reached, not chased round.
+                let previous = self.reading.position;
+                let position = previous + wrap(angle - wrap(previous));
                 JointReading {
                     position,
                     velocity: generalized

@@ -260,6 +260,17 @@ fn a_kinematic_arm_moves_at_its_speed_limit_and_holds_a_pose_without_sag() {
             "{name}: {speed}, {effort}"
         );
     }
+    // A speed target runs the joint to its limit and no further.
+    let targets = [1.0, 0.0, -1.0].map(|velocity| Target {
+        position: f64::INFINITY,
+        velocity,
+        ..Target::default()
+    });
+    s.set_targets(0, &targets);
+    run(&mut s, 4.0);
+    for ((name, q, _, _), want) in s.joints(0).zip([2.5, -2.5, -2.5]) {
+        assert!((q - want).abs() < 1e-3, "{name}: {q} vs its limit {want}");
+    }
 }
 
 #[test]
