@@ -284,6 +284,13 @@ fn play_and_topic_pub_publish_into_a_running_group() {
     let s = Scenario::new("play", &body);
     let child = s.start_realtime(1);
     let g = s.group.name.as_str();
+    // The recorder finds `demo/*` topics as they appear; pong's answers are recorded only
+    // once it has subscribed to demo/pong.
+    wait_until("the recorder subscribes to demo/pong", || {
+        let info = caravan(&["topic", "info", "demo/pong", "--json", "--group", g]);
+        serde_json::from_slice::<serde_json::Value>(&info.stdout)
+            .is_ok_and(|i| i["subscribers"].as_array().is_some_and(|s| !s.is_empty()))
+    });
     let play = caravan(&[
         "play",
         mcap.to_str().unwrap(),
