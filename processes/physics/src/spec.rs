@@ -416,9 +416,9 @@ impl RobotSpec {
         let spec = |k: Option<usize>| k.map(|k| &self.actuators[k]);
         let Some(k) = entry
             .iter()
-            .copied()
-            .find(|&k| matches!(spec(k), Some(ActuatorSpec::Kinematic { .. })))
             .flatten()
+            .copied()
+            .find(|&k| matches!(self.actuators[k], ActuatorSpec::Kinematic { .. }))
         else {
             return Ok(());
         };

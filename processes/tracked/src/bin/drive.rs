@@ -14,6 +14,7 @@ use caravan_schemas::{
 };
 use caravan_tracked::diff_drive::{DiffDrive, DriveLimits, WheelOdometry, circumscribed_radius};
 use caravan_tracked::flippers::{FlipperRamp, flipper_command};
+use caravan_tracked::urdf::flipper_joints;
 use caravan_world::description::{JointKind, load_description};
 use serde::Deserialize;
 use std::process::ExitCode;
@@ -74,8 +75,12 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
         ));
     }
     let mut flippers = Vec::new();
-    for j in d.joints.iter() {
-        if j.kind != JointKind::Revolute || !j.name.ends_with("flipper_joint") {
+    for name in flipper_joints() {
+        // Fixed flippers (`caravan-tracked-urdf --flipper-angle`) have nothing to move.
+        let Some(j) = d.joint(&name).map(|j| &d.joints[j]) else {
+            continue;
+        };
+        if j.kind != JointKind::Revolute {
             continue;
         }
         let l = j.limits;
