@@ -15,10 +15,20 @@ fn json_of(out: &Output) -> serde_json::Value {
     })
 }
 
+/// `caravan topic info <topic> --json` of group `g`, once the topic exists.
+fn topic_info(g: &str, topic: &str) -> Option<serde_json::Value> {
+    let out = caravan(&["topic", "info", topic, "--json", "--group", g]);
+    serde_json::from_slice(&out.stdout).ok()
+}
+
 #[test]
 fn topic_echo_without_a_count_exits_when_its_group_ends() {
     let s = Scenario::new("echo-end", PINGPONG);
     let group = s.start_realtime(4);
+    // A node is listed once it runs, which can be before it has opened its topics.
+    wait_until("ping publishes demo/ping", || {
+        topic_info(&s.group.name, "demo/ping").is_some()
+    });
     let echo = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
         .args(["topic", "echo", "demo/ping", "--group", &s.group.name])
         .stdout(Stdio::piped())
@@ -287,9 +297,8 @@ fn play_and_topic_pub_publish_into_a_running_group() {
     // The recorder finds `demo/*` topics as they appear; pong's answers are recorded only
     // once it has subscribed to demo/pong.
     wait_until("the recorder subscribes to demo/pong", || {
-        let info = caravan(&["topic", "info", "demo/pong", "--json", "--group", g]);
-        serde_json::from_slice::<serde_json::Value>(&info.stdout)
-            .is_ok_and(|i| i["subscribers"].as_array().is_some_and(|s| !s.is_empty()))
+        topic_info(g, "demo/pong")
+            .is_some_and(|i| i["subscribers"].as_array().is_some_and(|s| !s.is_empty()))
     });
     let play = caravan(&[
         "play",
