@@ -7,8 +7,8 @@
 //!
 //! | variant | main track (per side) | flipper (per side) |
 //! |---|---|---|
-//! | v1 small round | 20 round wheels r = 2 cm around the track outline | 9 round, r 2 → 1.2 cm |
-//! | v2 small gear | 20 gear wheels r = 2 cm (8 teeth) around the outline | 9 gear, r 2 → 1.2 cm |
+//! | v1 small round | 20 round wheels r = 2 cm around the track outline | 9 round, r 2 → 1.2 cm, along the big flipper's bottom |
+//! | v2 small gear | 20 gear wheels r = 2 cm (8 teeth) around the outline | 9 gear, r 2 → 1.2 cm, along the big flipper's bottom |
 //! | v3 big round | 9 overlapping round wheels r = 6.256 cm | 9 round, r 5.5 → 3.3 cm |
 //! | v4 big gear | 9 overlapping gear wheels r = 6.256 cm (12 teeth) | 9 gear, r 5.5 → 3.3 cm |
 //!
@@ -46,6 +46,11 @@ pub const FLIPPER_LENGTH_M: f64 = 0.22;
 pub const FLIPPER_WHEELS: usize = 9;
 /// The last flipper wheel's radius over the first's (tapering; chosen).
 pub const FLIPPER_TAPER: f64 = 0.6;
+/// Radius of the big variants' first flipper wheel, m (chosen). Every variant's flipper
+/// wheels stand on one bottom line this far below the pivot's axis: the small wheels of v1
+/// and v2 line the bottom of the big flipper's outline, as their main-track wheels ring the
+/// big main wheels' outline.
+pub const FLIPPER_BIG_RADIUS_M: f64 = 0.055;
 /// Mass of every wheel, kg (the reference's).
 pub const WHEEL_MASS_KG: f64 = 0.15;
 /// Teeth per gear: (count, depth m) for big and small gears (chosen).
@@ -249,17 +254,24 @@ pub fn wheels(variant: Variant) -> Vec<Wheel> {
                 teeth: teeth(variant, index, variant.big()),
             });
         }
-        let r0 = if variant.big() { 0.055 } else { SMALL_RADIUS_M };
+        let r0 = if variant.big() {
+            FLIPPER_BIG_RADIUS_M
+        } else {
+            SMALL_RADIUS_M
+        };
         for index in 0..FLIPPER_WHEELS {
             let f = index as f64 / (FLIPPER_WHEELS - 1) as f64;
+            let radius_m = r0 * (1.0 - (1.0 - FLIPPER_TAPER) * f);
             out.push(Wheel {
                 side,
                 carrier: Carrier::Flipper,
                 index,
                 x_m: FLIPPER_LENGTH_M * f,
-                // The flipper's wheels share one bottom line; the top tapers.
-                z_m: -(1.0 - FLIPPER_TAPER) * r0 * f,
-                radius_m: r0 * (1.0 - (1.0 - FLIPPER_TAPER) * f),
+                // The flipper's wheels share one bottom line; the top tapers. (The small
+                // wheels once sat 3.5 cm higher, on their own radius: v2's flipper then met a
+                // stair's edge above its wheels and stalled there.)
+                z_m: radius_m - FLIPPER_BIG_RADIUS_M,
+                radius_m,
                 width_m: FLIPPER_WIDTH_M,
                 teeth: teeth(variant, index, variant.big()),
             });
@@ -319,18 +331,26 @@ mod tests {
     }
 
     #[test]
-    fn flipper_wheels_taper_along_the_main_tracks_bottom_line() {
-        let w = wheels(Variant::V4);
-        let flipper: Vec<&Wheel> = w
-            .iter()
-            .filter(|w| w.side == Side::Right && w.carrier == Carrier::Flipper)
-            .collect();
-        assert_eq!(flipper.len(), 9);
-        for pair in flipper.windows(2) {
-            assert!(pair[1].radius_m < pair[0].radius_m);
-            // Bottoms on one line (flipper frame z = −r0).
-            let bottom = |w: &Wheel| w.z_m - w.radius_m;
-            assert!((bottom(pair[0]) - bottom(pair[1])).abs() < 1e-12);
+    fn flipper_wheels_taper_along_one_bottom_line_in_every_variant() {
+        for v in Variant::ALL {
+            let w = wheels(v);
+            let flipper: Vec<&Wheel> = w
+                .iter()
+                .filter(|w| w.side == Side::Right && w.carrier == Carrier::Flipper)
+                .collect();
+            assert_eq!(flipper.len(), 9);
+            for pair in flipper.windows(2) {
+                assert!(pair[1].radius_m < pair[0].radius_m, "{v:?}");
+            }
+            // Bottoms on the big flipper's line (flipper frame z = −0.055 m), small wheels
+            // and big alike, so every variant meets an edge with the same outline.
+            for wheel in flipper {
+                let bottom = wheel.z_m - wheel.radius_m;
+                assert!(
+                    (bottom + FLIPPER_BIG_RADIUS_M).abs() < 1e-12,
+                    "{v:?}: {bottom}"
+                );
+            }
         }
     }
 }
