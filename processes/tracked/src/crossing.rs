@@ -1,7 +1,9 @@
 //! One crossing's outcome from the robot's true 3-D pose over time, as the reference's
 //! passability runs count them: **passed** (its base reached the goal line without tipping
-//! over), **flipped** (it tipped past [`FLIP_TILT_DEG`] at any time) or **stuck** (neither,
-//! by the end of the run).
+//! over), **flipped** (it tipped past [`FLIP_TILT_DEG`] at any time), **off the world** (its
+//! base left the world's floor plan sideways: a run driven straight that veered off the
+//! terrain, which the reference's operator would have steered back) or **stuck** (none of
+//! these, by the end of the run). The first of them to happen decides.
 
 use serde::Serialize;
 
@@ -34,6 +36,9 @@ pub enum Outcome {
     Passed,
     Stuck,
     Flipped,
+    /// The base left the world's floor plan (it then falls off its edge).
+    #[serde(rename = "off_world")]
+    OffWorld,
 }
 
 /// What a crossing did.
@@ -50,8 +55,12 @@ pub struct Crossing {
     pub max_climb_m: f64,
 }
 
-/// Classifies a run's samples (time order) against the goal line x = `goal_x_m`.
-pub fn classify(samples: &[Sample], goal_x_m: f64) -> Option<Crossing> {
+/// Classifies a run's samples (time order) against the goal line x = `goal_x_m`, on a world
+/// whose floor plan is [0, `size`.0] × [0, `size`.1] m when `size` is given.
+pub fn classify(samples: &[Sample], goal_x_m: f64, size: Option<[f64; 2]>) -> Option<Crossing> {
+    let off = |p: [f64; 3]| {
+        size.is_some_and(|[sx, sy]| !(0.0..=sx).contains(&p[0]) || !(0.0..=sy).contains(&p[1]))
+    };
     let first = samples.first()?;
     let mut c = Crossing {
         outcome: Outcome::Stuck,
@@ -67,6 +76,8 @@ pub fn classify(samples: &[Sample], goal_x_m: f64) -> Option<Crossing> {
         if c.outcome == Outcome::Stuck {
             if s.tilt_deg() > FLIP_TILT_DEG {
                 c.outcome = Outcome::Flipped;
+            } else if off(s.position) {
+                c.outcome = Outcome::OffWorld;
             } else if s.position[0] >= goal_x_m {
                 c.outcome = Outcome::Passed;
                 c.passed_at_s = Some(s.t_s);
@@ -84,7 +95,7 @@ mod tests {
         let (s, c) = (pitch_deg.to_radians() / 2.0).sin_cos();
         Sample {
             t_s,
-            position: [x, 0.0, 0.1],
+            position: [x, 1.0, 0.1],
             orientation: [0.0, s, 0.0, c],
         }
     }
@@ -98,15 +109,46 @@ mod tests {
 
     #[test]
     fn outcomes() {
-        let passed = classify(&[at(0.0, 1.0, 0.0), at(1.0, 5.1, 20.0)], 5.0).unwrap();
+        let passed = classify(&[at(0.0, 1.0, 0.0), at(1.0, 5.1, 20.0)], 5.0, None).unwrap();
         assert_eq!(passed.outcome, Outcome::Passed);
         assert_eq!(passed.passed_at_s, Some(1.0));
-        let stuck = classify(&[at(0.0, 1.0, 0.0), at(1.0, 3.0, 40.0)], 5.0).unwrap();
+        let stuck = classify(&[at(0.0, 1.0, 0.0), at(1.0, 3.0, 40.0)], 5.0, None).unwrap();
         assert_eq!(stuck.outcome, Outcome::Stuck);
         assert_eq!(stuck.max_x_m, 3.0);
         // Tipping over first counts, even if the body later slides past the line.
-        let flipped = classify(&[at(0.0, 3.0, 100.0), at(1.0, 5.5, 170.0)], 5.0).unwrap();
+        let flipped = classify(&[at(0.0, 3.0, 100.0), at(1.0, 5.5, 170.0)], 5.0, None).unwrap();
         assert_eq!(flipped.outcome, Outcome::Flipped);
-        assert!(classify(&[], 5.0).is_none());
+        assert!(classify(&[], 5.0, None).is_none());
+    }
+
+    #[test]
+    fn veering_off_the_worlds_side_is_neither_passed_nor_flipped() {
+        let veer = |y: f64, x: f64, pitch: f64| Sample {
+            position: [x, y, 0.1],
+            ..at(0.0, x, pitch)
+        };
+        // Off the side at x = 4, then falling and tumbling past the goal line.
+        let run = [
+            veer(1.5, 1.0, 0.0),
+            veer(3.2, 4.0, 10.0),
+            veer(3.5, 5.6, 150.0),
+        ];
+        let c = classify(&run, 5.0, Some([7.0, 3.0])).unwrap();
+        assert_eq!(c.outcome, Outcome::OffWorld);
+        assert_eq!(c.passed_at_s, None);
+        // Without a floor plan the same run counts as flipped, as before.
+        assert_eq!(classify(&run, 5.0, None).unwrap().outcome, Outcome::Flipped);
+        // Running off the far end after passing keeps the pass.
+        let on = [
+            veer(1.5, 1.0, 0.0),
+            veer(1.5, 5.5, 0.0),
+            veer(1.5, 7.5, 120.0),
+        ];
+        let c = classify(&on, 5.0, Some([7.0, 3.0])).unwrap();
+        assert_eq!(c.outcome, Outcome::Passed);
+        assert_eq!(
+            serde_json::to_value(Outcome::OffWorld).unwrap(),
+            serde_json::json!("off_world")
+        );
     }
 }

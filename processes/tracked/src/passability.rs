@@ -22,13 +22,15 @@ pub struct Tally {
     pub passed: usize,
     pub stuck: usize,
     pub flipped: usize,
+    /// Runs that left the world's floor plan sideways (veered off the terrain).
+    pub off_world: usize,
     /// Runs without a `tracked` section (the group failed).
     pub failed: usize,
 }
 
 impl Tally {
     pub fn runs(&self) -> usize {
-        self.passed + self.stuck + self.flipped + self.failed
+        self.passed + self.stuck + self.flipped + self.off_world + self.failed
     }
 }
 
@@ -50,15 +52,17 @@ pub fn pool(summary: &Value) -> Result<BTreeMap<(String, String), Tally>, String
             .or_default();
         let count = |flag: &str| cell["flags"][flag]["successes"].as_u64().unwrap_or(0) as usize;
         let runs = cell["runs"].as_array().map_or(0, Vec::len);
-        let (p, s, f) = (
+        let (p, s, f, o) = (
             count("tracked.passed"),
             count("tracked.stuck"),
             count("tracked.flipped"),
+            count("tracked.off_world"),
         );
         tally.passed += p;
         tally.stuck += s;
         tally.flipped += f;
-        tally.failed += runs.saturating_sub(p + s + f);
+        tally.off_world += o;
+        tally.failed += runs.saturating_sub(p + s + f + o);
     }
     Ok(out)
 }
@@ -78,11 +82,11 @@ fn rate(k: usize, n: usize) -> String {
 }
 
 /// The Markdown table: per variant and terrain, Caravan's pass rate with its interval and
-/// flips, and the reference's pass rate.
+/// flips, runs stuck and runs off the world, and the reference's pass rate.
 pub fn table(tallies: &BTreeMap<(String, String), Tally>) -> String {
     let mut out = String::from(
-        "| variant | terrain | passed (95 % Wilson) | flipped | stuck | reference passed |\n\
-         |---|---|---|---|---|---:|\n",
+        "| variant | terrain | passed (95 % Wilson) | flipped | stuck | off the world | reference passed |\n\
+         |---|---|---|---|---|---|---:|\n",
     );
     for (variant, reference) in REFERENCE {
         for (terrain, refp) in TERRAINS.iter().zip(reference) {
@@ -91,19 +95,19 @@ pub fn table(tallies: &BTreeMap<(String, String), Tally>) -> String {
                 .copied()
                 .unwrap_or_default();
             let n = t.runs();
+            let of = |k: usize| {
+                if n == 0 {
+                    "–".into()
+                } else {
+                    format!("{k}/{n}")
+                }
+            };
             out.push_str(&format!(
-                "| {variant} | {terrain} | {} | {} | {} | {refp} % |\n",
+                "| {variant} | {terrain} | {} | {} | {} | {} | {refp} % |\n",
                 rate(t.passed, n),
-                if n == 0 {
-                    "–".into()
-                } else {
-                    format!("{}/{n}", t.flipped)
-                },
-                if n == 0 {
-                    "–".into()
-                } else {
-                    format!("{}/{n}", t.stuck)
-                },
+                of(t.flipped),
+                of(t.stuck),
+                of(t.off_world),
             ));
         }
     }
@@ -125,6 +129,7 @@ mod tests {
                 "tracked.passed": flag("passed"),
                 "tracked.stuck": flag("stuck"),
                 "tracked.flipped": flag("flipped"),
+                "tracked.off_world": flag("off_world"),
             })},
         })
     }
@@ -136,19 +141,27 @@ mod tests {
             cell("v4", "random", 2, "passed"),
             cell("v4", "random", 3, "flipped"),
             cell("v4", "diagonal", 1, "stuck"),
+            cell("v4", "diagonal", 2, "off_world"),
             cell("v1", "random", 1, "error"),
         ]});
         let t = pool(&summary).unwrap();
         let v4 = t[&("v4".into(), "random".into())];
         assert_eq!((v4.passed, v4.flipped, v4.runs()), (2, 1, 3));
-        assert_eq!(t[&("v4".into(), "diagonal".into())].stuck, 1);
+        let diagonal = t[&("v4".into(), "diagonal".into())];
+        assert_eq!(
+            (diagonal.stuck, diagonal.off_world, diagonal.runs()),
+            (1, 1, 2)
+        );
         assert_eq!(t[&("v1".into(), "random".into())].failed, 1);
         let md = table(&t);
         assert!(
-            md.contains("| v4 | random | 67 % (2/3; 21–94 %) | 1/3 | 0/3 | 100 % |"),
+            md.contains("| v4 | random | 67 % (2/3; 21–94 %) | 1/3 | 0/3 | 0/3 | 100 % |"),
             "{md}"
         );
-        assert!(md.contains("| v2 | random | – | – | – | 100 % |"), "{md}");
+        assert!(
+            md.contains("| v2 | random | – | – | – | – | 100 % |"),
+            "{md}"
+        );
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! and how fast the robot went, from the recorded `robot/0/ground_truth`, and its braking
 //! distance after a stop asked on the recorded `robot/0/cmd_vel` (see [`crate::braking`]).
 //!
-//! JSON: `{goal_x_m, outcome, passed, stuck, flipped, passed_at_s, max_x_m, max_tilt_deg, max_climb_m,
+//! JSON: `{goal_x_m, outcome, passed, stuck, flipped, off_world, passed_at_s, max_x_m, max_tilt_deg, max_climb_m,
 //! top_speed_m_s, stop_s, braking_distance_m, samples, track}`.
 
 use crate::crossing::{Outcome, Sample, classify};
@@ -20,7 +20,8 @@ pub struct Params {
     /// The goal line: the run passes when the base's x reaches it, m.
     pub goal_x_m: f64,
     /// The world file (relative to the launch file), for the picture of the terrain with
-    /// the track driven; none: no picture.
+    /// the track driven and the floor plan a run can leave (outcome `off_world`); none: no
+    /// picture, and a run is never off the world.
     #[serde(default)]
     pub world: Option<String>,
 }
@@ -44,8 +45,8 @@ fn track(samples: &[Sample], every_s: f64) -> Vec<[f64; 5]> {
 
 pub struct TrackedReport {
     params: Params,
-    /// The world's blocks and its name, when `world` is given.
-    terrain: Option<(crate::rse::Grid, String)>,
+    /// The world's blocks, its name and its floor plan (m), when `world` is given.
+    terrain: Option<(crate::rse::Grid, String, [f64; 2])>,
 }
 
 impl ReportPlugin for TrackedReport {
@@ -62,7 +63,8 @@ impl ReportPlugin for TrackedReport {
             Some(w) => {
                 let world = caravan_world::world::load_world(&inputs.path(w))
                     .map_err(|e| format!("key 'world': {e}"))?;
-                Some((crate::rse_world::grid_of(&world), world.name))
+                let size = world.size;
+                Some((crate::rse_world::grid_of(&world), world.name, size))
             }
             None => None,
         };
@@ -90,7 +92,8 @@ impl ReportPlugin for TrackedReport {
                 orientation: [num(&q["x"]), num(&q["y"]), num(&q["z"]), num(&q["w"])],
             });
         }
-        let c = classify(&samples, self.params.goal_x_m).ok_or_else(|| {
+        let size = self.terrain.as_ref().map(|t| t.2);
+        let c = classify(&samples, self.params.goal_x_m, size).ok_or_else(|| {
             anyhow::anyhow!(
                 "no ground truth on {TRUTH_TOPIC} in the recording (physics `ground_truth = true`)"
             )
@@ -104,6 +107,7 @@ impl ReportPlugin for TrackedReport {
             "passed": c.outcome == Outcome::Passed,
             "stuck": c.outcome == Outcome::Stuck,
             "flipped": c.outcome == Outcome::Flipped,
+            "off_world": c.outcome == Outcome::OffWorld,
             "passed_at_s": c.passed_at_s,
             "max_x_m": c.max_x_m,
             "max_tilt_deg": c.max_tilt_deg,
@@ -134,7 +138,7 @@ impl ReportPlugin for TrackedReport {
                 "Stop asked at {t:.2} s: braking distance {d:.3} m.\n"
             ));
         }
-        if let Some((grid, name)) = &self.terrain {
+        if let Some((grid, name, _)) = &self.terrain {
             let path: Vec<(f64, f64)> = samples
                 .iter()
                 .map(|s| (s.position[0], s.position[1]))
