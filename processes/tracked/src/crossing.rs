@@ -1,9 +1,10 @@
 //! One crossing's outcome from the robot's true 3-D pose over time, as the reference's
 //! passability runs count them: **passed** (its base reached the goal line without tipping
 //! over), **flipped** (it tipped past [`FLIP_TILT_DEG`] at any time), **off the world** (its
-//! base left the world's floor plan sideways: a run driven straight that veered off the
-//! terrain, which the reference's operator would have steered back) or **stuck** (none of
-//! these, by the end of the run). The first of them to happen decides.
+//! base left the world's floor plan, in practice sideways: a run driven straight that veered
+//! off the terrain, which the reference's operator would have steered back) or **stuck**
+//! (none of these, by the end of the run). The first of them to happen decides; in one sample
+//! tipping over comes first.
 
 use serde::Serialize;
 
@@ -36,7 +37,7 @@ pub enum Outcome {
     Passed,
     Stuck,
     Flipped,
-    /// The base left the world's floor plan (it then falls off its edge).
+    /// The base left the world's floor plan (onto the physics' floor margin, then over it).
     #[serde(rename = "off_world")]
     OffWorld,
 }
@@ -136,6 +137,14 @@ mod tests {
         let c = classify(&run, 5.0, Some([7.0, 3.0])).unwrap();
         assert_eq!(c.outcome, Outcome::OffWorld);
         assert_eq!(c.passed_at_s, None);
+        // Tipped over and off in the same sample: flipped.
+        let both = [veer(1.5, 1.0, 0.0), veer(3.2, 4.0, 120.0)];
+        let c = classify(&both, 5.0, Some([7.0, 3.0])).unwrap();
+        assert_eq!(c.outcome, Outcome::Flipped);
+        // Backwards off the near end counts too.
+        let back = [veer(1.5, 1.0, 0.0), veer(1.5, -0.1, 0.0)];
+        let c = classify(&back, 5.0, Some([7.0, 3.0])).unwrap();
+        assert_eq!(c.outcome, Outcome::OffWorld);
         // Without a floor plan the same run counts as flipped, as before.
         assert_eq!(classify(&run, 5.0, None).unwrap().outcome, Outcome::Flipped);
         // Running off the far end after passing keeps the pass.

@@ -3,7 +3,7 @@
 //!
 //! - [`braking`]: the braking distance after the operator's stop;
 //! - [`climb`]: the operator's flipper sequence for climbing a step;
-//! - [`crossing`]: a crossing's outcome (passed, stuck, flipped) from the true pose;
+//! - [`crossing`]: a crossing's outcome (passed, stuck, flipped, off the world) from the true pose;
 //! - [`diff_drive`]: the drive controller's limits, wheel speeds and wheel odometry;
 //! - [`flippers`]: the flipper command topic and the drive's speed-limited flipper targets;
 //! - [`passability`]: a sweep's crossings pooled into the passability table;

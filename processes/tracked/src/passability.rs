@@ -22,7 +22,7 @@ pub struct Tally {
     pub passed: usize,
     pub stuck: usize,
     pub flipped: usize,
-    /// Runs that left the world's floor plan sideways (veered off the terrain).
+    /// Runs whose base left the world's floor plan (in practice: veered off the terrain).
     pub off_world: usize,
     /// Runs without a `tracked` section (the group failed).
     pub failed: usize,
