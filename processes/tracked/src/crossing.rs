@@ -128,24 +128,23 @@ mod tests {
             position: [x, y, 0.1],
             ..at(0.0, x, pitch)
         };
+        // On a 7 × 3 m world, goal line x = 5 m.
+        let on_world = |run: &[Sample]| classify(run, 5.0, Some([7.0, 3.0])).unwrap();
         // Off the side at x = 4, then falling and tumbling past the goal line.
         let run = [
             veer(1.5, 1.0, 0.0),
             veer(3.2, 4.0, 10.0),
             veer(3.5, 5.6, 150.0),
         ];
-        let c = classify(&run, 5.0, Some([7.0, 3.0])).unwrap();
-        assert_eq!(c.outcome, Outcome::OffWorld);
-        assert_eq!(c.passed_at_s, None);
+        let c = on_world(&run);
+        assert_eq!((c.outcome, c.passed_at_s), (Outcome::OffWorld, None));
         // Tipped over and off in the same sample: flipped.
         let both = [veer(1.5, 1.0, 0.0), veer(3.2, 4.0, 120.0)];
-        let c = classify(&both, 5.0, Some([7.0, 3.0])).unwrap();
-        assert_eq!(c.outcome, Outcome::Flipped);
+        assert_eq!(on_world(&both).outcome, Outcome::Flipped);
         // Backwards off the near end counts too.
         let back = [veer(1.5, 1.0, 0.0), veer(1.5, -0.1, 0.0)];
-        let c = classify(&back, 5.0, Some([7.0, 3.0])).unwrap();
-        assert_eq!(c.outcome, Outcome::OffWorld);
-        // Without a floor plan the same run counts as flipped, as before.
+        assert_eq!(on_world(&back).outcome, Outcome::OffWorld);
+        // Without a floor plan the first run counts as flipped, as before.
         assert_eq!(classify(&run, 5.0, None).unwrap().outcome, Outcome::Flipped);
         // Running off the far end after passing keeps the pass.
         let on = [
@@ -153,8 +152,7 @@ mod tests {
             veer(1.5, 5.5, 0.0),
             veer(1.5, 7.5, 120.0),
         ];
-        let c = classify(&on, 5.0, Some([7.0, 3.0])).unwrap();
-        assert_eq!(c.outcome, Outcome::Passed);
+        assert_eq!(on_world(&on).outcome, Outcome::Passed);
         assert_eq!(
             serde_json::to_value(Outcome::OffWorld).unwrap(),
             serde_json::json!("off_world")
