@@ -43,10 +43,19 @@ fn track(samples: &[Sample], every_s: f64) -> Vec<[f64; 5]> {
     out
 }
 
+/// What the report takes from the world file.
+struct Terrain {
+    /// Its blocks, for the picture.
+    grid: crate::rse::Grid,
+    name: String,
+    /// Its floor plan, m: a base outside [0, x] × [0, y] is off the world.
+    size: [f64; 2],
+}
+
 pub struct TrackedReport {
     params: Params,
-    /// The world's blocks, its name and its floor plan (m), when `world` is given.
-    terrain: Option<(crate::rse::Grid, String, [f64; 2])>,
+    /// When `world` is given.
+    terrain: Option<Terrain>,
 }
 
 impl ReportPlugin for TrackedReport {
@@ -63,8 +72,11 @@ impl ReportPlugin for TrackedReport {
             Some(w) => {
                 let world = caravan_world::world::load_world(&inputs.path(w))
                     .map_err(|e| format!("key 'world': {e}"))?;
-                let size = world.size;
-                Some((crate::rse_world::grid_of(&world), world.name, size))
+                Some(Terrain {
+                    grid: crate::rse_world::grid_of(&world),
+                    size: world.size,
+                    name: world.name,
+                })
             }
             None => None,
         };
@@ -92,7 +104,7 @@ impl ReportPlugin for TrackedReport {
                 orientation: [num(&q["x"]), num(&q["y"]), num(&q["z"]), num(&q["w"])],
             });
         }
-        let size = self.terrain.as_ref().map(|t| t.2);
+        let size = self.terrain.as_ref().map(|t| t.size);
         let c = classify(&samples, self.params.goal_x_m, size).ok_or_else(|| {
             anyhow::anyhow!(
                 "no ground truth on {TRUTH_TOPIC} in the recording (physics `ground_truth = true`)"
@@ -138,7 +150,7 @@ impl ReportPlugin for TrackedReport {
                 "Stop asked at {t:.2} s: braking distance {d:.3} m.\n"
             ));
         }
-        if let Some((grid, name, _)) = &self.terrain {
+        if let Some(Terrain { grid, name, .. }) = &self.terrain {
             let path: Vec<(f64, f64)> = samples
                 .iter()
                 .map(|s| (s.position[0], s.position[1]))
