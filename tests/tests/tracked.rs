@@ -56,6 +56,28 @@ fn v4_reaches_its_top_speed_and_brakes_at_the_drives_limit() {
     assert!((braking - 0.4).abs() < 0.04, "{braking}: {t}");
 }
 
+/// The driver steers back to its line: set off 0.3 m to the left of the line y = 1.5 m, the
+/// robot ends on it, which only steering can bring about.
+#[test]
+fn the_driver_steers_back_to_its_line() {
+    let t = run(
+        "flat.toml",
+        &[
+            "--set",
+            "args.pose=[1.0, 1.8, 0.0]",
+            "--set",
+            "process.driver.params.keep_line.line=[0.0, 1.5, 0.0]",
+            "--set",
+            "args.duration=9s",
+        ],
+    );
+    let track = t["track"].as_array().unwrap();
+    let last = track.last().unwrap().as_array().unwrap();
+    let (x, y) = (last[1].as_f64().unwrap(), last[2].as_f64().unwrap());
+    assert!((y - 1.5).abs() < 0.05, "ended at y = {y}: {t}");
+    assert!(x > 2.5, "x = {x}: {t}");
+}
+
 #[test]
 fn v4_climbs_a_10_cm_step() {
     let t = run("step.toml", &["--set", "args.step=10"]);
@@ -85,8 +107,16 @@ fn v4_climbs_20_cm_with_its_flippers_and_not_30() {
 }
 
 #[test]
-fn bad_flipper_params_fail_the_launch_naming_the_key() {
+fn bad_driver_params_fail_the_launch_naming_the_key() {
     for (set, key) in [
+        (
+            "process.driver.params.keep_line.lookahead_m=0.0",
+            "keep_line.lookahead_m",
+        ),
+        (
+            "process.driver.params.keep_line.line=[1.0, 1.5]",
+            "keep_line",
+        ),
         (
             "process.driver.params.climb.push_deg=-120.0",
             "climb.push_deg",

@@ -5,6 +5,7 @@
 //! - [`climb`]: the operator's flipper sequence for climbing a step;
 //! - [`crossing`]: a crossing's outcome (passed, stuck, flipped, off the world) from the true pose;
 //! - [`diff_drive`]: the drive controller's limits, wheel speeds and wheel odometry;
+//! - [`keep_line`]: the operator's steering back to the line it started on;
 //! - [`flippers`]: the flipper command topic and the drive's speed-limited flipper targets;
 //! - [`passability`]: a sweep's crossings pooled into the passability table;
 //! - [`report`]: the `tracked` report section;
@@ -18,6 +19,7 @@ pub mod climb;
 pub mod crossing;
 pub mod diff_drive;
 pub mod flippers;
+pub mod keep_line;
 pub mod passability;
 pub mod report;
 pub mod rse;

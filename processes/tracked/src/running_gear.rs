@@ -7,8 +7,8 @@
 //!
 //! | variant | main track (per side) | flipper (per side) |
 //! |---|---|---|
-//! | v1 small round | 20 round wheels r = 2 cm around the track outline | 9 round, r 2 → 1.2 cm, along the big flipper's bottom |
-//! | v2 small gear | 20 gear wheels r = 2 cm (8 teeth) around the outline | 9 gear, r 2 → 1.2 cm, along the big flipper's bottom |
+//! | v1 small round | 22 overlapping round wheels r = 2 cm along the track outline | 9 round, r 2 → 1.2 cm, along the big flipper's bottom |
+//! | v2 small gear | 22 overlapping gear wheels r = 2 cm (8 teeth) along the outline | 9 gear, r 2 → 1.2 cm, along the big flipper's bottom |
 //! | v3 big round | 9 overlapping round wheels r = 6.256 cm | 9 round, r 5.5 → 3.3 cm |
 //! | v4 big gear | 9 overlapping gear wheels r = 6.256 cm (12 teeth) | 9 gear, r 5.5 → 3.3 cm |
 //!
@@ -31,9 +31,11 @@ pub const MAIN_Z_M: f64 = -0.03;
 pub const BIG_RADIUS_M: f64 = 0.06256;
 /// Radius of a small wheel, m (v1, v2; chosen).
 pub const SMALL_RADIUS_M: f64 = 0.02;
-/// Small wheels around each main track's outline (v1, v2; chosen so the robot stays within
-/// the 64 joints a `JointState` message holds).
-pub const SMALL_OUTLINE_WHEELS: usize = 20;
+/// Small wheels around each main track's outline (v1, v2): the most the 64 joints of a
+/// `JointState` message allow (2 × (22 + 9) wheels + 2 flippers). Along the open outline
+/// (`track_outline`) they stand 3.0 cm apart, so the 4 cm wheels overlap and a block's edge
+/// cannot lodge between two of them.
+pub const SMALL_OUTLINE_WHEELS: usize = 22;
 /// Width of a main-track wheel, m (chosen).
 pub const MAIN_WIDTH_M: f64 = 0.04;
 /// Lateral offset of the flippers, m: outside the main tracks (chosen).
@@ -190,29 +192,28 @@ fn teeth(variant: Variant, index: usize, big: bool) -> Option<Teeth> {
     })
 }
 
-/// Points spaced evenly along a stadium (two semicircles of radius `r` about x0 and x1 on
-/// the line z = `z`), starting at the back of the bottom run and going forward.
-fn stadium(x0: f64, x1: f64, z: f64, r: f64, n: usize) -> Vec<(f64, f64)> {
+/// Points spaced evenly along the part of a stadium (two semicircles of radius `r` about x0
+/// and x1 on the line z = `z`) that meets the terrain: from the top of the back arc, down and
+/// along the bottom run, up to the top of the front arc; both ends included, `n` ≥ 2. The top
+/// run carries no wheels: it never touches the ground while the robot is upright, and wheels
+/// there would only thin out the bottom row (the joints are bounded).
+fn track_outline(x0: f64, x1: f64, z: f64, r: f64, n: usize) -> Vec<(f64, f64)> {
+    let half = std::f64::consts::PI * r;
     let straight = x1 - x0;
-    let perimeter = 2.0 * straight + std::f64::consts::TAU * r;
+    let length = 2.0 * half + straight;
     (0..n)
         .map(|k| {
-            let mut s = perimeter * k as f64 / n as f64;
-            if s < straight {
-                return (x0 + s, z - r);
-            }
-            s -= straight;
-            let half = std::f64::consts::PI * r;
+            let s = length * k as f64 / (n - 1) as f64;
             if s < half {
-                let a = -std::f64::consts::FRAC_PI_2 + s / r;
-                return (x1 + r * a.cos(), z + r * a.sin());
+                // Back arc: from the top (+90°) round the back (180°) to the bottom (270°).
+                let a = std::f64::consts::FRAC_PI_2 + s / r;
+                return (x0 + r * a.cos(), z + r * a.sin());
             }
-            s -= half;
-            if s < straight {
-                return (x1 - s, z + r);
+            if s < half + straight {
+                return (x0 + s - half, z - r);
             }
-            let a = std::f64::consts::FRAC_PI_2 + (s - straight) / r;
-            (x0 + r * a.cos(), z + r * a.sin())
+            let a = -std::f64::consts::FRAC_PI_2 + (s - half - straight) / r;
+            (x1 + r * a.cos(), z + r * a.sin())
         })
         .collect()
 }
@@ -229,7 +230,7 @@ pub fn wheels(variant: Variant) -> Vec<Wheel> {
         } else {
             // Small wheels around the outline the big wheels would have.
             let inset = BIG_RADIUS_M - SMALL_RADIUS_M;
-            stadium(
+            track_outline(
                 MAIN_X_M[0],
                 MAIN_X_M[1],
                 MAIN_Z_M,
@@ -327,6 +328,22 @@ mod tests {
                 (lowest - (MAIN_Z_M - BIG_RADIUS_M)).abs() < 1e-9,
                 "{lowest}"
             );
+            // Neighbours overlap (an edge cannot lodge between them), evenly spaced, and
+            // the row runs from the top of the back arc to the top of the front arc.
+            let main: Vec<&Wheel> = w
+                .iter()
+                .filter(|w| w.side == Side::Left && w.carrier == Carrier::Chassis)
+                .collect();
+            let gaps: Vec<f64> = main
+                .windows(2)
+                .map(|p| (p[1].x_m - p[0].x_m).hypot(p[1].z_m - p[0].z_m))
+                .collect();
+            assert!(gaps.iter().all(|g| *g < 2.0 * SMALL_RADIUS_M), "{gaps:?}");
+            assert!(gaps.iter().all(|g| (g - gaps[0]).abs() < 2e-3), "{gaps:?}");
+            let top = MAIN_Z_M + BIG_RADIUS_M - SMALL_RADIUS_M;
+            let (first, last) = (main[0], main[main.len() - 1]);
+            assert!((first.x_m - MAIN_X_M[0]).abs() < 1e-9 && (first.z_m - top).abs() < 1e-9);
+            assert!((last.x_m - MAIN_X_M[1]).abs() < 1e-9 && (last.z_m - top).abs() < 1e-9);
         }
     }
 

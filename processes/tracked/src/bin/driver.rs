@@ -4,11 +4,15 @@
 //! `climb`: with `climb = { enabled = true }` it also works the flippers through the
 //! step-climbing sequence of `caravan_tracked::climb` (its angles are keys of the same table)
 //! from the robot's pitch (`robot/i/ground_truth`), on `robot/i/flipper_command`.
+//! `keep_line` (on by default) steers back to the line the robot was on when it set off (or
+//! to `keep_line.line`), from its true pose, as an operator with a joystick would
+//! (`caravan_tracked::keep_line`); `keep_line = { enabled = false }` never turns.
 
 use caravan::{Node, NodeIdentity, Trigger};
-use caravan_schemas::{JointCommand, JointValue, Name, Twist, Vector3, topics};
+use caravan_schemas::{JointCommand, JointValue, Name, Twist, topics};
 use caravan_tracked::climb::{Climb, ClimbParams, nose_up_deg};
 use caravan_tracked::flippers::flipper_command;
+use caravan_tracked::keep_line::{KeepLineParams, Line, turn_rate};
 use caravan_tracked::urdf::{FLIPPER_RANGE_DEG, flipper_joints};
 use serde::Deserialize;
 use std::process::ExitCode;
@@ -34,6 +38,9 @@ struct Params {
     /// Work the flippers to climb steps (angles in degrees; see `caravan_tracked::climb`).
     #[serde(default)]
     climb: ClimbParams,
+    /// Steer back to the starting line (see `caravan_tracked::keep_line`).
+    #[serde(default)]
+    keep_line: KeepLineParams,
 }
 
 fn speed() -> f64 {
@@ -60,29 +67,39 @@ fn setup(p: Params, _: &NodeIdentity) -> Result<Params, String> {
         ));
     }
     p.climb.validate(FLIPPER_RANGE_DEG)?;
+    p.keep_line.validate()?;
     Ok(p)
 }
 
 fn run(mut node: Node, p: Params) -> Result<(), caravan::Error> {
     let cmd_vel = node.publisher(&topics::cmd_vel(p.robot))?;
+    let truth = if p.climb.enabled || p.keep_line.enabled {
+        Some(node.subscriber(&topics::ground_truth(p.robot))?)
+    } else {
+        None
+    };
     let mut flippers = if p.climb.enabled {
         Some((
             Climb::new(p.climb),
-            node.subscriber(&topics::ground_truth(p.robot))?,
             node.publisher(&flipper_command(p.robot))?,
         ))
     } else {
         None
     };
+    let mut line: Option<Line> = None;
     let names = flipper_joints();
     let trigger = node.trigger(Trigger::every_hz(50.0))?;
     node.run(trigger, |step| {
-        if let Some((climb, truth, out)) = &mut flippers
-            && let Some(pose) = truth.latest()?
+        let t = step.now().as_secs_f64();
+        let driving = t >= p.start_s && t < p.stop_s;
+        let pose = match &truth {
+            Some(truth) => truth.latest()?.map(|odometry| odometry.pose),
+            None => None,
+        };
+        if let Some((climb, out)) = &mut flippers
+            && let Some(pose) = &pose
         {
-            let angle = climb
-                .update(nose_up_deg(&pose.pose.orientation))
-                .to_radians();
+            let angle = climb.update(nose_up_deg(&pose.orientation)).to_radians();
             let mut cmd = caravan_schemas::placement_new::<JointCommand>();
             for name in &names {
                 let _ = cmd.joints.push(JointValue {
@@ -94,19 +111,17 @@ fn run(mut node: Node, p: Params) -> Result<(), caravan::Error> {
             }
             out.publish(&cmd)?;
         }
-        let t = step.now().as_secs_f64();
-        let v = if t >= p.start_s && t < p.stop_s {
-            p.speed_m_s
-        } else {
-            0.0
+        let (v, w) = match (driving, &pose) {
+            (false, _) => (0.0, 0.0),
+            (true, None) => (p.speed_m_s, 0.0),
+            (true, Some(pose)) => {
+                let position = [pose.position.x, pose.position.y];
+                let yaw = pose.orientation.yaw();
+                let line = *line.get_or_insert_with(|| p.keep_line.line_from(position, yaw));
+                (p.speed_m_s, turn_rate(&p.keep_line, &line, position, yaw))
+            }
         };
-        cmd_vel.publish(&Twist {
-            linear: Vector3 {
-                x: v,
-                ..Vector3::default()
-            },
-            ..Twist::default()
-        })
+        cmd_vel.publish(&Twist::planar(v, w))
     })?;
     Ok(())
 }

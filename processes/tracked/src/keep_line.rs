@@ -1,0 +1,220 @@
+//! The operator's steering while driving "straight across": keep to the line the robot
+//! started on. An operator with a joystick steers back when a track drops into a hole and the
+//! robot yaws; without this the robot wanders off the 3 m field's side. The turn rate asked
+//! for is proportional to the heading error toward a point `lookahead_m` ahead on the line
+//! (a pure-pursuit-like line follower), bounded by `max_turn_rad_s`; the drive's own limits
+//! (|ω| ≤ 0.5 rad/s, 0.5 rad/s²) still apply after it.
+
+use serde::Deserialize;
+
+/// How the operator keeps to the line.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeepLineParams {
+    /// Steer back to the line (default true); off, the turn rate asked for is always 0.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// Turn rate per radian of heading error, 1/s, > 0 (default 2).
+    #[serde(default = "gain")]
+    pub gain_per_s: f64,
+    /// How far ahead on the line the operator aims, m, > 0 (default 0.5): shorter steers
+    /// back harder.
+    #[serde(default = "lookahead")]
+    pub lookahead_m: f64,
+    /// The largest turn rate asked for, rad/s, > 0 (default 0.5, the drive's limit).
+    #[serde(default = "max_turn")]
+    pub max_turn_rad_s: f64,
+    /// The line to keep, `[x m, y m, heading rad]` on the floor; default the robot's own
+    /// position and heading when it sets off.
+    #[serde(default)]
+    pub line: Option<[f64; 3]>,
+}
+
+fn yes() -> bool {
+    true
+}
+fn gain() -> f64 {
+    2.0
+}
+fn lookahead() -> f64 {
+    0.5
+}
+fn max_turn() -> f64 {
+    0.5
+}
+
+impl Default for KeepLineParams {
+    fn default() -> Self {
+        Self {
+            enabled: yes(),
+            gain_per_s: gain(),
+            lookahead_m: lookahead(),
+            max_turn_rad_s: max_turn(),
+            line: None,
+        }
+    }
+}
+
+impl KeepLineParams {
+    /// Every number positive and finite, or an error naming the key (under `keep_line`).
+    pub fn validate(&self) -> Result<(), String> {
+        for (key, value) in [
+            ("gain_per_s", self.gain_per_s),
+            ("lookahead_m", self.lookahead_m),
+            ("max_turn_rad_s", self.max_turn_rad_s),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(format!(
+                    "key 'keep_line.{key}': must be a number > 0, got {value}"
+                ));
+            }
+        }
+        if let Some(line) = self.line.filter(|l| !l.iter().all(|v| v.is_finite())) {
+            return Err(format!(
+                "key 'keep_line.line': must be [x m, y m, heading rad], finite, got {line:?}"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The line to keep for a robot setting off at `position` (m) heading `yaw_rad`.
+    pub fn line_from(&self, position: [f64; 2], yaw_rad: f64) -> Line {
+        match self.line {
+            Some([x, y, heading_rad]) => Line {
+                origin: [x, y],
+                heading_rad,
+            },
+            None => Line {
+                origin: position,
+                heading_rad: yaw_rad,
+            },
+        }
+    }
+}
+
+/// A line on the floor: through `origin` (x, y, m) along heading `heading_rad`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Line {
+    pub origin: [f64; 2],
+    pub heading_rad: f64,
+}
+
+impl Line {
+    /// The robot's signed distance to the left of the line, m.
+    pub fn left_of(&self, position: [f64; 2]) -> f64 {
+        let (s, c) = self.heading_rad.sin_cos();
+        let d = [position[0] - self.origin[0], position[1] - self.origin[1]];
+        c * d[1] - s * d[0]
+    }
+}
+
+/// The turn rate to ask for, rad/s (positive turns left), for a robot at `position` (m)
+/// heading `yaw_rad`.
+pub fn turn_rate(p: &KeepLineParams, line: &Line, position: [f64; 2], yaw_rad: f64) -> f64 {
+    if !p.enabled {
+        return 0.0;
+    }
+    let aim = line.heading_rad - (line.left_of(position) / p.lookahead_m).atan();
+    let error = wrap_pi(aim - yaw_rad);
+    (p.gain_per_s * error).clamp(-p.max_turn_rad_s, p.max_turn_rad_s)
+}
+
+/// An angle brought into (−π, π], rad.
+fn wrap_pi(a: f64) -> f64 {
+    let tau = std::f64::consts::TAU;
+    let w = a.rem_euclid(tau);
+    if w > std::f64::consts::PI { w - tau } else { w }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALONG_X_AT_0: Line = Line {
+        origin: [0.0, 1.5],
+        heading_rad: 0.0,
+    };
+    const ALONG_X: Line = Line {
+        origin: [1.0, 1.5],
+        heading_rad: 0.0,
+    };
+
+    #[test]
+    fn on_the_line_and_heading_along_it_asks_for_no_turn() {
+        let p = KeepLineParams::default();
+        assert_eq!(turn_rate(&p, &ALONG_X, [3.0, 1.5], 0.0), 0.0);
+    }
+
+    #[test]
+    fn a_robot_yawed_right_turns_left_and_the_turn_is_bounded() {
+        let p = KeepLineParams::default();
+        let w = turn_rate(&p, &ALONG_X, [2.0, 1.5], -0.1);
+        assert!((w - 0.2).abs() < 1e-12, "{w}");
+        assert_eq!(turn_rate(&p, &ALONG_X, [2.0, 1.5], -1.0), 0.5);
+        assert_eq!(turn_rate(&p, &ALONG_X, [2.0, 1.5], 1.0), -0.5);
+    }
+
+    #[test]
+    fn a_robot_left_of_the_line_heading_along_it_turns_right_toward_it() {
+        let p = KeepLineParams::default();
+        // 0.1 m left, 0.5 m look-ahead: aim atan(0.2) to the right.
+        let w = turn_rate(&p, &ALONG_X, [2.0, 1.6], 0.0);
+        assert!((w + 2.0 * 0.2f64.atan()).abs() < 1e-12, "{w}");
+        // Already pointing at the aim point: no turn.
+        assert!(turn_rate(&p, &ALONG_X, [2.0, 1.6], -(0.2f64.atan())).abs() < 1e-12);
+    }
+
+    #[test]
+    fn headings_wrap_so_the_turn_is_the_short_way_round() {
+        let p = KeepLineParams::default();
+        let line = Line {
+            origin: [0.0, 0.0],
+            heading_rad: std::f64::consts::PI,
+        };
+        // Heading −179° on a line of 180°: 1° to the right of it, so turn right.
+        let w = turn_rate(&p, &line, [-1.0, 0.0], -179f64.to_radians());
+        assert!((w + 2.0 * 1f64.to_radians()).abs() < 1e-9, "{w}");
+        assert!((line.left_of([-1.0, -0.2]) - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn disabled_asks_for_no_turn_and_bad_numbers_name_their_key() {
+        let off = KeepLineParams {
+            enabled: false,
+            ..KeepLineParams::default()
+        };
+        assert_eq!(turn_rate(&off, &ALONG_X, [2.0, 2.5], 1.0), 0.0);
+        let bad = KeepLineParams {
+            lookahead_m: 0.0,
+            ..KeepLineParams::default()
+        };
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .contains("keep_line.lookahead_m")
+        );
+        let bad = KeepLineParams {
+            line: Some([0.0, f64::NAN, 0.0]),
+            ..KeepLineParams::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("keep_line.line"));
+        assert!(KeepLineParams::default().validate().is_ok());
+    }
+
+    #[test]
+    fn the_line_is_the_start_pose_unless_one_is_given() {
+        let p = KeepLineParams::default();
+        assert_eq!(
+            p.line_from([2.0, 1.0], 0.3),
+            Line {
+                origin: [2.0, 1.0],
+                heading_rad: 0.3
+            }
+        );
+        let given = KeepLineParams {
+            line: Some([0.0, 1.5, 0.0]),
+            ..p
+        };
+        assert_eq!(given.line_from([2.0, 1.0], 0.3), ALONG_X_AT_0);
+    }
+}
