@@ -105,19 +105,17 @@ impl Default for DriveLimits {
 impl DriveLimits {
     /// Checks every value is positive; the error names the key.
     pub fn validate(&self) -> Result<(), String> {
-        for (key, v) in [
-            ("max_v_m_s", self.max_v_m_s),
-            ("max_w_rad_s", self.max_w_rad_s),
-            ("max_accel_m_s2", self.max_accel_m_s2),
-            ("max_alpha_rad_s2", self.max_alpha_rad_s2),
-            ("wheel_radius_m", self.wheel_radius_m),
-            ("wheel_separation_m", self.wheel_separation_m),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("key '{key}': must be a positive number, got {v}"));
-            }
-        }
-        Ok(())
+        crate::params::all_positive(
+            "",
+            &[
+                ("max_v_m_s", self.max_v_m_s),
+                ("max_w_rad_s", self.max_w_rad_s),
+                ("max_accel_m_s2", self.max_accel_m_s2),
+                ("max_alpha_rad_s2", self.max_alpha_rad_s2),
+                ("wheel_radius_m", self.wheel_radius_m),
+                ("wheel_separation_m", self.wheel_separation_m),
+            ],
+        )
     }
 }
 

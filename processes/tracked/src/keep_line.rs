@@ -58,17 +58,14 @@ impl Default for KeepLineParams {
 impl KeepLineParams {
     /// Every number positive and finite, or an error naming the key (under `keep_line`).
     pub fn validate(&self) -> Result<(), String> {
-        for (key, value) in [
-            ("gain_per_s", self.gain_per_s),
-            ("lookahead_m", self.lookahead_m),
-            ("max_turn_rad_s", self.max_turn_rad_s),
-        ] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(format!(
-                    "key 'keep_line.{key}': must be a number > 0, got {value}"
-                ));
-            }
-        }
+        crate::params::all_positive(
+            "keep_line.",
+            &[
+                ("gain_per_s", self.gain_per_s),
+                ("lookahead_m", self.lookahead_m),
+                ("max_turn_rad_s", self.max_turn_rad_s),
+            ],
+        )?;
         if let Some(line) = self.line.filter(|l| !l.iter().all(|v| v.is_finite())) {
             return Err(format!(
                 "key 'keep_line.line': must be [x m, y m, heading rad], finite, got {line:?}"

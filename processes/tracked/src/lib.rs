@@ -7,6 +7,7 @@
 //! - [`diff_drive`]: the drive controller's limits, wheel speeds and wheel odometry;
 //! - [`keep_line`]: the operator's steering back to the line it started on;
 //! - [`flippers`]: the flipper command topic and the drive's speed-limited flipper targets;
+//! - [`params`]: checks shared by the processes' params;
 //! - [`passability`]: a sweep's crossings pooled into the passability table;
 //! - [`report`]: the `tracked` report section;
 //! - [`running_gear`]: the wheels of the four running-gear variants;
@@ -20,6 +21,7 @@ pub mod crossing;
 pub mod diff_drive;
 pub mod flippers;
 pub mod keep_line;
+pub mod params;
 pub mod passability;
 pub mod report;
 pub mod rse;
