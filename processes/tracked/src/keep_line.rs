@@ -106,12 +106,20 @@ impl Line {
 }
 
 /// The turn rate to ask for, rad/s (positive turns left), for a robot at `position` (m)
-/// heading `yaw_rad`.
-pub fn turn_rate(p: &KeepLineParams, line: &Line, position: [f64; 2], yaw_rad: f64) -> f64 {
+/// heading `yaw_rad` and driving at `speed_m_s` (its sign says which way the aim point lies:
+/// reversing, the robot closes on the line by turning the other way).
+pub fn turn_rate(
+    p: &KeepLineParams,
+    line: &Line,
+    position: [f64; 2],
+    yaw_rad: f64,
+    speed_m_s: f64,
+) -> f64 {
     if !p.enabled {
         return 0.0;
     }
-    let aim = line.heading_rad - (line.left_of(position) / p.lookahead_m).atan();
+    let toward = if speed_m_s < 0.0 { -1.0 } else { 1.0 };
+    let aim = line.heading_rad - toward * (line.left_of(position) / p.lookahead_m).atan();
     let error = wrap_pi(aim - yaw_rad);
     (p.gain_per_s * error).clamp(-p.max_turn_rad_s, p.max_turn_rad_s)
 }
@@ -139,26 +147,29 @@ mod tests {
     #[test]
     fn on_the_line_and_heading_along_it_asks_for_no_turn() {
         let p = KeepLineParams::default();
-        assert_eq!(turn_rate(&p, &ALONG_X, [3.0, 1.5], 0.0), 0.0);
+        assert_eq!(turn_rate(&p, &ALONG_X, [3.0, 1.5], 0.0, 0.3), 0.0);
     }
 
     #[test]
     fn a_robot_yawed_right_turns_left_and_the_turn_is_bounded() {
         let p = KeepLineParams::default();
-        let w = turn_rate(&p, &ALONG_X, [2.0, 1.5], -0.1);
+        let w = turn_rate(&p, &ALONG_X, [2.0, 1.5], -0.1, 0.3);
         assert!((w - 0.2).abs() < 1e-12, "{w}");
-        assert_eq!(turn_rate(&p, &ALONG_X, [2.0, 1.5], -1.0), 0.5);
-        assert_eq!(turn_rate(&p, &ALONG_X, [2.0, 1.5], 1.0), -0.5);
+        assert_eq!(turn_rate(&p, &ALONG_X, [2.0, 1.5], -1.0, 0.3), 0.5);
+        assert_eq!(turn_rate(&p, &ALONG_X, [2.0, 1.5], 1.0, 0.3), -0.5);
     }
 
     #[test]
     fn a_robot_left_of_the_line_heading_along_it_turns_right_toward_it() {
         let p = KeepLineParams::default();
         // 0.1 m left, 0.5 m look-ahead: aim atan(0.2) to the right.
-        let w = turn_rate(&p, &ALONG_X, [2.0, 1.6], 0.0);
+        let w = turn_rate(&p, &ALONG_X, [2.0, 1.6], 0.0, 0.3);
         assert!((w + 2.0 * 0.2f64.atan()).abs() < 1e-12, "{w}");
+        // Reversing, the aim point lies behind: turn left, so the tail swings toward it.
+        let back = turn_rate(&p, &ALONG_X, [2.0, 1.6], 0.0, -0.3);
+        assert!((back - 2.0 * 0.2f64.atan()).abs() < 1e-12, "{back}");
         // Already pointing at the aim point: no turn.
-        assert!(turn_rate(&p, &ALONG_X, [2.0, 1.6], -(0.2f64.atan())).abs() < 1e-12);
+        assert!(turn_rate(&p, &ALONG_X, [2.0, 1.6], -(0.2f64.atan()), 0.3).abs() < 1e-12);
     }
 
     #[test]
@@ -169,7 +180,7 @@ mod tests {
             heading_rad: std::f64::consts::PI,
         };
         // Heading −179° on a line of 180°: 1° to the right of it, so turn right.
-        let w = turn_rate(&p, &line, [-1.0, 0.0], -179f64.to_radians());
+        let w = turn_rate(&p, &line, [-1.0, 0.0], -179f64.to_radians(), 0.3);
         assert!((w + 2.0 * 1f64.to_radians()).abs() < 1e-9, "{w}");
         assert!((line.left_of([-1.0, -0.2]) - 0.2).abs() < 1e-12);
     }
@@ -180,7 +191,7 @@ mod tests {
             enabled: false,
             ..KeepLineParams::default()
         };
-        assert_eq!(turn_rate(&off, &ALONG_X, [2.0, 2.5], 1.0), 0.0);
+        assert_eq!(turn_rate(&off, &ALONG_X, [2.0, 2.5], 1.0, 0.3), 0.0);
         let bad = KeepLineParams {
             lookahead_m: 0.0,
             ..KeepLineParams::default()

@@ -118,7 +118,10 @@ fn run(mut node: Node, p: Params) -> Result<(), caravan::Error> {
                 let position = [pose.position.x, pose.position.y];
                 let yaw = pose.orientation.yaw();
                 let line = *line.get_or_insert_with(|| p.keep_line.line_from(position, yaw));
-                (p.speed_m_s, turn_rate(&p.keep_line, &line, position, yaw))
+                (
+                    p.speed_m_s,
+                    turn_rate(&p.keep_line, &line, position, yaw, p.speed_m_s),
+                )
             }
         };
         cmd_vel.publish(&Twist::planar(v, w))
