@@ -74,6 +74,16 @@ pub fn node_main<P: DeserializeOwned, S>(
     })();
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // A stop that comes while the node makes its ports (or tears them down) can fail a
+        // transport call; the group is ending anyway, so that is a clean stop. Bad input is
+        // still reported as such.
+        Err((code, e))
+            if code != EXIT_BAD_INPUT
+                && iceoryx2_bb_posix::signal::SignalHandler::termination_requested() =>
+        {
+            eprintln!("{program}: stopped ({e})");
+            ExitCode::SUCCESS
+        }
         Err((code, e)) => {
             eprintln!("{program}: {e}");
             ExitCode::from(code)
