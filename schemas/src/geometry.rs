@@ -61,6 +61,13 @@ impl Quaternion {
     }
 }
 
+/// An angle brought into (−π, π], rad: the one wrap every process uses for headings.
+pub fn wrap_angle(a: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let w = a.rem_euclid(TAU);
+    if w > PI { w - TAU } else { w }
+}
+
 /// A pose in space, as geometry_msgs/Pose.
 #[repr(C)]
 #[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]

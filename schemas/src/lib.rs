@@ -37,7 +37,7 @@ pub use episodes::{
     ShortName,
 };
 pub use fixed::{FixedString, FixedVec};
-pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3};
+pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3, wrap_angle};
 pub use header::Header;
 pub use map::{Goal, MAP_MAX_CELLS, MAP_MAX_SIDE, OccupancyGrid, PATH_MAX_POSES, Path2D};
 pub use metrics::{MAX_METRICS, Metrics};

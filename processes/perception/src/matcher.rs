@@ -202,12 +202,8 @@ fn solve(h: &[f64; 6], g: &[f64; 3]) -> Option<[f64; 3]> {
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
-/// Angle wrapped to (−π, π].
-pub fn wrap_angle(a: f64) -> f64 {
-    use std::f64::consts::{PI, TAU};
-    let w = a.rem_euclid(TAU);
-    if w > PI { w - TAU } else { w }
-}
+/// Angle wrapped to (−π, π] (the schemas' one wrap).
+pub use caravan_schemas::wrap_angle;
 
 #[cfg(test)]
 mod tests {

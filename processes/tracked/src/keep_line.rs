@@ -120,15 +120,8 @@ pub fn turn_rate(
     }
     let toward = if speed_m_s < 0.0 { -1.0 } else { 1.0 };
     let aim = line.heading_rad - toward * (line.left_of(position) / p.lookahead_m).atan();
-    let error = wrap_pi(aim - yaw_rad);
+    let error = caravan_schemas::wrap_angle(aim - yaw_rad);
     (p.gain_per_s * error).clamp(-p.max_turn_rad_s, p.max_turn_rad_s)
-}
-
-/// An angle brought into (−π, π], rad.
-fn wrap_pi(a: f64) -> f64 {
-    let tau = std::f64::consts::TAU;
-    let w = a.rem_euclid(tau);
-    if w > std::f64::consts::PI { w - tau } else { w }
 }
 
 #[cfg(test)]

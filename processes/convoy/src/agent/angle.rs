@@ -1,12 +1,5 @@
-/// Wraps an angle to (−π, π].
-pub fn wrap(a: f64) -> f64 {
-    let w = a.rem_euclid(std::f64::consts::TAU);
-    if w > std::f64::consts::PI {
-        w - std::f64::consts::TAU
-    } else {
-        w
-    }
-}
+/// Wraps an angle to (−π, π] (the schemas' one wrap).
+pub use caravan_schemas::wrap_angle as wrap;
 
 #[cfg(test)]
 mod tests {
