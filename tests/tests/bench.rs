@@ -1,6 +1,6 @@
 //! Benchmarks run briefly and write their files. They assert nothing about time.
 
-use caravan_tests::workspace_bin;
+use caravan_tests::{children, wait_until, workspace_bin};
 use std::collections::BTreeSet;
 use std::process::Command;
 
@@ -90,6 +90,59 @@ fn bench_transport_quick_writes_csv_and_plot() {
         .filter(|name| name.starts_with(&format!("cvn_bt-{pid}-")))
         .collect();
     assert!(left.is_empty(), "left in /dev/shm: {left:?}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A relays' process held off the CPU for longer than the launcher's 1 s lease (as on a loaded
+/// machine) used to close the hosts' link and lose the message in flight, and the bench then
+/// waited on its echo for good. The measurement must ride the stall out.
+#[test]
+fn bench_transport_bridged_rides_out_a_stalled_relay() {
+    let out = std::env::temp_dir().join(format!("caravan-bench-stall-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let mut bench = Command::new(workspace_bin("caravan"))
+        .args(["bench", "transport", "--transports", "caravan-bridged"])
+        .args(["--sizes", "16", "--rounds", "5000", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("cannot run caravan bench transport");
+    let command_line =
+        |pid: i32| std::fs::read_to_string(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+    let (mut relays, mut pong) = (None, false);
+    wait_until("the relays and the echoing side run", || {
+        for pid in children(bench.id()) {
+            let line = command_line(pid);
+            relays = relays.or(line.contains("transport-relays").then_some(pid));
+            pong |= line.contains("transport-pong");
+        }
+        relays.is_some() && pong
+    });
+    let relays = relays.expect("the relays' process");
+    // Round trips are under way once the echoing side runs.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    // SAFETY: signalling a process this test's bench started.
+    unsafe { libc::kill(relays, libc::SIGSTOP) };
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    unsafe { libc::kill(relays, libc::SIGCONT) };
+    assert!(
+        bench.try_wait().unwrap().is_none(),
+        "the bench ended before the stall was over: give it more rounds"
+    );
+    let run = bench.wait_with_output().unwrap();
+    assert!(
+        run.status.success(),
+        "bench failed\nstdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = std::fs::read_to_string(out.join("transport.csv")).unwrap();
+    let header = text.lines().find(|l| !l.starts_with('#')).unwrap();
+    let status = header.split(',').position(|h| h == "status").unwrap();
+    let rows = csv_rows(&out.join("transport.csv"));
+    assert_eq!(rows.len(), 1, "{text}");
+    assert_eq!(rows[0][status], "ok", "{text}");
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -4,8 +4,8 @@
 //! 2, named, nothing started) or a clear failure, never a panic, a hang or an orphan.
 
 use caravan_tests::{
-    PINGPONG, Scenario, alive, assert_refused, caravan, launch_with_set, realtime_ping_pong,
-    wait_until, workspace_bin, workspace_root,
+    PINGPONG, Scenario, alive, assert_refused, caravan, children, launch_with_set,
+    realtime_ping_pong, wait_until, workspace_bin, workspace_root,
 };
 use std::process::{Command, Stdio};
 
@@ -147,22 +147,6 @@ fn a_launch_leaves_no_lock_or_config_in_the_temporary_directory() {
         let file = tmp.join(format!("caravan-group-{}.{suffix}", s.group.name));
         assert!(!file.exists(), "{} left behind", file.display());
     }
-}
-
-/// The children of `pid`, whichever of its threads started them (from /proc).
-fn children(pid: u32) -> Vec<i32> {
-    let tasks = std::fs::read_dir(format!("/proc/{pid}/task"))
-        .into_iter()
-        .flatten();
-    tasks
-        .flatten()
-        .flat_map(|t| {
-            let list = std::fs::read_to_string(t.path().join("children")).unwrap_or_default();
-            list.split_whitespace()
-                .filter_map(|p| p.parse().ok())
-                .collect::<Vec<i32>>()
-        })
-        .collect()
 }
 
 /// Waits until `parent` has started a child, kills `parent` with SIGKILL and waits until that

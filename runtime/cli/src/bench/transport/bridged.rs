@@ -11,6 +11,11 @@
 //!
 //! The relays run in a process of their own because a relay never serves readers in its own
 //! process (it takes them for its launcher's recorder and scheduler).
+//!
+//! Their sessions take the launcher's settings but for the lease: the launcher's 1 s notices a
+//! silent host quickly, and a relays' process held off the CPU for longer than that on a
+//! loaded machine (CI) closed the link and lost the message in flight, on which the measuring
+//! side then waited for good. The bench measures the path, not the launcher's fault detection.
 
 use super::{Pair, await_ready, ready, stop_child, temp_path};
 use crate::bridge::relay::{Relay, RelayConfig};
@@ -35,6 +40,9 @@ pub struct RelaysArgs {
     #[arg(long)]
     endpoint: String,
 }
+
+/// The relays' zenoh lease, ms: zenoh's default, not the launcher's 1 s (see the module doc).
+const LEASE_MS: u64 = 10_000;
 
 /// The iceoryx2 namespace of `host` in bench group `group`.
 fn namespace(group: &str, host: &str) -> String {
@@ -80,7 +88,9 @@ pub fn relays(args: &RelaysArgs) -> Result<()> {
     };
     let mut running = Vec::new();
     for ((host, node), spec) in HOSTS.into_iter().zip([listen, connect]) {
-        let session = z(zenoh::open(session_config(&spec)?).wait())
+        let mut config = session_config(&spec)?;
+        z(config.insert_json5("transport/link/tx/lease", &LEASE_MS.to_string()))?;
+        let session = z(zenoh::open(config).wait())
             .with_context(|| format!("host '{host}': cannot open its zenoh session"))?;
         let iceoryx = super::iceoryx2_raw::config(&namespace(&args.group, host))?;
         // The node of the other host: its messages arrive through this relay and must not be
