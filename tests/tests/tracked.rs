@@ -118,6 +118,10 @@ fn bad_driver_params_fail_the_launch_naming_the_key() {
             "keep_line",
         ),
         (
+            "process.driver.params.keep_line.straight_above_tilt_deg=90.0",
+            "keep_line.straight_above_tilt_deg",
+        ),
+        (
             "process.driver.params.climb.push_deg=-120.0",
             "climb.push_deg",
         ),

@@ -23,12 +23,17 @@ pub struct Sample {
 impl Sample {
     /// Angle between the body's z axis and the world's, degrees.
     pub fn tilt_deg(&self) -> f64 {
-        let [x, y, z, w] = self.orientation;
-        // The body z axis' world z component: 1 − 2(x² + y²) for a unit quaternion.
-        let n = x * x + y * y + z * z + w * w;
-        let up = 1.0 - 2.0 * (x * x + y * y) / n;
-        up.clamp(-1.0, 1.0).acos().to_degrees()
+        tilt_deg(self.orientation)
     }
+}
+
+/// Angle between the z axis of a body with orientation `[x, y, z, w]` (a quaternion, any
+/// norm) and the world's, degrees: how far it leans from level, whichever way.
+pub fn tilt_deg([x, y, z, w]: [f64; 4]) -> f64 {
+    // The body z axis' world z component: 1 − 2(x² + y²) for a unit quaternion.
+    let n = x * x + y * y + z * z + w * w;
+    let up = 1.0 - 2.0 * (x * x + y * y) / n;
+    up.clamp(-1.0, 1.0).acos().to_degrees()
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -28,6 +28,11 @@ pub struct KeepLineParams {
     /// position and heading when it sets off.
     #[serde(default)]
     pub line: Option<[f64; 3]>,
+    /// While the body leans more than this from level (pitch or roll), degrees in (0, 90),
+    /// the operator pushes straight on and steers back once it is under again, as one does
+    /// over an obstacle; default none: it always steers.
+    #[serde(default)]
+    pub straight_above_tilt_deg: Option<f64>,
 }
 
 fn yes() -> bool {
@@ -51,6 +56,7 @@ impl Default for KeepLineParams {
             lookahead_m: lookahead(),
             max_turn_rad_s: max_turn(),
             line: None,
+            straight_above_tilt_deg: None,
         }
     }
 }
@@ -66,6 +72,14 @@ impl KeepLineParams {
                 ("max_turn_rad_s", self.max_turn_rad_s),
             ],
         )?;
+        if let Some(t) = self
+            .straight_above_tilt_deg
+            .filter(|t| !(*t > 0.0 && *t < 90.0))
+        {
+            return Err(format!(
+                "key 'keep_line.straight_above_tilt_deg': must be above 0 and below 90 degrees, got {t}"
+            ));
+        }
         if let Some(line) = self.line.filter(|l| !l.iter().all(|v| v.is_finite())) {
             return Err(format!(
                 "key 'keep_line.line': must be [x m, y m, heading rad], finite, got {line:?}"
@@ -105,19 +119,23 @@ impl Line {
     }
 }
 
-/// The turn rate to ask for, rad/s (positive turns left), for a robot at `position` (m)
-/// heading `yaw_rad` and driving at `speed_m_s` (its sign says which way the aim point lies:
-/// reversing, the robot closes on the line by turning the other way).
-pub fn turn_rate(
-    p: &KeepLineParams,
-    line: &Line,
-    position: [f64; 2],
-    yaw_rad: f64,
-    speed_m_s: f64,
-) -> f64 {
-    if !p.enabled {
+/// Where the robot is: position on the floor (m), heading (rad) and lean from level (deg).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Attitude {
+    pub position: [f64; 2],
+    pub yaw_rad: f64,
+    pub tilt_deg: f64,
+}
+
+/// The turn rate to ask for, rad/s (positive turns left), for a robot at `at` driving at
+/// `speed_m_s` (its sign says which way the aim point lies: reversing, the robot closes on
+/// the line by turning the other way).
+pub fn turn_rate(p: &KeepLineParams, line: &Line, at: &Attitude, speed_m_s: f64) -> f64 {
+    let leaning = p.straight_above_tilt_deg.is_some_and(|t| at.tilt_deg > t);
+    if !p.enabled || leaning {
         return 0.0;
     }
+    let (position, yaw_rad) = (at.position, at.yaw_rad);
     let toward = if speed_m_s < 0.0 { -1.0 } else { 1.0 };
     let aim = line.heading_rad - toward * (line.left_of(position) / p.lookahead_m).atan();
     let error = caravan_schemas::wrap_angle(aim - yaw_rad);
@@ -137,32 +155,41 @@ mod tests {
         heading_rad: 0.0,
     };
 
+    /// Level, at `position` heading `yaw_rad`.
+    fn at(position: [f64; 2], yaw_rad: f64) -> Attitude {
+        Attitude {
+            position,
+            yaw_rad,
+            tilt_deg: 0.0,
+        }
+    }
+
     #[test]
     fn on_the_line_and_heading_along_it_asks_for_no_turn() {
         let p = KeepLineParams::default();
-        assert_eq!(turn_rate(&p, &ALONG_X, [3.0, 1.5], 0.0, 0.3), 0.0);
+        assert_eq!(turn_rate(&p, &ALONG_X, &at([3.0, 1.5], 0.0), 0.3), 0.0);
     }
 
     #[test]
     fn a_robot_yawed_right_turns_left_and_the_turn_is_bounded() {
         let p = KeepLineParams::default();
-        let w = turn_rate(&p, &ALONG_X, [2.0, 1.5], -0.1, 0.3);
+        let w = turn_rate(&p, &ALONG_X, &at([2.0, 1.5], -0.1), 0.3);
         assert!((w - 0.2).abs() < 1e-12, "{w}");
-        assert_eq!(turn_rate(&p, &ALONG_X, [2.0, 1.5], -1.0, 0.3), 0.5);
-        assert_eq!(turn_rate(&p, &ALONG_X, [2.0, 1.5], 1.0, 0.3), -0.5);
+        assert_eq!(turn_rate(&p, &ALONG_X, &at([2.0, 1.5], -1.0), 0.3), 0.5);
+        assert_eq!(turn_rate(&p, &ALONG_X, &at([2.0, 1.5], 1.0), 0.3), -0.5);
     }
 
     #[test]
     fn a_robot_left_of_the_line_heading_along_it_turns_right_toward_it() {
         let p = KeepLineParams::default();
         // 0.1 m left, 0.5 m look-ahead: aim atan(0.2) to the right.
-        let w = turn_rate(&p, &ALONG_X, [2.0, 1.6], 0.0, 0.3);
+        let w = turn_rate(&p, &ALONG_X, &at([2.0, 1.6], 0.0), 0.3);
         assert!((w + 2.0 * 0.2f64.atan()).abs() < 1e-12, "{w}");
         // Reversing, the aim point lies behind: turn left, so the tail swings toward it.
-        let back = turn_rate(&p, &ALONG_X, [2.0, 1.6], 0.0, -0.3);
+        let back = turn_rate(&p, &ALONG_X, &at([2.0, 1.6], 0.0), -0.3);
         assert!((back - 2.0 * 0.2f64.atan()).abs() < 1e-12, "{back}");
         // Already pointing at the aim point: no turn.
-        assert!(turn_rate(&p, &ALONG_X, [2.0, 1.6], -(0.2f64.atan()), 0.3).abs() < 1e-12);
+        assert!(turn_rate(&p, &ALONG_X, &at([2.0, 1.6], -(0.2f64.atan())), 0.3).abs() < 1e-12);
     }
 
     #[test]
@@ -173,7 +200,7 @@ mod tests {
             heading_rad: std::f64::consts::PI,
         };
         // Heading −179° on a line of 180°: 1° to the right of it, so turn right.
-        let w = turn_rate(&p, &line, [-1.0, 0.0], -179f64.to_radians(), 0.3);
+        let w = turn_rate(&p, &line, &at([-1.0, 0.0], -179f64.to_radians()), 0.3);
         assert!((w + 2.0 * 1f64.to_radians()).abs() < 1e-9, "{w}");
         assert!((line.left_of([-1.0, -0.2]) - 0.2).abs() < 1e-12);
     }
@@ -184,7 +211,7 @@ mod tests {
             enabled: false,
             ..KeepLineParams::default()
         };
-        assert_eq!(turn_rate(&off, &ALONG_X, [2.0, 2.5], 1.0, 0.3), 0.0);
+        assert_eq!(turn_rate(&off, &ALONG_X, &at([2.0, 2.5], 1.0), 0.3), 0.0);
         let bad = KeepLineParams {
             lookahead_m: 0.0,
             ..KeepLineParams::default()
@@ -199,7 +226,33 @@ mod tests {
             ..KeepLineParams::default()
         };
         assert!(bad.validate().unwrap_err().contains("keep_line.line"));
+        for t in [0.0, 90.0, f64::NAN] {
+            let bad = KeepLineParams {
+                straight_above_tilt_deg: Some(t),
+                ..KeepLineParams::default()
+            };
+            let err = bad.validate().unwrap_err();
+            assert!(err.contains("keep_line.straight_above_tilt_deg"), "{err}");
+        }
         assert!(KeepLineParams::default().validate().is_ok());
+    }
+
+    #[test]
+    fn leaning_past_the_threshold_it_drives_straight_on_and_steers_again_when_under() {
+        let p = KeepLineParams {
+            straight_above_tilt_deg: Some(12.0),
+            ..KeepLineParams::default()
+        };
+        let yawed = |tilt_deg| Attitude {
+            tilt_deg,
+            ..at([2.0, 1.5], -0.1)
+        };
+        assert_eq!(turn_rate(&p, &ALONG_X, &yawed(20.0), 0.3), 0.0);
+        let level = turn_rate(&p, &ALONG_X, &yawed(5.0), 0.3);
+        assert!((level - 0.2).abs() < 1e-12, "{level}");
+        // Without the threshold it steers however it leans.
+        let always = turn_rate(&KeepLineParams::default(), &ALONG_X, &yawed(20.0), 0.3);
+        assert_eq!(always, level);
     }
 
     #[test]

@@ -6,13 +6,15 @@
 //! from the robot's pitch (`robot/i/ground_truth`), on `robot/i/flipper_command`.
 //! `keep_line` (on by default) steers back to the line the robot was on when it set off (or
 //! to `keep_line.line`), from its true pose, as an operator with a joystick would
-//! (`caravan_tracked::keep_line`); `keep_line = { enabled = false }` never turns.
+//! (`caravan_tracked::keep_line`); with `keep_line.straight_above_tilt_deg` it pushes straight
+//! on while the body leans more than that; `keep_line = { enabled = false }` never turns.
 
 use caravan::{Node, NodeIdentity, Trigger};
 use caravan_schemas::{JointCommand, JointValue, Name, Twist, topics};
 use caravan_tracked::climb::{Climb, ClimbParams, nose_up_deg};
+use caravan_tracked::crossing::tilt_deg;
 use caravan_tracked::flippers::flipper_command;
-use caravan_tracked::keep_line::{KeepLineParams, Line, turn_rate};
+use caravan_tracked::keep_line::{Attitude, KeepLineParams, Line, turn_rate};
 use caravan_tracked::urdf::{FLIPPER_RANGE_DEG, flipper_joints};
 use serde::Deserialize;
 use std::process::ExitCode;
@@ -115,12 +117,17 @@ fn run(mut node: Node, p: Params) -> Result<(), caravan::Error> {
             (false, _) => (0.0, 0.0),
             (true, None) => (p.speed_m_s, 0.0),
             (true, Some(pose)) => {
-                let position = [pose.position.x, pose.position.y];
-                let yaw = pose.orientation.yaw();
-                let line = *line.get_or_insert_with(|| p.keep_line.line_from(position, yaw));
+                let q = &pose.orientation;
+                let at = Attitude {
+                    position: [pose.position.x, pose.position.y],
+                    yaw_rad: q.yaw(),
+                    tilt_deg: tilt_deg([q.x, q.y, q.z, q.w]),
+                };
+                let line =
+                    *line.get_or_insert_with(|| p.keep_line.line_from(at.position, at.yaw_rad));
                 (
                     p.speed_m_s,
-                    turn_rate(&p.keep_line, &line, position, yaw, p.speed_m_s),
+                    turn_rate(&p.keep_line, &line, &at, p.speed_m_s),
                 )
             }
         };
