@@ -137,12 +137,10 @@ fn bench_transport_bridged_rides_out_a_stalled_relay() {
         String::from_utf8_lossy(&run.stdout),
         String::from_utf8_lossy(&run.stderr)
     );
-    let text = std::fs::read_to_string(out.join("transport.csv")).unwrap();
-    let header = text.lines().find(|l| !l.starts_with('#')).unwrap();
-    let status = header.split(',').position(|h| h == "status").unwrap();
-    let rows = csv_rows(&out.join("transport.csv"));
-    assert_eq!(rows.len(), 1, "{text}");
-    assert_eq!(rows[0][status], "ok", "{text}");
+    let csv = out.join("transport.csv");
+    let rows = csv_rows(&csv);
+    assert_eq!(rows.len(), 1, "{rows:?}");
+    assert_eq!(rows[0][csv_column(&csv, "status")], "ok", "{rows:?}");
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -184,6 +182,19 @@ fn csv_rows(path: &std::path::Path) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// Where column `name` stands in a bench CSV's header.
+fn csv_column(path: &std::path::Path, name: &str) -> usize {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let header = text
+        .lines()
+        .find(|l| !l.starts_with('#'))
+        .expect("a header");
+    header
+        .split(',')
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("no column {name} in {header}"))
+}
+
 #[test]
 fn bench_transport_streams_with_several_messages_in_flight() {
     let out = std::env::temp_dir().join(format!("caravan-bench-window-{}", std::process::id()));
@@ -198,20 +209,15 @@ fn bench_transport_streams_with_several_messages_in_flight() {
         "8",
     ];
     run_bench(&args, &out);
-    let text = std::fs::read_to_string(out.join("transport.csv")).unwrap();
-    let header: Vec<&str> = text
-        .lines()
-        .find(|l| !l.starts_with('#'))
-        .unwrap()
-        .split(',')
-        .collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
-    let rows = csv_rows(&out.join("transport.csv"));
-    assert_eq!(rows.len(), 6, "{text}");
+    let csv = out.join("transport.csv");
+    let [status, in_flight, throughput] =
+        ["status", "in_flight", "throughput_bytes_per_s"].map(|name| csv_column(&csv, name));
+    let rows = csv_rows(&csv);
+    assert_eq!(rows.len(), 6, "{rows:?}");
     for row in &rows {
-        assert_eq!(row[col("status")], "ok", "{row:?}");
-        assert_eq!(row[col("in_flight")], "8", "{row:?}");
-        let throughput: f64 = row[col("throughput_bytes_per_s")].parse().unwrap();
+        assert_eq!(row[status], "ok", "{row:?}");
+        assert_eq!(row[in_flight], "8", "{row:?}");
+        let throughput: f64 = row[throughput].parse().unwrap();
         assert!(throughput > 0.0, "{row:?}");
     }
     let _ = std::fs::remove_dir_all(&out);
