@@ -203,8 +203,14 @@ class Node:
         self, step: Callable[[Step], Any], state: Step, stats: _Stats, due_ns: int, start_ns: int
     ) -> None:
         started = time.perf_counter_ns()
+        cpu_started = time.thread_time_ns()
         step(state)
-        stats.record(start_ns, due_ns, time.perf_counter_ns() - started)
+        stats.record(
+            start_ns,
+            due_ns,
+            time.perf_counter_ns() - started,
+            time.thread_time_ns() - cpu_started,
+        )
         state.index += 1
 
     def _run_realtime(

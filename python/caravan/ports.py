@@ -33,10 +33,13 @@ class _Stats:
         self.jitter_max = 0
         self.compute_max = 0
         self.compute_sum = 0
+        self.cpu_sum = 0
         self.last_start: Optional[int] = None
 
-    def record(self, start_ns: int, due_ns: int, compute_ns: int) -> None:
+    def record(self, start_ns: int, due_ns: int, compute_ns: int, cpu_ns: int) -> None:
+        """One step: wall-clock ``compute_ns`` and the stepping thread's ``cpu_ns`` in it."""
         self.steps += 1
+        self.cpu_sum += cpu_ns
         self.compute.append(compute_ns)
         self.compute_max = max(self.compute_max, compute_ns)
         self.compute_sum += compute_ns
@@ -67,6 +70,7 @@ class _Stats:
         s.compute_mean_ns = self.compute_sum // max(self.steps, 1)
         s.compute_p99_ns = self._quantile(self.compute, 0.99)
         s.compute_max_ns = self.compute_max
+        s.compute_cpu_mean_ns = self.cpu_sum // max(self.steps, 1)
 
 
 # --- ports ---------------------------------------------------------------------------------

@@ -482,7 +482,7 @@ class Scene(Message):
 
 
 class NodeStatus(Message):
-    """``caravan::NodeStatus``: 208 bytes, aligned to 8."""
+    """``caravan::NodeStatus``: 216 bytes, aligned to 8."""
 
     _fields_ = [
         ("node_len", ctypes.c_uint32),
@@ -503,8 +503,9 @@ class NodeStatus(Message):
         ("running", ctypes.c_uint32),
         ("_reserved", ctypes.c_uint32),
         ("rss_kib", ctypes.c_uint64),
+        ("compute_cpu_mean_ns", ctypes.c_uint64),
     ]
-    SIZE = 208
+    SIZE = 216
     ALIGN = 8
     OFFSETS = {
         "node_len": 0,
@@ -525,6 +526,7 @@ class NodeStatus(Message):
         "running": 192,
         "_reserved": 196,
         "rss_kib": 200,
+        "compute_cpu_mean_ns": 208,
     }
 
     @classmethod

@@ -110,11 +110,16 @@ impl Executor<'_> {
         F: FnMut(&mut Step) -> Result<(), Error>,
     {
         let started = Instant::now();
-        self.shared.step_started.set(Some(started));
+        let cpu_started = crate::stats::thread_cpu_ns();
+        self.shared.step_cpu_started_ns.set(Some(cpu_started));
         // Subscribers note what they still hold while the step reads them.
         self.shared.next_arrival_ns.set(u64::MAX);
         step(state)?;
-        stats.record(start_ns, due_ns, started.elapsed().as_nanos() as u64);
+        let compute = crate::StepCompute {
+            wall_ns: started.elapsed().as_nanos() as u64,
+            cpu_ns: crate::stats::thread_cpu_ns().saturating_sub(cpu_started),
+        };
+        stats.record(start_ns, due_ns, compute);
         state.index += 1;
         Ok(())
     }

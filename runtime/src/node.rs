@@ -103,7 +103,7 @@ impl Node {
                 .as_ref()
                 .and_then(|n| NodeNet::new(n, &identity.name, &identity.host)),
             next_arrival_ns: Cell::new(u64::MAX),
-            step_started: Cell::new(None),
+            step_cpu_started_ns: Cell::new(None),
             ports: RefCell::new(Default::default()),
         });
         // Emulated links hold messages past the tick and a CPU slowdown stamps them late:

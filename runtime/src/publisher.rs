@@ -111,14 +111,17 @@ impl<T: Message> Publisher<T> {
     }
 
     /// The message's simulated time: the step's, or in lockstep on a host with a CPU
-    /// slowdown, later by the step's compute time so far times the slowdown (rounded up to
-    /// the tick), as if this machine's computer were that much slower.
+    /// slowdown, later by the step's CPU time so far times the slowdown (rounded up to the
+    /// tick), as if this machine's computer were that much slower. CPU time, not wall-clock
+    /// time: a step that waits for one of the emulating machine's cores would not wait on
+    /// its own computer.
     fn stamp_ns(&self) -> u64 {
         let now = self.shared.now_ns.get();
         let slowdown = self.shared.net.as_ref().and_then(|n| n.slowdown);
-        match (slowdown, self.shared.step_started.get()) {
+        match (slowdown, self.shared.step_cpu_started_ns.get()) {
             (Some(factor), Some(started)) if self.shared.lockstep => {
-                let compute = (started.elapsed().as_nanos() as f64 * factor) as u64;
+                let cpu = crate::stats::thread_cpu_ns().saturating_sub(started);
+                let compute = (cpu as f64 * factor) as u64;
                 let tick = self.shared.tick_ns.get().max(1);
                 now.saturating_add(compute.div_ceil(tick).saturating_mul(tick))
             }

@@ -31,8 +31,9 @@ pub(crate) struct Shared {
     /// Earliest time a message held by a subscriber becomes visible (simulated ns in
     /// lockstep, wall-clock ns in realtime); `u64::MAX` when none is held.
     pub next_arrival_ns: Cell<u64>,
-    /// When the current step started (wall clock), for compute budgets.
-    pub step_started: Cell<Option<std::time::Instant>>,
+    /// The stepping thread's CPU time when the current step started, ns, for compute
+    /// budgets.
+    pub step_cpu_started_ns: Cell<Option<u64>>,
     /// What the node told the lockstep scheduler it touches (see [`Ports`]).
     pub ports: RefCell<Ports>,
 }

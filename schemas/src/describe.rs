@@ -283,7 +283,7 @@ describe! {
     NodeStatus {
         node, host, period_ns, steps, deadline_misses, jitter_p50_ns, jitter_p99_ns,
         jitter_max_ns, compute_mean_ns, compute_p99_ns, compute_max_ns, messages_missed,
-        sim_time_ns, running, _reserved, rss_kib,
+        sim_time_ns, running, _reserved, rss_kib, compute_cpu_mean_ns,
     }
     Collision { robot, other_robot, started, _reserved }
     JointValue { name, position, velocity, effort }

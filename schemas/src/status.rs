@@ -18,7 +18,7 @@ pub struct NodeStatus {
     pub jitter_p50_ns: u64,
     pub jitter_p99_ns: u64,
     pub jitter_max_ns: u64,
-    /// Time spent inside the step function, ns.
+    /// Wall-clock time spent inside the step function, ns.
     pub compute_mean_ns: u64,
     pub compute_p99_ns: u64,
     pub compute_max_ns: u64,
@@ -31,4 +31,7 @@ pub struct NodeStatus {
     pub _reserved: u32,
     /// Resident memory of the node's process, KiB (Linux's /proc/self/statm; 0 elsewhere).
     pub rss_kib: u64,
+    /// CPU time the stepping thread spent inside the step function, mean, ns: what a host's
+    /// `cpu_slowdown` scales.
+    pub compute_cpu_mean_ns: u64,
 }

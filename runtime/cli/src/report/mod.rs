@@ -13,15 +13,16 @@
 //!   schedule (lockstep, else null): {advances, steps, overlapped_steps}}`
 //! - `nodes[]`: `{name, host, required, restarts, exit_status, period_ms (null when stepped by
 //!   messages), steps, rate_hz, deadline_misses, jitter_p50_ms, jitter_p99_ms, jitter_max_ms,
-//!   compute_mean_ms, compute_p99_ms, compute_max_ms, messages_missed, cpu_s (CPU time of the
-//!   process, all runs), max_rss_mib (peak resident memory)}`
+//!   compute_mean_ms, compute_p99_ms, compute_max_ms (wall-clock time in the step),
+//!   compute_cpu_mean_ms (the stepping thread's CPU time in the step), messages_missed, cpu_s
+//!   (CPU time of the process, all runs), max_rss_mib (peak resident memory)}`
 //! - `topics[]`: `{name, type, messages, gaps, latency_us: {p50, p90, p99, max}}`; latency is
 //!   wall-clock time from send to the recorder's receipt.
 //! - `links[]` (when messages crossed emulated network links): `{from, to, delivered, dropped,
 //!   loss_pct, latency_ms: {p50, p90, p99, max}}` per ordered host pair, merged from the
 //!   receiving nodes' `links/<node>.json`; latency is arrival − send in simulated time
 //!   (lockstep) or wall time (realtime), in 0.1 ms bins. `nodes[].emulated_compute_mean_ms`
-//!   is the mean step compute time times the host's `cpu_slowdown` (null without one).
+//!   is the mean step CPU time times the host's `cpu_slowdown` (null without one).
 //! - one key per plugin section (e.g. `convoy`, `slam`), laid out as its plugin documents;
 //! - `failed_sections[]` (only when a plugin failed): `{exec, message}`.
 //!
@@ -168,9 +169,10 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
                 "compute_mean_ms": ms(&s["compute_mean_ns"]),
                 "compute_p99_ms": ms(&s["compute_p99_ns"]),
                 "compute_max_ms": ms(&s["compute_max_ns"]),
-                // What the step took on its emulated host (compute × the host's slowdown).
+                "compute_cpu_mean_ms": ms(&s["compute_cpu_mean_ns"]),
+                // What the step took on its emulated host (CPU time × the host's slowdown).
                 "emulated_compute_mean_ms": slowdown
-                    .and_then(|f| Some(s["compute_mean_ns"].as_u64()? as f64 * f / 1e6)),
+                    .and_then(|f| Some(s["compute_cpu_mean_ns"].as_u64()? as f64 * f / 1e6)),
                 "messages_missed": s["messages_missed"],
                 "cpu_s": p.cpu_s,
                 "max_rss_mib": p.max_rss_mib,
