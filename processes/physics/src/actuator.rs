@@ -124,7 +124,10 @@ pub enum Control {
         stiffness: f64,
         damping: f64,
     },
-    Kinematic,
+    Kinematic {
+        /// Turned as a rim ([`crate::spec::ActuatorSpec::Rim`]).
+        rim: bool,
+    },
     Effort,
 }
 
@@ -178,7 +181,8 @@ impl Actuator {
                 stiffness: *stiffness,
                 damping: *damping,
             },
-            ActuatorSpec::Kinematic { .. } => Control::Kinematic,
+            ActuatorSpec::Kinematic { .. } => Control::Kinematic { rim: false },
+            ActuatorSpec::Rim { .. } => Control::Kinematic { rim: true },
             ActuatorSpec::Effort { .. } => Control::Effort,
             ActuatorSpec::None { .. } => return None,
         };
@@ -200,7 +204,12 @@ impl Actuator {
 
     /// Whether the engine moves this joint kinematically.
     pub fn is_kinematic(&self) -> bool {
-        matches!(self.control, Control::Kinematic)
+        matches!(self.control, Control::Kinematic { .. })
+    }
+
+    /// Whether the engine turns this joint as a rim ([`crate::spec::ActuatorSpec::Rim`]).
+    pub fn is_rim(&self) -> bool {
+        matches!(self.control, Control::Kinematic { rim: true })
     }
 
     /// The DC motor's firmware, when its tick is due at `now_ns`.
@@ -241,7 +250,9 @@ impl Actuator {
             }
             // The engine sets the motor ([`Self::motor`]) and reads its effort back, or moves
             // a kinematic joint ([`Self::kinematic_velocity`]).
-            Control::Motor { .. } | Control::Servo { .. } | Control::Kinematic => return 0.0,
+            Control::Motor { .. } | Control::Servo { .. } | Control::Kinematic { .. } => {
+                return 0.0;
+            }
             Control::Effort => bound(effort_ff),
             Control::Velocity { kp, ki, integral } => {
                 let target = or(t.velocity, 0.0).clamp(-l.velocity, l.velocity);

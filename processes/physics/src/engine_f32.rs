@@ -13,6 +13,8 @@ pub mod applied_wrench;
 pub mod contacts;
 #[path = "engine/joint_state.rs"]
 pub mod joint_state;
+#[path = "engine/rim.rs"]
+pub mod rim;
 #[path = "engine/scene.rs"]
 pub mod scene;
 #[path = "engine/shapes.rs"]

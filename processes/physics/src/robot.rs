@@ -92,6 +92,9 @@ pub struct RobotSetup<'a> {
     /// Joints moved kinematically ([`crate::spec::ActuatorSpec::Kinematic`]); one per joint,
     /// or empty for none.
     pub kinematic: Vec<bool>,
+    /// Wheels turned as rims ([`crate::spec::ActuatorSpec::Rim`]); one per joint, or
+    /// empty for none.
+    pub rim: Vec<bool>,
     /// Fixed joints that carry a force–torque sensor (description indices), from
     /// [`RobotSpec::sensed_joints`]: not welded.
     pub sensed: Vec<usize>,
@@ -119,9 +122,14 @@ impl RobotSetup<'_> {
         (joint.kind != JointKind::Fixed && extra > 0.0).then_some((joint.axis, extra))
     }
 
-    /// Whether joint `j` is moved kinematically.
+    /// Whether joint `j` is moved kinematically by rapier's kinematic joint.
     pub(crate) fn is_kinematic(&self, j: usize) -> bool {
         self.kinematic.get(j).copied().unwrap_or(false)
+    }
+
+    /// Whether joint `j` is a wheel turned as a rim.
+    pub(crate) fn is_rim(&self, j: usize) -> bool {
+        self.rim.get(j).copied().unwrap_or(false)
     }
 }
 

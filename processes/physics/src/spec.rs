@@ -135,6 +135,17 @@ pub enum ActuatorSpec {
     /// are held only by the clamped targets of kinematic and `servo` joints, so every other
     /// joint with limits (revolute, prismatic) is refused. Its `effort` reads 0.
     Kinematic { joints: Vec<String> },
+    /// A wheel (continuous joint) turned exactly as commanded, like `kinematic`, without
+    /// the joint's degree of freedom: the wheel is welded to its parent, the weld's frame
+    /// turns at the commanded speed, and each of its contacts is given the speed of the
+    /// wheel's surface at that point (rapier's contact `tangent_velocity`, and its motion
+    /// along the normal as a change of the contact's distance over the step). To the
+    /// contacts that is the kinematic joint; the multibody's mass matrix, which rapier
+    /// assembles densely over every link, keeps only the robot's other joints (a tracked
+    /// robot's 36 wheels: 8 rows instead of 44, and no work for the 36 links' columns).
+    /// Multibody robots only (on impulse joints the weld's turning frame would spin the
+    /// wheel's body as well), beside any other actuator. Its `effort` reads 0.
+    Rim { joints: Vec<String> },
     /// The commanded effort, bounded by the URDF's.
     Effort { joints: Vec<String> },
     /// A passive joint: no actuator (the default for every joint).
@@ -169,6 +180,7 @@ impl ActuatorSpec {
             | ActuatorSpec::Servo { joints, .. }
             | ActuatorSpec::Position { joints, .. }
             | ActuatorSpec::Kinematic { joints }
+            | ActuatorSpec::Rim { joints }
             | ActuatorSpec::Effort { joints }
             | ActuatorSpec::None { joints } => joints,
         }
@@ -197,6 +209,7 @@ impl ActuatorSpec {
             }
             ActuatorSpec::Position { kp, ki, kd, .. } => &[("kp", *kp), ("ki", *ki), ("kd", *kd)],
             ActuatorSpec::Kinematic { .. }
+            | ActuatorSpec::Rim { .. }
             | ActuatorSpec::Effort { .. }
             | ActuatorSpec::None { .. } => &[],
         };
@@ -399,6 +412,7 @@ impl RobotSpec {
             }
         }
         self.check_kinematic(d, &entry)?;
+        self.check_rims(d, &entry)?;
         Ok(entry
             .iter()
             .map(|k| match &self.actuators[(*k)?] {
@@ -406,6 +420,28 @@ impl RobotSpec {
                 a => Some(a),
             })
             .collect())
+    }
+
+    /// A rim is a wheel's, in a multibody: only continuous joints turn that way.
+    fn check_rims(&self, d: &RobotDescription, entry: &[Option<usize>]) -> Result<(), String> {
+        for (j, &k) in entry.iter().enumerate() {
+            let Some(k) = k else { continue };
+            let rim = matches!(self.actuators[k], ActuatorSpec::Rim { .. });
+            if rim && self.joint_model() != JointModel::Multibody {
+                return Err(format!(
+                    "'actuators[{k}]': a rim needs joints = \"multibody\" (on impulse joints \
+                     the weld's turning frame would also spin the wheel's own body)"
+                ));
+            }
+            if rim && d.joints[j].kind != JointKind::Continuous {
+                return Err(format!(
+                    "'actuators[{k}]': joint '{}' of {} is not continuous; a rim turns wheels \
+                     (continuous joints) only",
+                    d.joints[j].name, d.file
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// A multibody with kinematic joints: rapier 0.36 builds its limit and motor constraints
@@ -441,7 +477,11 @@ impl RobotSpec {
                         d.file
                     ));
                 }
-                Some(ActuatorSpec::Kinematic { .. } | ActuatorSpec::Servo { .. }) => {}
+                Some(
+                    ActuatorSpec::Kinematic { .. }
+                    | ActuatorSpec::Rim { .. }
+                    | ActuatorSpec::Servo { .. },
+                ) => {}
                 _ if matches!(d.joints[j].kind, JointKind::Revolute | JointKind::Prismatic) => {
                     return Err(format!(
                         "'actuators[{k}]': joint '{name}' of {} has limits, which rapier cannot \

@@ -28,6 +28,9 @@ pub struct JointIo {
     pub multibody: Option<MultibodyJointHandle>,
     /// The impulse joint, when it is one (for a motor actuator).
     pub impulse: Option<ImpulseJointHandle>,
+    /// A wheel turned as a rim ([`crate::spec::ActuatorSpec::Rim`]): welded to its
+    /// parent, its speed is the commanded one.
+    pub rim: bool,
     /// Position and speed after the last step.
     pub reading: JointReading,
 }
@@ -66,6 +69,7 @@ impl JointIo {
             axis1,
             multibody: None,
             impulse: None,
+            rim: false,
             reading: JointReading::default(),
         }
     }
@@ -159,6 +163,24 @@ impl JointIo {
         mb.generalized_velocity_mut()[dof] = speed as Real;
     }
 
+    /// Turns a rim at `speed` (rad/s) over the next step: its weld's frame is set to where
+    /// the wheel will be, and its contacts take that speed ([`super::rim`]).
+    pub fn turn_rim(
+        &mut self,
+        impulse: &mut ImpulseJointSet,
+        multibody: &mut MultibodyJointSet,
+        speed: f64,
+        dt: f64,
+    ) {
+        self.reading.velocity = speed;
+        let angle = self.reading.position + speed * dt;
+        let axis = nalgebra::Unit::new_normalize(self.axis);
+        let turned = self.frame * UnitQuaternion::from_axis_angle(&axis, angle);
+        if let Some(data) = self.data_mut(impulse, multibody) {
+            data.set_local_frame1(shapes::pose(&turned));
+        }
+    }
+
     /// The effort rapier's motor applied over the last step, N·m or N: its last substep's
     /// impulse times the substeps, over the step.
     pub fn motor_effort(
@@ -220,11 +242,13 @@ impl JointIo {
                 // target beyond π is reached, not chased round.
                 let previous = self.reading.position;
                 let position = previous + wrap(angle - wrap(previous));
-                JointReading {
-                    position,
-                    velocity: generalized
-                        .unwrap_or_else(|| (b2.angvel() - b1.angvel()).dot(axis_w) as f64),
-                }
+                // A rim's bodies move as one: its speed is the one it was turned at.
+                let velocity = if self.rim {
+                    self.reading.velocity
+                } else {
+                    generalized.unwrap_or_else(|| (b2.angvel() - b1.angvel()).dot(axis_w) as f64)
+                };
+                JointReading { position, velocity }
             }
         };
     }

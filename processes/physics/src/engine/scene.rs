@@ -326,6 +326,12 @@ fn add_robot(
             }
             let wheel = plan.wheels[*link];
             let fixed = r.spec.base == Base::Fixed && body_plan.joint.is_none();
+            // A rim's contacts take its surface speed ([`super::rim`]).
+            let hooks = if d.parent_joint(*link).is_some_and(|j| r.is_rim(j)) {
+                self_filter | ActiveHooks::MODIFY_SOLVER_CONTACTS
+            } else {
+                self_filter
+            };
             // Several primitives on a link (a gear's rim and teeth) make one compound
             // collider: one broad-phase entry instead of one per part.
             if let Some(shape) = shapes::compound(&l.collisions, link_pose, fixed) {
@@ -333,7 +339,7 @@ fn add_robot(
                     .friction(friction_of(*link) as Real)
                     .friction_combine_rule(CoefficientCombineRule::Min)
                     .collision_groups(groups::BODY_GROUPS)
-                    .active_hooks(self_filter)
+                    .active_hooks(hooks)
                     .user_data(part.encode());
                 builder = match &inertial {
                     Some(i) => builder.mass_properties(shapes::mass_properties(
@@ -360,7 +366,7 @@ fn add_robot(
                     } else {
                         groups::BODY_GROUPS
                     })
-                    .active_hooks(self_filter)
+                    .active_hooks(hooks)
                     .user_data(part.encode());
                 builder = match (&inertial, k) {
                     (Some(i), 0) => builder.mass_properties(shapes::mass_properties(
@@ -381,6 +387,7 @@ fn add_robot(
                                 .friction(r.spec.wheel_friction as Real)
                                 .friction_combine_rule(CoefficientCombineRule::Min)
                                 .collision_groups(groups::TYRE_GROUPS)
+                                .active_hooks(hooks & ActiveHooks::MODIFY_SOLVER_CONTACTS)
                                 .user_data(part.encode()),
                             Some(handle),
                         ),
@@ -406,7 +413,15 @@ fn add_robot(
             let joint = &d.joints[j.joint];
             let parent = bodies[j.parent_body];
             let kinematic = r.is_kinematic(j.joint);
-            let mut generic = shapes::joint(joint, &j.frame);
+            // A rim is welded to its parent; the simulation turns the weld's frame.
+            let mut generic = if r.is_rim(j.joint) {
+                FixedJointBuilder::new()
+                    .local_frame1(shapes::pose(&j.frame))
+                    .contacts_enabled(false)
+                    .into()
+            } else {
+                shapes::joint(joint, &j.frame)
+            };
             if with_kinematic {
                 // rapier cannot hold limits in a multibody with kinematic joints; the
                 // actuators' targets are clamped to them (see `ActuatorSpec::Kinematic`).

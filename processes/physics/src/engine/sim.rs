@@ -7,6 +7,7 @@ use super::applied_wrench::ActiveWrench;
 use super::contacts::ContactMonitor;
 use super::joint_state::{JointIo, Loads};
 use super::rapier::prelude::*;
+use super::rim::{Rims, StepHooks};
 use super::scene::{self, Scene};
 use crate::actuator::{Actuator, Target};
 use crate::robot::{ContactPoint, Outputs, RobotBuild, RobotSetup, SimConfig};
@@ -40,6 +41,8 @@ pub struct Simulation {
     cfg: SimConfig,
     robots: Vec<RobotState>,
     loads: Loads,
+    /// Wheels turned as rims, and their speeds.
+    rims: Rims,
     contacts: ContactMonitor,
     events: Vec<Collision>,
     time_ns: u64,
@@ -52,6 +55,7 @@ impl Simulation {
         let mut scene = scene::build(world, &setups, &cfg)?;
         scene.physics.integration_parameters.dt = cfg.dt_ns as Real * 1e-9;
         let mut robots = Vec::with_capacity(builds.len());
+        let mut rims = Rims::default();
         for (i, build) in builds.into_iter().enumerate() {
             let d = build.setup.description;
             let bodies = &scene.robots[i];
@@ -76,6 +80,14 @@ impl Simulation {
                     Some(scene::JointHandle::Multibody(h)) => io.multibody = Some(h),
                     Some(scene::JointHandle::Impulse(h)) => io.impulse = Some(h),
                     None => {}
+                }
+                if build.setup.is_rim(j) {
+                    io.rim = true;
+                    rims.add(
+                        i,
+                        d.joints[j].child,
+                        super::shapes::vector(&d.joints[j].axis),
+                    );
                 }
                 io.read(&scene.physics.bodies, &scene.physics.multibody_joints);
                 index_of[j] = joints.len();
@@ -119,6 +131,7 @@ impl Simulation {
             cfg,
             robots,
             loads: Loads::default(),
+            rims,
             contacts: ContactMonitor::default(),
             events: Vec::new(),
             time_ns: 0,
@@ -228,7 +241,7 @@ impl Simulation {
         let dt = self.cfg.dt_ns as f64 * 1e-9;
         let physics = &mut self.scene.physics;
         let bodies = &mut physics.bodies;
-        for (r, rb) in self.robots.iter_mut().zip(&self.scene.robots) {
+        for (i, (r, rb)) in self.robots.iter_mut().zip(&self.scene.robots).enumerate() {
             for a in r.actuators.iter_mut().flatten() {
                 a.firmware_tick(self.time_ns);
             }
@@ -237,7 +250,7 @@ impl Simulation {
                 b.reset_torques(false);
                 b.reset_forces(false);
             }
-            for (io, a) in r.joints.iter().zip(&mut r.actuators) {
+            for (io, a) in r.joints.iter_mut().zip(&mut r.actuators) {
                 if let Some(a) = a {
                     if let Some(motor) = a.motor() {
                         let joints = &mut physics.impulse_joints;
@@ -245,7 +258,14 @@ impl Simulation {
                         continue;
                     }
                     if let Some(speed) = a.kinematic_velocity(io.reading, dt) {
-                        io.set_kinematic_velocity(&mut physics.multibody_joints, speed);
+                        if io.rim {
+                            let joints = &mut physics.impulse_joints;
+                            io.turn_rim(joints, &mut physics.multibody_joints, speed, dt);
+                            let link = r.description.joints[io.joint].child;
+                            self.rims.set_speed(i, link, speed);
+                        } else {
+                            io.set_kinematic_velocity(&mut physics.multibody_joints, speed);
+                        }
                         continue;
                     }
                     let tau = a.torque(io.reading, dt);
@@ -262,9 +282,11 @@ impl Simulation {
             }
         }
         self.loads.apply(bodies);
-        self.scene
-            .physics
-            .step_with_events(&scene::NoSelfContacts, &());
+        let hooks = StepHooks {
+            rims: &self.rims,
+            dt: dt as Real,
+        };
+        self.scene.physics.step_with_events(&hooks, &());
         self.time_ns += self.cfg.dt_ns;
         let physics = &mut self.scene.physics;
         let per_second = physics.integration_parameters.num_solver_iterations as f64 / dt;

@@ -162,9 +162,33 @@ fn kinematic_joints_refuse_what_rapier_cannot_solve_beside_them() {
             "joint 'fore_joint'",
         ),
     ];
+    check_actuator_errors(&cases);
+}
+
+#[test]
+fn a_rim_is_refused_on_a_joint_that_is_not_a_wheels_or_outside_a_multibody() {
+    check_actuator_errors(&[
+        (
+            serde_json::json!({ "urdf": "arm3.urdf", "base": "fixed", "joints": "multibody",
+                "actuators": [{ "type": "position", "joints": ["*"] },
+                    { "type": "rim", "joints": ["fore_joint"] }] }),
+            1,
+            "is not continuous; a rim turns wheels",
+        ),
+        (
+            serde_json::json!({ "urdf": "overlap.urdf", "joints": "impulse",
+                "actuators": [{ "type": "rim", "joints": ["*"] }] }),
+            0,
+            "a rim needs joints = \"multibody\"",
+        ),
+    ]);
+}
+
+/// Each robot's params fail naming `robots[0].actuators[entry]` and saying `says`.
+fn check_actuator_errors(cases: &[(serde_json::Value, usize, &str)]) {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/robots");
     for (robot, entry, says) in cases {
-        let mut robot = robot;
+        let mut robot = robot.clone();
         robot["poses"] = serde_json::json!([[2.0, 2.0, 0.0]]);
         let params: Params = caravan::parse_params(
             "physics",

@@ -1,5 +1,5 @@
 //! What rows of overlapping wheels need: no contacts between a robot's own links, rapier's
-//! velocity motors or kinematic joints on the wheels, a world's own friction.
+//! velocity motors, kinematic joints or rims on the wheels, a world's own friction.
 
 use caravan_physics::actuator::Target;
 use caravan_physics::{Params, Simulation, load};
@@ -41,7 +41,11 @@ fn rolls_at_rim_speed(joints: &str, actuator: &str) -> Simulation {
     s.advance_to(5_000_000_000, u64::MAX);
     let moved = s.pose(0).x - x0;
     assert!((moved - 0.4).abs() < 0.02, "{actuator}: moved {moved} m");
-    assert!(s.twist(0).angular.y.abs() < 0.05, "{actuator}: rolls level");
+    assert!(
+        s.twist(0).angular.y.abs() < 0.05,
+        "{joints} {actuator}: rolls level: {:?}",
+        s.twist(0)
+    );
     s
 }
 
@@ -122,4 +126,22 @@ fn kinematic_wheels_roll_a_multibody_at_their_rim_speed_and_no_faster_than_the_l
         (speed - 20.0).abs() < 1e-4,
         "clamped to the URDF's 20 rad/s: {speed}"
     );
+}
+
+#[test]
+fn rims_roll_a_multibody_at_their_rim_speed_and_report_their_turn() {
+    let mut s = rolls_at_rim_speed("multibody", "rim");
+    for (name, position, speed, effort) in s.joints(0) {
+        // Turned exactly: 4 rad/s for 5 s, whatever the load.
+        assert!((speed - 4.0).abs() < 1e-9, "{name}: {speed} rad/s");
+        assert!((position - 20.0).abs() < 0.01, "{name}: {position} rad");
+        assert_eq!(effort, 0.0, "{name}");
+    }
+    // Backwards, and clamped to the URDF's 20 rad/s like a kinematic joint.
+    spin(&mut s, -50.0);
+    let x0 = s.pose(0).x;
+    s.advance_to(6_000_000_000, u64::MAX);
+    let (_, _, speed, _) = s.joints(0).next().unwrap();
+    assert_eq!(speed, -20.0);
+    assert!(s.pose(0).x < x0 - 0.3, "rolled back to {}", s.pose(0).x);
 }
