@@ -114,7 +114,11 @@ impl Executor<'_> {
         self.shared.step_cpu_started_ns.set(Some(cpu_started));
         // Subscribers note what they still hold while the step reads them.
         self.shared.next_arrival_ns.set(u64::MAX);
-        step(state)?;
+        let stepped = step(state);
+        // Outside a step (a final status, a message published between steps) nothing is
+        // computing: its messages carry the step's time.
+        self.shared.step_cpu_started_ns.set(None);
+        stepped?;
         let compute = crate::StepCompute {
             wall_ns: started.elapsed().as_nanos() as u64,
             cpu_ns: crate::stats::thread_cpu_ns().saturating_sub(cpu_started),

@@ -9,28 +9,35 @@
 //!
 //! That is what rapier's kinematic joint gives the contacts, without the joint's degree of
 //! freedom: the multibody's mass matrix, which rapier assembles densely over every link's
-//! Jacobian, keeps only the robot's other joints.
+//! Jacobian, keeps only the robot's other joints. One difference: where the normal motion
+//! would close the gap within the step, rapier sees a penetration and pushes out over a few
+//! steps (at most its corrective speed), where the kinematic joint's velocity is resolved at
+//! once; a tooth pressing an edge is a little softer. The geometry's turn takes effect because
+//! rapier runs every multibody's forward kinematics at the start of each step, from the joints'
+//! frames.
 
 use super::rapier::prelude::*;
 use super::scene::{NoSelfContacts, Part};
 
-/// One turning wheel: its speed and its axis in its link's frame.
+/// One turning wheel: its speed and its axis in its body's frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Rim {
     /// rad/s, as last commanded.
     speed: Real,
-    /// Unit axis in the wheel link's frame (the joint's axis).
+    /// Unit axis in the wheel body's frame (the joint's axis; the body's frame is the wheel
+    /// link's, its centre on the axis).
     axis: Vector,
 }
 
-/// The rims of every robot, by robot and link.
+/// The rims of every robot, by robot and link (the wheel's link and any welded to it).
 #[derive(Debug, Clone, Default)]
 pub struct Rims {
     links: Vec<Vec<Option<Rim>>>,
 }
 
 impl Rims {
-    /// Makes link `link` of robot `robot` a rim turning about `axis` (its link's frame).
+    /// Makes link `link` of robot `robot` part of a rim turning about `axis` (its body's
+    /// frame).
     pub fn add(&mut self, robot: usize, link: usize, axis: Vector) {
         if self.links.len() <= robot {
             self.links.resize(robot + 1, Vec::new());

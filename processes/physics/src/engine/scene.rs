@@ -326,8 +326,9 @@ fn add_robot(
             }
             let wheel = plan.wheels[*link];
             let fixed = r.spec.base == Base::Fixed && body_plan.joint.is_none();
-            // A rim's contacts take its surface speed ([`super::rim`]).
-            let hooks = if d.parent_joint(*link).is_some_and(|j| r.is_rim(j)) {
+            // A rim's contacts (its link's and any welded to it) take its surface speed
+            // ([`super::rim`]).
+            let hooks = if body_plan.joint.as_ref().is_some_and(|j| r.is_rim(j.joint)) {
                 self_filter | ActiveHooks::MODIFY_SOLVER_CONTACTS
             } else {
                 self_filter

@@ -83,11 +83,11 @@ impl Simulation {
                 }
                 if build.setup.is_rim(j) {
                     io.rim = true;
-                    rims.add(
-                        i,
-                        d.joints[j].child,
-                        super::shapes::vector(&d.joints[j].axis),
-                    );
+                    // Every link welded into the wheel's body turns with it.
+                    let axis = super::shapes::vector(&d.joints[j].axis);
+                    for (link, _) in &bodies.plan.bodies[body].links {
+                        rims.add(i, *link, axis);
+                    }
                 }
                 io.read(&scene.physics.bodies, &scene.physics.multibody_joints);
                 index_of[j] = joints.len();
@@ -261,8 +261,10 @@ impl Simulation {
                         if io.rim {
                             let joints = &mut physics.impulse_joints;
                             io.turn_rim(joints, &mut physics.multibody_joints, speed, dt);
-                            let link = r.description.joints[io.joint].child;
-                            self.rims.set_speed(i, link, speed);
+                            let body = rb.plan.body_of_joint(io.joint).expect("a rim's body");
+                            for (link, _) in &rb.plan.bodies[body].links {
+                                self.rims.set_speed(i, *link, speed);
+                            }
                         } else {
                             io.set_kinematic_velocity(&mut physics.multibody_joints, speed);
                         }

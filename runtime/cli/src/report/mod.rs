@@ -170,9 +170,12 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
                 "compute_p99_ms": ms(&s["compute_p99_ns"]),
                 "compute_max_ms": ms(&s["compute_max_ns"]),
                 "compute_cpu_mean_ms": ms(&s["compute_cpu_mean_ns"]),
-                // What the step took on its emulated host (CPU time × the host's slowdown).
-                "emulated_compute_mean_ms": slowdown
-                    .and_then(|f| Some(s["compute_cpu_mean_ns"].as_u64()? as f64 * f / 1e6)),
+                // What the step took on its emulated host (CPU time × the host's slowdown;
+                // runs recorded before CPU time was measured: wall-clock time, as then).
+                "emulated_compute_mean_ms": slowdown.and_then(|f| {
+                    let cpu = s["compute_cpu_mean_ns"].as_u64();
+                    Some(cpu.or(s["compute_mean_ns"].as_u64())? as f64 * f / 1e6)
+                }),
                 "messages_missed": s["messages_missed"],
                 "cpu_s": p.cpu_s,
                 "max_rss_mib": p.max_rss_mib,
