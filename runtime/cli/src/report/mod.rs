@@ -144,6 +144,14 @@ fn ms(ns: &Value) -> Value {
     ns.as_u64().map_or(Value::Null, |n| json!(n as f64 / 1e6))
 }
 
+/// What a node's step took on its emulated host, ms: its CPU time times the host's slowdown
+/// (`None` without one). Runs recorded before CPU time was measured: wall-clock time, as
+/// their stamps were.
+fn emulated_compute_ms(status: &Value, slowdown: Option<f64>) -> Option<f64> {
+    let cpu = status["compute_cpu_mean_ns"].as_u64();
+    Some(cpu.or(status["compute_mean_ns"].as_u64())? as f64 * slowdown? / 1e6)
+}
+
 fn nodes(facts: &RunFacts) -> Vec<Value> {
     facts
         .processes
@@ -170,12 +178,7 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
                 "compute_p99_ms": ms(&s["compute_p99_ns"]),
                 "compute_max_ms": ms(&s["compute_max_ns"]),
                 "compute_cpu_mean_ms": ms(&s["compute_cpu_mean_ns"]),
-                // What the step took on its emulated host (CPU time × the host's slowdown;
-                // runs recorded before CPU time was measured: wall-clock time, as then).
-                "emulated_compute_mean_ms": slowdown.and_then(|f| {
-                    let cpu = s["compute_cpu_mean_ns"].as_u64();
-                    Some(cpu.or(s["compute_mean_ns"].as_u64())? as f64 * f / 1e6)
-                }),
+                "emulated_compute_mean_ms": emulated_compute_ms(&s, slowdown),
                 "messages_missed": s["messages_missed"],
                 "cpu_s": p.cpu_s,
                 "max_rss_mib": p.max_rss_mib,
@@ -209,4 +212,20 @@ fn topics(facts: &RunFacts, messages: &[RecordedMessage]) -> Vec<Value> {
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::emulated_compute_ms;
+    use serde_json::json;
+
+    #[test]
+    fn emulated_compute_scales_cpu_time_or_an_older_runs_wall_time() {
+        let now = json!({ "compute_mean_ns": 9_000_000, "compute_cpu_mean_ns": 2_000_000 });
+        assert_eq!(emulated_compute_ms(&now, Some(10.0)), Some(20.0));
+        assert_eq!(emulated_compute_ms(&now, None), None);
+        let older = json!({ "compute_mean_ns": 3_000_000 });
+        assert_eq!(emulated_compute_ms(&older, Some(10.0)), Some(30.0));
+        assert_eq!(emulated_compute_ms(&json!(null), Some(10.0)), None);
+    }
 }
