@@ -56,6 +56,13 @@ impl Rims {
         }
     }
 
+    /// The spin of link `link` of robot `robot` relative to its body, in the body's frame
+    /// (rad/s about the axis); `None` for a link that is not part of a rim.
+    pub fn spin(&self, robot: usize, link: usize) -> Option<Vector> {
+        let rim = self.of(Part::Link { robot, link })?;
+        Some(rim.axis * rim.speed)
+    }
+
     fn of(&self, part: Part) -> Option<Rim> {
         let Part::Link { robot, link } = part else {
             return None;
@@ -160,6 +167,7 @@ mod tests {
             rims.of(Part::Link { robot: 1, link: 3 }).unwrap().speed,
             4.0
         );
+        assert_eq!(rims.spin(1, 3), Some(Vector::new(0.0, 4.0, 0.0)));
         assert!(rims.of(Part::Link { robot: 0, link: 3 }).is_none());
         assert!(rims.of(Part::Link { robot: 1, link: 9 }).is_none());
         assert!(rims.of(Part::Floor).is_none());

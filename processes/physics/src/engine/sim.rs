@@ -366,8 +366,14 @@ impl Simulation {
         rb.plan
             .link_body
             .iter()
-            .map(|(b, in_body)| {
+            .enumerate()
+            .map(|(link, (b, in_body))| {
                 let body = &bodies[rb.bodies[*b]];
+                // A rim's body does not spin; its link does.
+                let spin = self
+                    .rims
+                    .spin(i, link)
+                    .map_or(Vector::ZERO, |w| *body.rotation() * w);
                 let pose = *body.position() * super::shapes::pose(in_body);
                 let origin = pose.translation;
                 let q = pose.rotation;
@@ -380,7 +386,10 @@ impl Simulation {
                         w: q.w as f64,
                     },
                 };
-                (p3, twist_of(body.velocity_at_point(origin), body.angvel()))
+                (
+                    p3,
+                    twist_of(body.velocity_at_point(origin), body.angvel() + spin),
+                )
             })
             .collect()
     }

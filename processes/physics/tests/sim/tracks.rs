@@ -137,6 +137,10 @@ fn rims_roll_a_multibody_at_their_rim_speed_and_report_their_turn() {
         assert!((position - 20.0).abs() < 0.01, "{name}: {position} rad");
         assert_eq!(effort, 0.0, "{name}");
     }
+    // The wheel's link spins in `link_states`, though its body does not.
+    let wheel = s.description(0).link("left_a").unwrap();
+    let (_, twist) = &s.link_states(0)[wheel];
+    assert!((twist.angular.y - 4.0).abs() < 0.05, "{twist:?}");
     // Backwards, and clamped to the URDF's 20 rad/s like a kinematic joint.
     spin(&mut s, -50.0);
     let x0 = s.pose(0).x;
