@@ -71,7 +71,7 @@ impl Rims {
     }
 }
 
-/// A rim in contact: its speed and axis, and its body's centre and rotation (world frame).
+/// A rim in contact: its speed, and its axis and centre (world frame).
 #[derive(Clone, Copy)]
 struct Turning {
     speed: Real,
