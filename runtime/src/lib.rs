@@ -58,7 +58,7 @@ pub use params::parse_params;
 pub use publisher::{Loan, Publisher};
 pub use rate::{MAX_DURATION, MIN_PERIOD, Trigger, parse_duration, parse_rate, seconds};
 pub use spin::{MAX_SPIN, parse_spin};
-pub use stats::{StepCompute, StepStats};
+pub use stats::{StepCompute, StepStats, process_cpu_ns, thread_cpu_ns};
 pub use subscriber::{Received, Subscriber};
 
 /// Wall-clock time (CLOCK_REALTIME) in nanoseconds since the Unix epoch.

@@ -28,9 +28,9 @@ pub struct JointIo {
     pub multibody: Option<MultibodyJointHandle>,
     /// The impulse joint, when it is one (for a motor actuator).
     pub impulse: Option<ImpulseJointHandle>,
-    /// A wheel turned as a rim ([`crate::spec::ActuatorSpec::Rim`]): welded to its
-    /// parent, its speed is the commanded one.
-    pub rim: bool,
+    /// A wheel turned as a rim ([`crate::spec::ActuatorSpec::Rim`]), its index in the
+    /// simulation's [`super::rim::Rims`]: welded to its parent, its speed is the commanded one.
+    pub rim: Option<usize>,
     /// Position and speed after the last step.
     pub reading: JointReading,
 }
@@ -69,7 +69,7 @@ impl JointIo {
             axis1,
             multibody: None,
             impulse: None,
-            rim: false,
+            rim: None,
             reading: JointReading::default(),
         }
     }
@@ -243,7 +243,7 @@ impl JointIo {
                 let previous = self.reading.position;
                 let position = previous + wrap(angle - wrap(previous));
                 // A rim's bodies move as one: its speed is the one it was turned at.
-                let velocity = if self.rim {
+                let velocity = if self.rim.is_some() {
                     self.reading.velocity
                 } else {
                     generalized.unwrap_or_else(|| (b2.angvel() - b1.angvel()).dot(axis_w) as f64)

@@ -29,31 +29,41 @@ struct Rim {
     axis: Vector,
 }
 
-/// The rims of every robot, by robot and link (the wheel's link and any welded to it).
+/// The rims of every robot: each rim once, and which links (by robot) belong to it: the
+/// wheel's link and any welded to it.
 #[derive(Debug, Clone, Default)]
 pub struct Rims {
-    links: Vec<Vec<Option<Rim>>>,
+    rims: Vec<Rim>,
+    links: Vec<Vec<Option<usize>>>,
 }
 
 impl Rims {
-    /// Makes link `link` of robot `robot` part of a rim turning about `axis` (its body's
-    /// frame).
-    pub fn add(&mut self, robot: usize, link: usize, axis: Vector) {
+    /// Adds a rim of robot `robot` made of `links`, turning about `axis` (its body's frame);
+    /// returns its index for [`Self::set_speed`].
+    pub fn add(
+        &mut self,
+        robot: usize,
+        links: impl IntoIterator<Item = usize>,
+        axis: Vector,
+    ) -> usize {
+        let rim = self.rims.len();
+        self.rims.push(Rim { speed: 0.0, axis });
         if self.links.len() <= robot {
             self.links.resize(robot + 1, Vec::new());
         }
-        let links = &mut self.links[robot];
-        if links.len() <= link {
-            links.resize(link + 1, None);
+        let of_robot = &mut self.links[robot];
+        for link in links {
+            if of_robot.len() <= link {
+                of_robot.resize(link + 1, None);
+            }
+            of_robot[link] = Some(rim);
         }
-        links[link] = Some(Rim { speed: 0.0, axis });
+        rim
     }
 
-    /// Sets the speed of a rim added before, rad/s.
-    pub fn set_speed(&mut self, robot: usize, link: usize, speed: f64) {
-        if let Some(Some(rim)) = self.links.get_mut(robot).and_then(|l| l.get_mut(link)) {
-            rim.speed = speed as Real;
-        }
+    /// Sets the speed of rim `rim` (from [`Self::add`]), rad/s.
+    pub fn set_speed(&mut self, rim: usize, speed: f64) {
+        self.rims[rim].speed = speed as Real;
     }
 
     /// The spin of link `link` of robot `robot` relative to its body, in the body's frame
@@ -67,7 +77,8 @@ impl Rims {
         let Part::Link { robot, link } = part else {
             return None;
         };
-        *self.links.get(robot)?.get(link)?
+        let rim = (*self.links.get(robot)?.get(link)?)?;
+        Some(self.rims[rim])
     }
 }
 
@@ -160,9 +171,8 @@ mod tests {
     #[test]
     fn rims_are_found_by_robot_and_link_only() {
         let mut rims = Rims::default();
-        rims.add(1, 3, Vector::new(0.0, 1.0, 0.0));
-        rims.set_speed(1, 3, 4.0);
-        rims.set_speed(0, 3, 9.0); // not a rim: ignored
+        let rim = rims.add(1, [3], Vector::new(0.0, 1.0, 0.0));
+        rims.set_speed(rim, 4.0);
         assert_eq!(
             rims.of(Part::Link { robot: 1, link: 3 }).unwrap().speed,
             4.0

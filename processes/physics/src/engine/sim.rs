@@ -82,12 +82,10 @@ impl Simulation {
                     None => {}
                 }
                 if build.setup.is_rim(j) {
-                    io.rim = true;
                     // Every link welded into the wheel's body turns with it.
+                    let links = bodies.plan.bodies[body].links.iter().map(|(l, _)| *l);
                     let axis = super::shapes::vector(&d.joints[j].axis);
-                    for (link, _) in &bodies.plan.bodies[body].links {
-                        rims.add(i, *link, axis);
-                    }
+                    io.rim = Some(rims.add(i, links, axis));
                 }
                 io.read(&scene.physics.bodies, &scene.physics.multibody_joints);
                 index_of[j] = joints.len();
@@ -241,7 +239,7 @@ impl Simulation {
         let dt = self.cfg.dt_ns as f64 * 1e-9;
         let physics = &mut self.scene.physics;
         let bodies = &mut physics.bodies;
-        for (i, (r, rb)) in self.robots.iter_mut().zip(&self.scene.robots).enumerate() {
+        for (r, rb) in self.robots.iter_mut().zip(&self.scene.robots) {
             for a in r.actuators.iter_mut().flatten() {
                 a.firmware_tick(self.time_ns);
             }
@@ -258,13 +256,10 @@ impl Simulation {
                         continue;
                     }
                     if let Some(speed) = a.kinematic_velocity(io.reading, dt) {
-                        if io.rim {
+                        if let Some(rim) = io.rim {
                             let joints = &mut physics.impulse_joints;
                             io.turn_rim(joints, &mut physics.multibody_joints, speed, dt);
-                            let body = rb.plan.body_of_joint(io.joint).expect("a rim's body");
-                            for (link, _) in &rb.plan.bodies[body].links {
-                                self.rims.set_speed(i, *link, speed);
-                            }
+                            self.rims.set_speed(rim, speed);
                         } else {
                             io.set_kinematic_velocity(&mut physics.multibody_joints, speed);
                         }

@@ -18,14 +18,6 @@ pub fn cpu_ns(pid: u32) -> Option<u64> {
     Some(total)
 }
 
-/// Nanoseconds this process (every thread of it) has run on a CPU, to the nanosecond.
-fn own_cpu_ns() -> u64 {
-    // SAFETY: clock_gettime only writes the timespec it is given.
-    let mut ts: libc::timespec = unsafe { std::mem::zeroed() };
-    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
-}
-
 /// The CPU time of this process and of others from a start to now.
 pub struct CpuMeter {
     others: Vec<u32>,
@@ -43,7 +35,7 @@ impl CpuMeter {
 
     fn total(&self) -> Option<u64> {
         let others: Option<u64> = self.others.iter().map(|&p| cpu_ns(p)).sum();
-        Some(own_cpu_ns() + others?)
+        Some(caravan::process_cpu_ns() + others?)
     }
 
     /// Starts counting from now.
