@@ -5,7 +5,7 @@
 //! the primitives act, and a run-out strip, along +x (the driving direction). Each
 //! primitive proposes a height for the blocks it acts on; a block takes the highest proposal
 //! (heights never add), or [`GROUND_M`] where none acts. Only the area primitives (random,
-//! Gaussian) make holes: walls and peaks fall to ground, not below. Each primitive draws from its own generator seeded
+//! Gaussian) make holes: walls, peaks and hills fall to ground, not below. Each primitive draws from its own generator seeded
 //! from (seed, its index), so adding a primitive leaves the others' blocks as they were.
 
 use rand::{Rng, SeedableRng};
@@ -96,6 +96,13 @@ pub enum Primitive {
         height: f64,
         radius: f64,
     },
+    /// `count` (1–100) Gaussian hills of `height` m (a step above ground) and spread `sigma`
+    /// m (> 0), each centred at a uniformly random point at least 2 σ inside the field's
+    /// edges (its middle, along a side shorter than 4 σ): a hill proposes
+    /// ground + (`height` − ground)·exp(−r²/2σ²) rounded to the nearest step, where that is
+    /// above ground. So a hill is a round staircase: its top step within 0.76 σ of the
+    /// centre when it is two steps high (the reference's "random Gaussian" obstacle).
+    Hills { count: u32, height: f64, sigma: f64 },
 }
 
 fn forty_five() -> f64 {
@@ -277,6 +284,23 @@ pub fn validate(spec: &Spec) -> Result<(), String> {
                 ladder(&key("height"), height)?;
                 positive(&key("radius"), radius)?;
             }
+            Primitive::Hills {
+                count,
+                height,
+                sigma,
+            } => {
+                if !(1..=100).contains(&count) {
+                    return Err(format!("{}: {count} must be 1 to 100", key("count")));
+                }
+                ladder(&key("height"), height)?;
+                if height <= GROUND_M {
+                    return Err(format!(
+                        "{}: {height} must be above the ground, {GROUND_M}",
+                        key("height")
+                    ));
+                }
+                positive(&key("sigma"), sigma)?;
+            }
         }
     }
     Ok(())
@@ -300,14 +324,39 @@ fn slope(height: f64, f: f64) -> f64 {
 }
 
 impl Primitive {
+    /// The points this primitive places before it proposes heights: the hills' centres
+    /// (field coordinates, m), none for the others.
+    fn centres(&self, field: [f64; 2], rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
+        match *self {
+            Primitive::Hills { count, sigma, .. } => {
+                // A hill's stairs reach 1.67 σ (two steps); centres 2 σ inside the field keep
+                // it whole, not cut by the field's edge into a wall (or at the middle of a
+                // field too small for that).
+                let along = |len: f64, rng: &mut ChaCha8Rng| {
+                    let margin = 2.0 * sigma;
+                    if len > 2.0 * margin {
+                        rng.random_range(margin..len - margin)
+                    } else {
+                        len / 2.0
+                    }
+                };
+                (0..count)
+                    .map(|_| [along(field[0], rng), along(field[1], rng)])
+                    .collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
     /// This primitive's proposal for the block whose centre is (`x`, `y`) in field
-    /// coordinates, m (`field` is the field's extent), or `None` where it does not act.
+    /// coordinates, m (`field` is the field's extent; `centres` from [`Self::centres`]), or
+    /// `None` where it does not act.
     fn height(
         &self,
-        x: f64,
-        y: f64,
+        [x, y]: [f64; 2],
         field: [f64; 2],
         flank_m: f64,
+        centres: &[[f64; 2]],
         rng: &mut ChaCha8Rng,
     ) -> Option<f64> {
         match *self {
@@ -351,6 +400,18 @@ impl Primitive {
                 let r = (x - center[0]).hypot(y - center[1]);
                 (r < radius).then(|| slope(height, r / radius))
             }
+            Primitive::Hills { height, sigma, .. } => {
+                let top = centres
+                    .iter()
+                    .map(|c| {
+                        let r2 = (x - c[0]).powi(2) + (y - c[1]).powi(2);
+                        nearest_step(
+                            GROUND_M + (height - GROUND_M) * (-r2 / (2.0 * sigma * sigma)).exp(),
+                        )
+                    })
+                    .fold(GROUND_M, f64::max);
+                (top > GROUND_M).then_some(top)
+            }
         }
     }
 }
@@ -371,10 +432,11 @@ pub fn generate(spec: &Spec, seed: u64) -> Grid {
     let mut proposals: Vec<Option<f64>> = vec![None; nx * ny];
     for (i, p) in spec.primitives.iter().enumerate() {
         let mut rng = ChaCha8Rng::seed_from_u64(primitive_seed(seed, i));
+        let centres = p.centres(t.field, &mut rng);
         for iy in 0..ny {
             for fx in 0..field_nx {
-                let (x, y) = ((fx as f64 + 0.5) * CELL_M, (iy as f64 + 0.5) * CELL_M);
-                if let Some(h) = p.height(x, y, t.field, t.flank, &mut rng) {
+                let xy = [(fx as f64 + 0.5) * CELL_M, (iy as f64 + 0.5) * CELL_M];
+                if let Some(h) = p.height(xy, t.field, t.flank, &centres, &mut rng) {
                     let cell = &mut proposals[iy * nx + field_start + fx];
                     *cell = Some(cell.map_or(h, |c| c.max(h)));
                 }

@@ -151,6 +151,47 @@ fn a_peak_is_highest_at_its_centre_and_falls_outwards() {
 }
 
 #[test]
+fn hills_are_round_staircases_at_seeded_places() {
+    let hill = |count: u32| {
+        spec(&format!(
+            "[[primitive]]\ntype = \"hills\"\ncount = {count}\nheight = 0.3\nsigma = 0.3\n"
+        ))
+    };
+    let one = generate(&hill(1), 4);
+    assert_eq!(one, generate(&hill(1), 4));
+    assert_ne!(one, generate(&hill(1), 5), "another seed, another place");
+    let f = field(&one);
+    let (mut top, mut counts) = ((0, 0), [0usize; 3]);
+    for iy in 0..one.ny {
+        for fx in 0..one.field_nx {
+            let h = f(fx, iy);
+            let i = [0.1, 0.2, 0.3].iter().position(|s| *s == h);
+            counts[i.unwrap_or_else(|| panic!("{h} at ({fx}, {iy})"))] += 1;
+            if h > f(top.0, top.1) {
+                top = (fx, iy);
+            }
+        }
+    }
+    // Both steps occur; the ground still dominates a 3 × 3 m field.
+    assert!(
+        counts[1] > 0 && counts[2] > 0 && counts[0] > counts[1] + counts[2],
+        "{counts:?}"
+    );
+    // Heights never rise walking away from the top, either way along x.
+    let (cx, cy) = top;
+    for fx in cx..one.field_nx - 1 {
+        assert!(f(fx + 1, cy) <= f(fx, cy));
+    }
+    for fx in 1..=cx {
+        assert!(f(fx - 1, cy) <= f(fx, cy));
+    }
+    // More hills cover more blocks, and never lower one (by max).
+    let three = generate(&hill(3), 4);
+    let raised = |g: &Grid| g.heights.iter().filter(|h| **h > GROUND_M).count();
+    assert!(raised(&three) > raised(&one));
+}
+
+#[test]
 fn primitives_combine_by_max_never_by_sum() {
     let wall =
         "[[primitive]]\ntype = \"horizontal_barrier\"\nat = 1.5\nwidth = 0.4\nheight = 0.2\n";
@@ -224,6 +265,19 @@ fn bad_specs_name_their_key() {
         ),
         "primitive[0].radius",
     );
+    let hills = |k: &str| format!("{head}[[primitive]]\ntype = \"hills\"\n{k}");
+    bad(
+        &hills("count = 0\nheight = 0.2\nsigma = 0.3\n"),
+        "primitive[0].count",
+    );
+    bad(
+        &hills("count = 2\nheight = 0.1\nsigma = 0.3\n"),
+        "primitive[0].height: 0.1 must be above the ground",
+    );
+    bad(
+        &hills("count = 2\nheight = 0.2\nsigma = 0.0\n"),
+        "primitive[0].sigma",
+    );
     bad(
         &format!("{head}[[primitive]]\ntype = \"cliff\"\n"),
         "unknown variant `cliff`",
@@ -240,14 +294,15 @@ proptest! {
         seed in any::<u64>(),
         min in 0usize..6, span in 0usize..6,
         at in 0.0f64..3.0, width in 0.05f64..1.0, hi in 0usize..6, soft in 0.0f64..=100.0,
-        angle in -80.0f64..80.0,
+        angle in -80.0f64..80.0, hills in 1u32..6, hill_hi in 3usize..6, sigma in 0.05f64..1.0,
     ) {
         let max = (min + span).min(5);
         let text = format!(
             "[[primitive]]\ntype = \"random\"\nmin = {}\nmax = {}\n\
              [[primitive]]\ntype = \"diagonal_barrier\"\nat = {at}\nwidth = {width}\n\
-             height = {}\nsoftness = {soft}\nangle_deg = {angle}\n",
-            STEPS_M[min], STEPS_M[max], STEPS_M[hi]
+             height = {}\nsoftness = {soft}\nangle_deg = {angle}\n\
+             [[primitive]]\ntype = \"hills\"\ncount = {hills}\nheight = {}\nsigma = {sigma}\n",
+            STEPS_M[min], STEPS_M[max], STEPS_M[hi], STEPS_M[hill_hi]
         );
         let g = generate(&spec(&text), seed);
         prop_assert!(g.heights.iter().all(|h| STEPS_M.contains(h)));

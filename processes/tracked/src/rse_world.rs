@@ -282,7 +282,7 @@ mod tests {
     #[test]
     fn the_shipped_seed_1_worlds_are_the_generators_output() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch/tracked");
-        for kind in ["random", "horizontal", "diagonal"] {
+        for kind in ["random", "hills", "horizontal", "diagonal"] {
             let file = format!("{kind}.toml");
             let text = std::fs::read_to_string(root.join("terrains").join(&file)).unwrap();
             let (_, world) = world_file(&parse_spec(&text).unwrap(), &file, 1);

@@ -23,6 +23,11 @@ use std::fmt::Write;
 pub const TOTAL_MASS_KG: f64 = 20.0;
 /// The chassis box, m: length, width, height (chosen: the main tracks' length, between them).
 pub const CHASSIS_M: [f64; 3] = [0.44, 0.14, 0.10];
+/// The chassis' bevelled nose, m: its belly starts to rise this far behind the front
+/// (`[0]`) and meets the front face this high above the belly (`[1]`), a 31° glacis
+/// (chosen: a tracked robot's hull is bevelled so that an obstacle between the tracks lifts
+/// its nose; a square nose 4.3 cm above the ground stops on any 10 cm block between them).
+pub const NOSE_M: [f64; 2] = [0.10, 0.06];
 /// The chassis' centre of mass from the box's centre, m: 5 cm forward and 3 cm down (chosen:
 /// the real robot carries its arm folded over the front and its batteries low in the hull).
 /// With the mass in the middle no flipper motion gets the 20 cm step: the main track is too
@@ -64,6 +69,45 @@ pub enum Flippers {
 fn box_inertia(m: f64, s: [f64; 3]) -> [f64; 3] {
     let [x, y, z] = s.map(|v| v * v);
     [m * (y + z) / 12.0, m * (x + z) / 12.0, m * (x + y) / 12.0]
+}
+
+/// A box collider of the chassis: its centre (x, z), pitch about y (rad) and full size, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChassisBox {
+    pub centre_xz: [f64; 2],
+    pub pitch_rad: f64,
+    pub size: [f64; 3],
+}
+
+/// The chassis' colliders: the box [`CHASSIS_M`] with its lower front edge bevelled by
+/// [`NOSE_M`], as three boxes (the part above the bevel's top, the part behind it, and a
+/// box whose bottom face is the bevel), all within the chassis box.
+pub fn chassis_boxes() -> [ChassisBox; 3] {
+    let [l, w, h] = CHASSIS_M;
+    let [run, rise] = NOSE_M;
+    let (front, belly, top) = (l / 2.0, -h / 2.0, h / 2.0);
+    let slope = rise.atan2(run);
+    // Thick enough to close the bevel's corner, thin enough to stay under the chassis' top.
+    let t = (run * rise / run.hypot(rise)).min((top - belly - rise) / slope.cos());
+    let (mx, mz) = (front - run / 2.0, belly + rise / 2.0);
+    [
+        ChassisBox {
+            centre_xz: [0.0, (belly + rise + top) / 2.0],
+            pitch_rad: 0.0,
+            size: [l, w, top - belly - rise],
+        },
+        ChassisBox {
+            centre_xz: [-run / 2.0, belly + rise / 2.0],
+            pitch_rad: 0.0,
+            size: [l - run, w, rise],
+        },
+        ChassisBox {
+            centre_xz: [mx - t / 2.0 * slope.sin(), mz + t / 2.0 * slope.cos()],
+            // URDF pitch turns x toward −z: the box's x runs up the bevel.
+            pitch_rad: -slope,
+            size: [run.hypot(rise), w, t],
+        },
+    ]
 }
 
 fn inertial(out: &mut String, m: f64, i: [f64; 3], at: [f64; 3]) {
@@ -167,11 +211,16 @@ pub fn urdf_with_flippers(variant: Variant, flippers_joint: Flippers) -> String 
         box_inertia(chassis_kg, CHASSIS_M),
         CHASSIS_COM_M,
     );
-    let [x, y, z] = CHASSIS_M;
-    let _ = writeln!(
-        out,
-        "    <collision><geometry><box size=\"{x} {y} {z}\"/></geometry></collision>\n  </link>"
-    );
+    for b in chassis_boxes() {
+        let ([cx, cz], [x, y, z]) = (b.centre_xz, b.size);
+        let _ = writeln!(
+            out,
+            "    <collision><origin xyz=\"{cx:.6} 0 {cz:.6}\" rpy=\"0 {:.9} 0\"/><geometry>\
+             <box size=\"{x:.6} {y:.6} {z:.6}\"/></geometry></collision>",
+            b.pitch_rad
+        );
+    }
+    let _ = writeln!(out, "  </link>");
     let (px, pz) = running_gear::flipper_pivot();
     for side in Side::BOTH {
         let name = flipper_link(side);
@@ -292,6 +341,50 @@ mod tests {
         let d = caravan_world::description::parse(&fixed, "v4.urdf", std::path::Path::new("."))
             .unwrap();
         assert!(d.joints.iter().all(|j| j.kind != JointKind::Revolute));
+    }
+
+    /// Whether (x, z) in the chassis frame lies inside one of its boxes.
+    fn in_chassis(x: f64, z: f64) -> bool {
+        chassis_boxes().iter().any(|b| {
+            let (dx, dz) = (x - b.centre_xz[0], z - b.centre_xz[1]);
+            // Into the box's frame: undo URDF's pitch (x toward −z by pitch).
+            let (c, s) = (b.pitch_rad.cos(), b.pitch_rad.sin());
+            let (u, v) = (c * dx - s * dz, s * dx + c * dz);
+            u.abs() <= b.size[0] / 2.0 + 1e-9 && v.abs() <= b.size[2] / 2.0 + 1e-9
+        })
+    }
+
+    #[test]
+    fn the_chassis_is_its_box_less_a_bevel_under_the_nose() {
+        let [l, _, h] = CHASSIS_M;
+        let [run, rise] = NOSE_M;
+        let (front, belly) = (l / 2.0, -h / 2.0);
+        // Every box stays within the chassis box.
+        for b in chassis_boxes() {
+            for (sx, sz) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
+                let (hx, hz) = (sx * b.size[0] / 2.0, sz * b.size[2] / 2.0);
+                let (c, s) = (b.pitch_rad.cos(), b.pitch_rad.sin());
+                let (x, z) = (
+                    b.centre_xz[0] + c * hx + s * hz,
+                    b.centre_xz[1] - s * hx + c * hz,
+                );
+                assert!(
+                    x.abs() <= front + 1e-9 && z.abs() <= h / 2.0 + 1e-9,
+                    "{b:?}: {x} {z}"
+                );
+            }
+        }
+        // Solid on a grid of the box, except below the bevel's line.
+        for i in 0..=44 {
+            for k in 0..=10 {
+                let (x, z) = (-front + i as f64 * l / 44.0, belly + k as f64 * h / 10.0);
+                let above_bevel = z - belly >= (x - (front - run)) * rise / run - 1e-9;
+                assert_eq!(in_chassis(x, z), above_bevel, "({x:.3}, {z:.3})");
+            }
+        }
+        // The URDF carries the three boxes on the base.
+        let d = parse(Variant::V4);
+        assert_eq!(d.links[d.link("base_link").unwrap()].collisions.len(), 3);
     }
 
     #[test]
