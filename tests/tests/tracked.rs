@@ -197,6 +197,17 @@ fn generated_world(
     world.to_path_buf()
 }
 
+/// Drives `variant` across `world` with `terrain.toml` and `extra` arguments.
+fn drive_on(world: &std::path::Path, variant: &str, extra: &[&str]) -> Value {
+    let (variant, world) = (
+        format!("args.variant={variant}"),
+        format!("args.world={}", world.display()),
+    );
+    let mut args = vec!["--set", variant.as_str(), "--set", world.as_str()];
+    args.extend_from_slice(extra);
+    run("terrain.toml", &args)
+}
+
 #[test]
 fn gear_wheels_climb_a_hill_where_round_wheels_stop_at_its_first_stair() {
     // The shipped hills spec at seed 21: the lane meets a hill's 10 cm stairs at the field's
@@ -207,19 +218,7 @@ fn gear_wheels_climb_a_hill_where_round_wheels_stop_at_its_first_stair() {
     let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../launch/tracked/terrains/hills.toml");
     let world = generated_world(&spec, 21, &dir.join("hills-21.toml"));
-    let drive = |variant: &str| {
-        run(
-            "terrain.toml",
-            &[
-                "--set",
-                &format!("args.variant={variant}"),
-                "--set",
-                &format!("args.world={}", world.display()),
-                "--set",
-                "args.duration=20s",
-            ],
-        )
-    };
+    let drive = |variant: &str| drive_on(&world, variant, &["--set", "args.duration=20s"]);
     let gear = drive("v4");
     assert_eq!(gear["outcome"], "passed", "{gear}");
     assert!(gear["max_climb_m"].as_f64().unwrap() > 0.09, "{gear}");
@@ -235,19 +234,8 @@ fn every_variant_makes_a_short_crossing_of_a_generated_terrain() {
     let dir = std::env::temp_dir().join(format!("caravan-tracked-holes-{}", std::process::id()));
     let world = holes_terrain(&dir);
     for variant in ["v1", "v2", "v3", "v4"] {
-        let t = run(
-            "terrain.toml",
-            &[
-                "--set",
-                &format!("args.variant={variant}"),
-                "--set",
-                &format!("args.world={}", world.display()),
-                "--set",
-                "args.goal_x=3.5",
-                "--set",
-                "args.duration=11s",
-            ],
-        );
+        let extra = ["--set", "args.goal_x=3.5", "--set", "args.duration=11s"];
+        let t = drive_on(&world, variant, &extra);
         let track = t["track"].as_array().unwrap();
         // It starts on the ground blocks (0.1 m above the floor), not on the floor.
         let z0 = track[0][3].as_f64().unwrap();
