@@ -329,8 +329,8 @@ impl Primitive {
     fn centres(&self, field: [f64; 2], rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
         match *self {
             Primitive::Hills { count, sigma, .. } => {
-                // A hill's stairs reach 1.67 σ (two steps); centres 2 σ inside the field keep
-                // it whole, not cut by the field's edge into a wall (or at the middle of a
+                // A hill's lowest stair reaches 1.2–1.9 σ (one to three steps high); centres
+                // 2 σ inside the field keep it whole, not cut by the field's edge into a wall (or at the middle of a
                 // field too small for that).
                 let along = |len: f64, rng: &mut ChaCha8Rng| {
                     let margin = 2.0 * sigma;
