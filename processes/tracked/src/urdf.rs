@@ -1,5 +1,5 @@
 //! The robot description (URDF) of a running-gear variant, generated from
-//! [`crate::running_gear`]: a chassis box, two flippers on revolute joints about the front
+//! [`crate::running_gear`]: a chassis box with a bevelled nose, two flippers on revolute joints about the front
 //! main wheels' axes (0 in line with the main track, positive raises the tip, within
 //! [`FLIPPER_RANGE_DEG`]; or fixed at an angle, for trying poses), and every wheel a link on
 //! a continuous joint about y, its rim a cylinder and its teeth capsules.
@@ -74,8 +74,11 @@ fn box_inertia(m: f64, s: [f64; 3]) -> [f64; 3] {
 /// A box collider of the chassis: its centre (x, z), pitch about y (rad) and full size, m.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChassisBox {
+    /// Centre in the chassis frame (x forward, z up), m.
     pub centre_xz: [f64; 2],
+    /// URDF pitch about y, rad (positive turns x toward −z).
     pub pitch_rad: f64,
+    /// Full length, width and height, m, each > 0.
     pub size: [f64; 3],
 }
 
