@@ -103,6 +103,16 @@ impl DcMotor {
     }
 }
 
+/// How the engine moves a joint at exactly its commanded speed, whatever the load.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kinematic {
+    /// rapier's kinematic multibody joint ([`crate::spec::ActuatorSpec::Kinematic`]).
+    Joint,
+    /// A wheel welded to its parent, its frame and contacts turned
+    /// ([`crate::spec::ActuatorSpec::Rim`]).
+    Rim,
+}
+
 #[derive(Debug, Clone)]
 pub enum Control {
     DcMotor(Box<DcMotor>),
@@ -124,10 +134,7 @@ pub enum Control {
         stiffness: f64,
         damping: f64,
     },
-    Kinematic {
-        /// Turned as a rim ([`crate::spec::ActuatorSpec::Rim`]).
-        rim: bool,
-    },
+    Kinematic(Kinematic),
     Effort,
 }
 
@@ -181,8 +188,8 @@ impl Actuator {
                 stiffness: *stiffness,
                 damping: *damping,
             },
-            ActuatorSpec::Kinematic { .. } => Control::Kinematic { rim: false },
-            ActuatorSpec::Rim { .. } => Control::Kinematic { rim: true },
+            ActuatorSpec::Kinematic { .. } => Control::Kinematic(Kinematic::Joint),
+            ActuatorSpec::Rim { .. } => Control::Kinematic(Kinematic::Rim),
             ActuatorSpec::Effort { .. } => Control::Effort,
             ActuatorSpec::None { .. } => return None,
         };
@@ -202,14 +209,12 @@ impl Actuator {
         }
     }
 
-    /// Whether the engine moves this joint kinematically.
-    pub fn is_kinematic(&self) -> bool {
-        matches!(self.control, Control::Kinematic { .. })
-    }
-
-    /// Whether the engine turns this joint as a rim ([`crate::spec::ActuatorSpec::Rim`]).
-    pub fn is_rim(&self) -> bool {
-        matches!(self.control, Control::Kinematic { rim: true })
+    /// How the engine moves this joint at exactly its commanded speed, if it does.
+    pub fn kinematic(&self) -> Option<Kinematic> {
+        match self.control {
+            Control::Kinematic(k) => Some(k),
+            _ => None,
+        }
     }
 
     /// The DC motor's firmware, when its tick is due at `now_ns`.
@@ -250,7 +255,7 @@ impl Actuator {
             }
             // The engine sets the motor ([`Self::motor`]) and reads its effort back, or moves
             // a kinematic joint ([`Self::kinematic_velocity`]).
-            Control::Motor { .. } | Control::Servo { .. } | Control::Kinematic { .. } => {
+            Control::Motor { .. } | Control::Servo { .. } | Control::Kinematic(_) => {
                 return 0.0;
             }
             Control::Effort => bound(effort_ff),
@@ -321,9 +326,7 @@ impl Actuator {
     /// limits (nothing else holds them: see `ActuatorSpec::Kinematic`); `None` for other
     /// actuators.
     pub fn kinematic_velocity(&self, now: JointReading, dt: f64) -> Option<f64> {
-        if !self.is_kinematic() {
-            return None;
-        }
+        self.kinematic()?;
         let l = self.limits;
         let t = self.target;
         let speed = if !t.position.is_nan() {

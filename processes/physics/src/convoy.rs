@@ -65,7 +65,6 @@ pub fn simulation(
                 pose: StartPose::Planar { x, y, yaw },
                 reflected_inertia: reflected.clone(),
                 kinematic: Vec::new(),
-                rim: Vec::new(),
                 sensed: Vec::new(),
             },
             actuators: actuators.clone(),

@@ -1,7 +1,7 @@
 //! What a simulation is built from and reports, the same for either precision of the engine:
 //! robots to place, the step configuration, a robot's outputs and contact points.
 
-use crate::actuator::Actuator;
+use crate::actuator::{Actuator, Kinematic};
 use crate::params::Precision;
 use crate::spec::RobotSpec;
 use caravan_world::ObstacleKind;
@@ -89,12 +89,9 @@ pub struct RobotSetup<'a> {
     /// Inertia added to each joint's child link about the joint axis (an actuator's rotor
     /// seen through its gear), kg·m²; one per joint.
     pub reflected_inertia: Vec<f64>,
-    /// Joints moved kinematically ([`crate::spec::ActuatorSpec::Kinematic`]); one per joint,
-    /// or empty for none.
-    pub kinematic: Vec<bool>,
-    /// Wheels turned as rims ([`crate::spec::ActuatorSpec::Rim`]); one per joint, or
-    /// empty for none.
-    pub rim: Vec<bool>,
+    /// Joints moved at exactly their commanded speed, and how ([`Kinematic`]); one per
+    /// joint, or empty for none.
+    pub kinematic: Vec<Option<Kinematic>>,
     /// Fixed joints that carry a force–torque sensor (description indices), from
     /// [`RobotSpec::sensed_joints`]: not welded.
     pub sensed: Vec<usize>,
@@ -124,12 +121,12 @@ impl RobotSetup<'_> {
 
     /// Whether joint `j` is moved kinematically by rapier's kinematic joint.
     pub(crate) fn is_kinematic(&self, j: usize) -> bool {
-        self.kinematic.get(j).copied().unwrap_or(false)
+        self.kinematic.get(j).copied().flatten() == Some(Kinematic::Joint)
     }
 
     /// Whether joint `j` is a wheel turned as a rim.
     pub(crate) fn is_rim(&self, j: usize) -> bool {
-        self.rim.get(j).copied().unwrap_or(false)
+        self.kinematic.get(j).copied().flatten() == Some(Kinematic::Rim)
     }
 }
 

@@ -141,11 +141,7 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                 .collect();
             let kinematic = actuators
                 .iter()
-                .map(|a| a.as_ref().is_some_and(|a| a.is_kinematic() && !a.is_rim()))
-                .collect();
-            let rim = actuators
-                .iter()
-                .map(|a| a.as_ref().is_some_and(Actuator::is_rim))
+                .map(|a| a.as_ref().and_then(Actuator::kinematic))
                 .collect();
             builds.push(RobotBuild {
                 setup: RobotSetup {
@@ -154,7 +150,6 @@ pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation
                     pose: start_pose(p),
                     reflected_inertia,
                     kinematic,
-                    rim,
                     sensed: sensed.clone(),
                 },
                 actuators: actuators.clone(),

@@ -281,7 +281,7 @@ fn add_robot(
     let d = r.description;
     let plan = RobotPlan::with_sensed(d, &r.sensed);
     let multibody = r.spec.joint_model() == JointModel::Multibody;
-    let with_kinematic = r.kinematic.iter().any(|&k| k);
+    let with_kinematic = (0..d.joints.len()).any(|j| r.is_kinematic(j));
     let base = base_pose(r, &plan);
     let friction_of = |l: usize| d.links[l].friction.unwrap_or(DEFAULT_FRICTION);
     let self_filter = if r.spec.self_collide {
