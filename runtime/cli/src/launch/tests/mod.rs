@@ -1,13 +1,13 @@
-//! Unit tests of launch files: one file (`mod.rs`), includes, templates, arguments and
+//! Unit tests of launch files: one file (`mod.rs`), includes, links, templates, arguments and
 //! report entries.
 
 mod args;
 mod fuzz;
 mod include;
+mod links;
 mod report;
 mod template;
 
-use super::convert::parse_bandwidth;
 use super::load::*;
 use super::model::*;
 use caravan::ClockMode;
@@ -389,27 +389,6 @@ fn launch_args_substitute_and_unknown_args_are_named() {
 }
 
 #[test]
-fn launch_bad_link_profiles_are_named() {
-    let text = edited(
-        "latency = \"6ms\"\n",
-        "latency = \"6ms\"\ndistribution = \"gauss\"\nspike = [\"100ms\", \"50ms\"]\nspike_probability = 2.0\n",
-    );
-    let lines = errors(&text, &[]);
-    assert_error(
-        &lines,
-        "FILE:12: link #1, key 'distribution': 'gauss' is not a jitter distribution; use uniform, normal or exponential",
-    );
-    assert_error(
-        &lines,
-        "FILE:13: link #1, key 'spike': the spike's minimum exceeds its maximum",
-    );
-    assert_error(
-        &lines,
-        "FILE:14: link #1, key 'spike_probability': must be between 0.0 and 1.0, found 2",
-    );
-}
-
-#[test]
 fn launch_bad_override() {
     let lines = errors(BASE, &["process.phyiscs.rate=1Hz", "group.seed=abc"]);
     assert_eq!(
@@ -507,22 +486,6 @@ fn launch_rate_and_on() {
 }
 
 #[test]
-fn launch_link_pattern_matching_nothing() {
-    let lines = errors(&edited("\"rpi-*\", \"sim\"", "\"rpi-*\", \"simm\""), &[]);
-    assert_eq!(
-        lines,
-        [
-            "FILE:10: link #1, key 'between': pattern 'simm' matches no declared host; did you mean 'sim'?"
-        ]
-    );
-    let lines = errors(&edited("[\"rpi-*\", \"sim\"]", "[\"rpi-*\"]"), &[]);
-    assert_error(
-        &lines,
-        "FILE:10: link #1, key 'between': expected exactly two host patterns, found 1",
-    );
-}
-
-#[test]
 fn launch_range_checks() {
     let text = edited("cpu_slowdown = 12.0", "cpu_slowdown = 0.5")
         .replace("latency = \"6ms\"", "loss = 1.5\nbandwidth = \"54Mb\"");
@@ -595,16 +558,4 @@ process = [
     )
     .unwrap();
     assert_eq!(lf.processes[1].rate.as_deref(), Some("1Hz"));
-}
-
-#[test]
-fn launch_bandwidths() {
-    assert_eq!(parse_bandwidth("54Mbit"), Ok(54_000_000));
-    assert_eq!(parse_bandwidth("10mbit"), Ok(10_000_000));
-    assert_eq!(parse_bandwidth("1Gbit"), Ok(1_000_000_000));
-    assert_eq!(parse_bandwidth("500kbit"), Ok(500_000));
-    assert_eq!(parse_bandwidth("1.5 Mbit"), Ok(1_500_000));
-    for bad in ["", "54", "54MB", "0Mbit", "fast"] {
-        assert!(parse_bandwidth(bad).is_err(), "{bad}");
-    }
 }
