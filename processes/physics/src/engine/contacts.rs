@@ -117,15 +117,25 @@ pub fn points(scene: &Scene, i: usize, dt: f64) -> Vec<ContactPoint> {
             };
             let mine_first = pair.collider1 == handle;
             let me = &colliders[handle];
-            for m in pair.manifolds() {
+            // The solver's manifolds hold the impulses: for a compound (a gear's rim and
+            // teeth) rapier solves clusters of its per-shape manifolds, whose own points
+            // then carry none.
+            for m in pair.solver_manifolds() {
                 // rapier's normal points from collider 1 to collider 2.
                 let sign: Real = if mine_first { -1.0 } else { 1.0 };
                 let n = m.data.normal * sign;
+                let shape = if mine_first {
+                    m.subshape_pos1()
+                } else {
+                    m.subshape_pos2()
+                };
                 for p in &m.points {
                     if p.dist > TOUCH_DISTANCE {
                         continue;
                     }
+                    // A point of a compound's part is in that part's frame.
                     let local = if mine_first { p.local_p1 } else { p.local_p2 };
+                    let local = shape.map_or(local, |pos| pos.transform_point(local));
                     let at = me.position().transform_point(local);
                     out.push(ContactPoint {
                         link,

@@ -149,3 +149,34 @@ fn rims_roll_a_multibody_at_their_rim_speed_and_report_their_turn() {
     assert_eq!(speed, -20.0);
     assert!(s.pose(0).x < x0 - 0.3, "rolled back to {}", s.pose(0).x);
 }
+
+/// A robot standing on its wheels: its contact points carry its weight (2.6 kg × 9.81 m/s²)
+/// and lie on the floor, whatever turns its wheels and whether a wheel is one shape or a
+/// compound (a rim and a tooth, whose contacts rapier's solver merges into clusters).
+#[test]
+fn wheel_contacts_carry_the_robots_weight_on_the_floor() {
+    for (urdf, joints, actuator) in [
+        ("overlap.urdf", "impulse", "motor"),
+        ("overlap.urdf", "multibody", "kinematic"),
+        ("overlap.urdf", "multibody", "rim"),
+        ("geared.urdf", "multibody", "kinematic"),
+        ("geared.urdf", "multibody", "rim"),
+    ] {
+        let mut s = sim(
+            serde_json::json!({ "urdf": urdf, "joints": joints, "contacts": true,
+                "poses": [[1.0, 2.0, 0.0]], "actuators": [{ "type": actuator, "joints": ["*"] }] }),
+            2_000_000,
+        );
+        s.advance_to(2_000_000_000, u64::MAX);
+        let points = s.contact_points(0);
+        let total: f64 = points.iter().map(|c| c.normal_force).sum();
+        assert!(
+            (total - 2.6 * 9.81).abs() < 0.05 * 2.6 * 9.81,
+            "{urdf} {joints} {actuator}: {} points carry {total} N",
+            points.len()
+        );
+        for c in points.iter().filter(|c| c.normal_force > 0.0) {
+            assert!(c.point[2].abs() < 0.003, "{urdf} {actuator}: {c:?}");
+        }
+    }
+}
