@@ -218,14 +218,41 @@ fn gear_wheels_climb_a_hill_where_round_wheels_stop_at_its_first_stair() {
     let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../launch/tracked/terrains/hills.toml");
     let world = generated_world(&spec, 21, &dir.join("hills-21.toml"));
-    let drive = |variant: &str| drive_on(&world, variant, &["--set", "args.duration=20s"]);
+    let extra = ["--set", "args.duration=20s", "--set", "args.contacts=true"];
+    let drive = |variant: &str| drive_on(&world, variant, &extra);
     let gear = drive("v4");
     assert_eq!(gear["outcome"], "passed", "{gear}");
     assert!(gear["max_climb_m"].as_f64().unwrap() > 0.09, "{gear}");
+    // Driving out over the run-out, it rests on its wheels alone.
+    assert_eq!(gear["chassis_share"].as_f64(), Some(0.0), "{gear}");
     let round = drive("v1");
     assert_eq!(round["outcome"], "stuck", "{round}");
     assert!(round["max_climb_m"].as_f64().unwrap() < 0.05, "{round}");
     assert!(round["max_x_m"].as_f64().unwrap() < 2.2, "{round}");
+    // Its wheels turn against the stair's face; its chassis touches nothing.
+    assert!(round["chassis_share"].as_f64().unwrap() < 0.05, "{round}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_gear_robot_stuck_on_a_hill_rests_on_its_chassis() {
+    // The shipped hills spec at seed 9, v4 with its flippers at 15° (the passability
+    // protocol's angle): it stops on a hill's flank high-centred, its belly on a stair's edge
+    // bearing most of its weight (docs/tracked.md, where the gears stop on the hills).
+    let dir = std::env::temp_dir().join(format!("caravan-tracked-belly-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../launch/tracked/terrains/hills.toml");
+    let world = generated_world(&spec, 9, &dir.join("hills-9.toml"));
+    let extra = [
+        "--set",
+        "args.contacts=true",
+        "--set",
+        "process.drive.params.flipper_angle_rad=0.26",
+    ];
+    let t = drive_on(&world, "v4", &extra);
+    assert_eq!(t["outcome"], "stuck", "{t}");
+    assert!(t["chassis_share"].as_f64().unwrap() > 0.5, "{t}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -10,6 +10,7 @@
 //! - [`params`]: checks shared by the processes' params;
 //! - [`passability`]: a sweep's crossings pooled into the passability table;
 //! - [`report`]: the `tracked` report section;
+//! - [`resting`]: what a robot rests on at the end (the chassis' share of its contact force);
 //! - [`running_gear`]: the wheels of the four running-gear variants;
 //! - [`urdf`]: a variant's robot description;
 //! - [`rse`]: the Random Step Environment generator (blocks, primitives, softness);
@@ -24,6 +25,7 @@ pub mod keep_line;
 pub mod params;
 pub mod passability;
 pub mod report;
+pub mod resting;
 pub mod rse;
 pub mod rse_world;
 pub mod running_gear;

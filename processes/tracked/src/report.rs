@@ -1,9 +1,11 @@
 //! The `tracked` report section: the crossing's outcome (see [`crate::crossing`]), how far
 //! and how fast the robot went, from the recorded `robot/0/ground_truth`, and its braking
-//! distance after a stop asked on the recorded `robot/0/cmd_vel` (see [`crate::braking`]).
+//! distance after a stop asked on the recorded `robot/0/cmd_vel` (see [`crate::braking`]);
+//! with `robot/0/contacts` recorded, the chassis' share of the contact force at the end (see
+//! [`crate::resting`]).
 //!
 //! JSON: `{goal_x_m, outcome, passed, stuck, flipped, off_world, passed_at_s, max_x_m, max_tilt_deg, max_climb_m,
-//! top_speed_m_s, stop_s, braking_distance_m, samples, track}`.
+//! top_speed_m_s, stop_s, braking_distance_m, chassis_share, samples, track}`.
 
 use crate::crossing::{Outcome, Sample, classify};
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
@@ -110,6 +112,24 @@ impl ReportPlugin for TrackedReport {
                 "no ground truth on {TRUTH_TOPIC} in the recording (physics `ground_truth = true`)"
             )
         })?;
+        let contacts: Vec<crate::resting::Step> = messages
+            .iter()
+            .filter(|m| m.topic == crate::resting::CONTACTS_TOPIC)
+            .map(|m| {
+                let forces = m.json["contacts"].as_array().map_or(Vec::new(), |cs| {
+                    cs.iter()
+                        .map(|c| {
+                            (
+                                c["link"].as_str().unwrap_or("").to_string(),
+                                num(&c["normal_force"]),
+                            )
+                        })
+                        .collect()
+                });
+                (m.stamp_ns() as f64 * 1e-9, forces)
+            })
+            .collect();
+        let chassis_share = crate::resting::chassis_share(&contacts);
         let stop_s = crate::braking::stop_time(&commands);
         let braking_m = stop_s.and_then(|t| crate::braking::braking_distance(&samples, t));
         let json = serde_json::json!({
@@ -129,6 +149,9 @@ impl ReportPlugin for TrackedReport {
             // (null: no stop, or still moving when the run ended).
             "stop_s": stop_s,
             "braking_distance_m": braking_m,
+            // The chassis' share of the contact force over the last 5 s (null: no contacts
+            // recorded).
+            "chassis_share": chassis_share,
             "samples": samples.len(),
             // Every 0.1 s: [t s, x, y, z m, tilt °], for plots and the terrain picture.
             "track": track(&samples, 0.1),
@@ -148,6 +171,18 @@ impl ReportPlugin for TrackedReport {
         if let (Some(t), Some(d)) = (stop_s, braking_m) {
             markdown.push_str(&format!(
                 "Stop asked at {t:.2} s: braking distance {d:.3} m.\n"
+            ));
+        }
+        if let Some(share) = chassis_share {
+            markdown.push_str(&format!(
+                "Over the last {} s the chassis bears {:.0} % of the robot's contact force{}.\n",
+                crate::resting::END_SPAN_S,
+                100.0 * share,
+                if share > crate::resting::HIGH_CENTRED_SHARE {
+                    " (high-centred)"
+                } else {
+                    ""
+                }
             ));
         }
         if let Some(Terrain { grid, name, .. }) = &self.terrain {
