@@ -208,16 +208,25 @@ fn drive_on(world: &std::path::Path, variant: &str, extra: &[&str]) -> Value {
     run("terrain.toml", &args)
 }
 
+/// The shipped hills spec at `seed`, written in a directory of its own: (directory, world).
+fn hills_world(seed: u64) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!(
+        "caravan-tracked-hills{seed}-{}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../launch/tracked/terrains/hills.toml");
+    let world = generated_world(&spec, seed, &dir.join(format!("hills-{seed}.toml")));
+    (dir, world)
+}
+
 #[test]
 fn gear_wheels_climb_a_hill_where_round_wheels_stop_at_its_first_stair() {
     // The shipped hills spec at seed 21: the lane meets a hill's 10 cm stairs at the field's
     // start, one track before the other (docs/tracked.md, passability). v4 climbs over it
     // since the chassis' nose is bevelled (with the square nose it stuck there); v1 stops.
-    let dir = std::env::temp_dir().join(format!("caravan-tracked-hills-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../launch/tracked/terrains/hills.toml");
-    let world = generated_world(&spec, 21, &dir.join("hills-21.toml"));
+    let (dir, world) = hills_world(21);
     let extra = ["--set", "args.duration=20s", "--set", "args.contacts=true"];
     let drive = |variant: &str| drive_on(&world, variant, &extra);
     let gear = drive("v4");
@@ -239,11 +248,7 @@ fn a_gear_robot_stuck_on_a_hill_rests_on_its_chassis() {
     // The shipped hills spec at seed 9, v4 with its flippers at 15° (the passability
     // protocol's angle): it stops on a hill's flank high-centred, its belly on a stair's edge
     // bearing most of its weight (docs/tracked.md, where the gears stop on the hills).
-    let dir = std::env::temp_dir().join(format!("caravan-tracked-belly-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../launch/tracked/terrains/hills.toml");
-    let world = generated_world(&spec, 9, &dir.join("hills-9.toml"));
+    let (dir, world) = hills_world(9);
     let extra = [
         "--set",
         "args.contacts=true",
