@@ -152,7 +152,9 @@ fn rims_roll_a_multibody_at_their_rim_speed_and_report_their_turn() {
 
 /// A robot standing on its wheels: its contact points carry its weight (2.6 kg × 9.81 m/s²)
 /// and lie on the floor, whatever turns its wheels and whether a wheel is one shape or a
-/// compound (a rim and a tooth, whose contacts rapier's solver merges into clusters).
+/// compound: a rim and a tooth, whose contacts rapier's solver merges into clusters
+/// (`geared.urdf`), or whose one manifold, the tooth's, it solves as it is, its points in
+/// the tooth's frame (`spiked.urdf`).
 #[test]
 fn wheel_contacts_carry_the_robots_weight_on_the_floor() {
     for (urdf, joints, actuator) in [
@@ -161,6 +163,7 @@ fn wheel_contacts_carry_the_robots_weight_on_the_floor() {
         ("overlap.urdf", "multibody", "rim"),
         ("geared.urdf", "multibody", "kinematic"),
         ("geared.urdf", "multibody", "rim"),
+        ("spiked.urdf", "multibody", "rim"),
     ] {
         let mut s = sim(
             serde_json::json!({ "urdf": urdf, "joints": joints, "contacts": true,
