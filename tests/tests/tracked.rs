@@ -347,5 +347,11 @@ fn bad_terrain_specs_and_arguments_exit_2_naming_file_and_key() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("summary.json"));
+    // Without its argument it says how to call it.
+    let out = std::process::Command::new(workspace_bin("caravan-tracked-passability"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("<SWEEP_DIR>"));
     let _ = std::fs::remove_dir_all(&dir);
 }

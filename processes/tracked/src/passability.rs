@@ -33,6 +33,9 @@ pub struct Tally {
     pub off_world: usize,
     /// Runs without a `tracked` section (the group failed).
     pub failed: usize,
+    /// Stuck runs high-centred, the chassis bearing over a third of the contact force
+    /// ([`crate::resting`]); `None` when no run recorded its contacts.
+    pub high_centred: Option<usize>,
 }
 
 impl Tally {
@@ -70,6 +73,9 @@ pub fn pool(summary: &Value) -> Result<BTreeMap<(String, String), Tally>, String
         tally.flipped += f;
         tally.off_world += o;
         tally.failed += runs.saturating_sub(p + s + f + o);
+        if let Some(k) = cell["flags"]["tracked.high_centred"]["successes"].as_u64() {
+            *tally.high_centred.get_or_insert(0) += k as usize;
+        }
     }
     Ok(out)
 }
@@ -89,12 +95,21 @@ fn rate(k: usize, n: usize) -> String {
 }
 
 /// The Markdown table: per variant and terrain, Caravan's pass rate with its interval and
-/// flips, runs stuck and runs off the world, and the reference's pass rate.
+/// flips, runs stuck (and of them high-centred, when the sweep recorded contacts) and runs
+/// off the world, and the reference's pass rate.
 pub fn table(tallies: &BTreeMap<(String, String), Tally>) -> String {
-    let mut out = String::from(
-        "| variant | terrain | passed (95 % Wilson) | flipped | stuck | off the world | reference passed |\n\
-         |---|---|---|---|---|---|---:|\n",
-    );
+    let bellies = tallies.values().any(|t| t.high_centred.is_some());
+    let mut out = if bellies {
+        String::from(
+            "| variant | terrain | passed (95 % Wilson) | flipped | stuck | of them high-centred | off the world | reference passed |\n\
+             |---|---|---|---|---|---|---|---:|\n",
+        )
+    } else {
+        String::from(
+            "| variant | terrain | passed (95 % Wilson) | flipped | stuck | off the world | reference passed |\n\
+             |---|---|---|---|---|---|---:|\n",
+        )
+    };
     // A kind no run of the sweep drove on is left out.
     let kinds: Vec<_> = TERRAINS
         .iter()
@@ -115,8 +130,13 @@ pub fn table(tallies: &BTreeMap<(String, String), Tally>) -> String {
                     format!("{k}/{n}")
                 }
             };
+            let belly = match (bellies, t.high_centred) {
+                (false, _) => String::new(),
+                (true, Some(k)) if t.stuck > 0 => format!(" {k}/{} |", t.stuck),
+                (true, _) => " – |".into(),
+            };
             out.push_str(&format!(
-                "| {variant} | {terrain} | {} | {} | {} | {} | {refp} % |\n",
+                "| {variant} | {terrain} | {} | {} | {} |{belly} {} | {refp} % |\n",
                 rate(t.passed, n),
                 of(t.flipped),
                 of(t.stuck),
@@ -182,6 +202,35 @@ mod tests {
             "{md}"
         );
         assert!(!md.contains("horizontal"), "{md}");
+    }
+
+    #[test]
+    fn stuck_runs_high_centred_get_a_column_when_contacts_were_recorded() {
+        let stuck = |seed: u32, belly: bool| {
+            let mut c = cell("v4", "hills", seed, "stuck");
+            c["flags"]["tracked.high_centred"] = json!({"successes": usize::from(belly), "n": 1});
+            c
+        };
+        let summary = json!({"cells": [
+            stuck(1, true),
+            stuck(2, false),
+            stuck(3, true),
+            cell("v4", "hills", 4, "passed"),
+            cell("v1", "hills", 1, "stuck"),
+        ]});
+        let t = pool(&summary).unwrap();
+        assert_eq!(t[&("v4".into(), "hills".into())].high_centred, Some(2));
+        let md = table(&t);
+        assert!(md.contains("| stuck | of them high-centred |"), "{md}");
+        assert!(
+            md.contains("| v4 | hills | 25 % (1/4; 5–70 %) | 0/4 | 3/4 | 2/3 | 0/4 | 100 % |"),
+            "{md}"
+        );
+        // A cell whose runs recorded no contacts says so.
+        assert!(
+            md.contains("| v1 | hills | 0 % (0/1; 0–79 %) | 0/1 | 1/1 | – | 0/1 | 0 % |"),
+            "{md}"
+        );
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! [`crate::resting`]).
 //!
 //! JSON: `{goal_x_m, outcome, passed, stuck, flipped, off_world, passed_at_s, max_x_m, max_tilt_deg, max_climb_m,
-//! top_speed_m_s, stop_s, braking_distance_m, chassis_share, samples, track}`.
+//! top_speed_m_s, stop_s, braking_distance_m, chassis_share, high_centred, samples, track}`.
 
 use crate::crossing::{Outcome, Sample, classify};
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
@@ -152,6 +152,9 @@ impl ReportPlugin for TrackedReport {
             // The chassis' share of the contact force over the last 5 s (null: no contacts
             // recorded).
             "chassis_share": chassis_share,
+            // Stuck with the chassis bearing over a third (null: no contacts recorded).
+            "high_centred": chassis_share
+                .map(|share| c.outcome == Outcome::Stuck && share > crate::resting::HIGH_CENTRED_SHARE),
             "samples": samples.len(),
             // Every 0.1 s: [t s, x, y, z m, tilt °], for plots and the terrain picture.
             "track": track(&samples, 0.1),

@@ -2,8 +2,18 @@
 //! `args.variant` × `args.terrain` × `args.terrain_seed` (see `caravan_tracked::passability`),
 //! as Markdown on stdout and `passability.md` in the sweep directory.
 
+use clap::Parser;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    about = "The passability table of a finished sweep over args.variant × args.terrain × args.terrain_seed"
+)]
+struct Args {
+    /// The sweep's output directory (with its summary.json).
+    sweep_dir: PathBuf,
+}
 
 fn run(dir: &Path) -> Result<String, String> {
     let path = dir.join("summary.json");
@@ -17,12 +27,8 @@ fn run(dir: &Path) -> Result<String, String> {
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let [dir] = args.as_slice() else {
-        eprintln!("usage: caravan-tracked-passability SWEEP_DIR");
-        return ExitCode::from(2);
-    };
-    match run(&PathBuf::from(dir)) {
+    let args = Args::parse();
+    match run(&args.sweep_dir) {
         Ok(table) => {
             print!("{table}");
             ExitCode::SUCCESS
