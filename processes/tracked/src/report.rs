@@ -130,6 +130,9 @@ impl ReportPlugin for TrackedReport {
             })
             .collect();
         let chassis_share = crate::resting::chassis_share(&contacts);
+        // Stuck with the chassis bearing over a third (None: no contacts recorded).
+        let high_centred = chassis_share
+            .map(|share| c.outcome == Outcome::Stuck && share > crate::resting::HIGH_CENTRED_SHARE);
         let stop_s = crate::braking::stop_time(&commands);
         let braking_m = stop_s.and_then(|t| crate::braking::braking_distance(&samples, t));
         let json = serde_json::json!({
@@ -152,9 +155,7 @@ impl ReportPlugin for TrackedReport {
             // The chassis' share of the contact force over the last 5 s (null: no contacts
             // recorded).
             "chassis_share": chassis_share,
-            // Stuck with the chassis bearing over a third (null: no contacts recorded).
-            "high_centred": chassis_share
-                .map(|share| c.outcome == Outcome::Stuck && share > crate::resting::HIGH_CENTRED_SHARE),
+            "high_centred": high_centred,
             "samples": samples.len(),
             // Every 0.1 s: [t s, x, y, z m, tilt °], for plots and the terrain picture.
             "track": track(&samples, 0.1),
@@ -181,8 +182,8 @@ impl ReportPlugin for TrackedReport {
                 "Over the last {} s the chassis bears {:.0} % of the robot's contact force{}.\n",
                 crate::resting::END_SPAN_S,
                 100.0 * share,
-                if share > crate::resting::HIGH_CENTRED_SHARE {
-                    " (high-centred)"
+                if high_centred == Some(true) {
+                    ": stuck high-centred"
                 } else {
                     ""
                 }
