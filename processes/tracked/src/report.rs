@@ -116,23 +116,19 @@ impl ReportPlugin for TrackedReport {
             .iter()
             .filter(|m| m.topic == crate::resting::CONTACTS_TOPIC)
             .map(|m| {
-                let forces = m.json["contacts"].as_array().map_or(Vec::new(), |cs| {
-                    cs.iter()
-                        .map(|c| {
-                            (
-                                c["link"].as_str().unwrap_or("").to_string(),
-                                num(&c["normal_force"]),
-                            )
-                        })
-                        .collect()
-                });
-                (m.stamp_ns() as f64 * 1e-9, forces)
+                let contacts = m.json["contacts"].as_array().map_or(&[][..], Vec::as_slice);
+                crate::resting::Step::new(
+                    m.stamp_ns() as f64 * 1e-9,
+                    contacts
+                        .iter()
+                        .map(|c| (c["link"].as_str().unwrap_or(""), num(&c["normal_force"]))),
+                )
             })
             .collect();
         let chassis_share = crate::resting::chassis_share(&contacts);
-        // Stuck with the chassis bearing over a third (None: no contacts recorded).
+        // None: no contacts recorded.
         let high_centred = chassis_share
-            .map(|share| c.outcome == Outcome::Stuck && share > crate::resting::HIGH_CENTRED_SHARE);
+            .map(|share| crate::resting::high_centred(c.outcome == Outcome::Stuck, share));
         let stop_s = crate::braking::stop_time(&commands);
         let braking_m = stop_s.and_then(|t| crate::braking::braking_distance(&samples, t));
         let json = serde_json::json!({

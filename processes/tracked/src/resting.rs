@@ -15,23 +15,47 @@ pub const END_SPAN_S: f64 = 5.0;
 /// third of the load off the tracks; stuck runs on the hills bear 0 % or 41–82 %).
 pub const HIGH_CENTRED_SHARE: f64 = 1.0 / 3.0;
 
-/// One physics step's contact forces: (time s, [(link, normal force N)]).
-pub type Step = (f64, Vec<(String, f64)>);
+/// One physics step's contact forces, summed: the chassis' and all links', N.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// Simulated time, s.
+    pub t_s: f64,
+    pub chassis_n: f64,
+    pub all_n: f64,
+}
+
+impl Step {
+    /// The step at `t_s` with these (link, normal force N) contacts.
+    pub fn new<'a>(t_s: f64, forces: impl IntoIterator<Item = (&'a str, f64)>) -> Self {
+        let mut step = Self {
+            t_s,
+            chassis_n: 0.0,
+            all_n: 0.0,
+        };
+        for (link, f) in forces {
+            step.all_n += f;
+            if link == CHASSIS_LINK {
+                step.chassis_n += f;
+            }
+        }
+        step
+    }
+}
 
 /// The chassis' share (0–1) of the summed normal force over the last [`END_SPAN_S`] of
 /// `steps` (in time order); `None` without steps or with no force in that span.
 pub fn chassis_share(steps: &[Step]) -> Option<f64> {
-    let end = steps.last()?.0;
-    let (mut chassis, mut all) = (0.0, 0.0);
-    for (_, forces) in steps.iter().filter(|(t, _)| *t >= end - END_SPAN_S) {
-        for (link, f) in forces {
-            all += f;
-            if link == CHASSIS_LINK {
-                chassis += f;
-            }
-        }
-    }
+    let end = steps.last()?.t_s;
+    let (chassis, all) = steps
+        .iter()
+        .filter(|s| s.t_s >= end - END_SPAN_S)
+        .fold((0.0, 0.0), |(c, a), s| (c + s.chassis_n, a + s.all_n));
     (all > 0.0).then_some(chassis / all)
+}
+
+/// Whether a run that ended `stuck` with the chassis bearing `share` is high-centred.
+pub fn high_centred(stuck: bool, share: f64) -> bool {
+    stuck && share > HIGH_CENTRED_SHARE
 }
 
 #[cfg(test)]
@@ -39,7 +63,7 @@ mod tests {
     use super::*;
 
     fn step(t: f64, forces: &[(&str, f64)]) -> Step {
-        (t, forces.iter().map(|(l, f)| (l.to_string(), *f)).collect())
+        Step::new(t, forces.iter().copied())
     }
 
     #[test]
