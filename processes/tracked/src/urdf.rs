@@ -122,7 +122,10 @@ fn inertial(out: &mut String, m: f64, i: [f64; 3], at: [f64; 3]) {
     );
 }
 
-/// One wheel's link: a cylinder about y (the rim) and, for a gear, a box per tooth.
+/// The `rpy` that lays a URDF cylinder's or capsule's axis (its z) along a wheel's axle (y).
+const ALONG_AXLE_RPY: &str = "1.5707963267949 0 0";
+
+/// One wheel's link: a cylinder about y (the rim) and, for a gear, a capsule per tooth.
 fn wheel_link(out: &mut String, w: &Wheel) {
     let name = w.name();
     let _ = writeln!(out, "  <link name=\"{name}_wheel\">");
@@ -133,7 +136,7 @@ fn wheel_link(out: &mut String, w: &Wheel) {
     let rim = w.radius_m - w.teeth.map_or(0.0, |t| t.depth_m);
     let _ = writeln!(
         out,
-        "    <collision><origin rpy=\"1.5707963267949 0 0\"/><geometry><cylinder radius=\"{rim:.6}\" \
+        "    <collision><origin rpy=\"{ALONG_AXLE_RPY}\"/><geometry><cylinder radius=\"{rim:.6}\" \
          length=\"{h}\"/></geometry></collision>"
     );
     if let Some(t) = w.teeth {
@@ -149,7 +152,7 @@ fn wheel_link(out: &mut String, w: &Wheel) {
             let a = t.phase_rad + std::f64::consts::TAU * k as f64 / t.count as f64;
             let _ = writeln!(
                 out,
-                "    <collision><origin xyz=\"{:.6} 0 {:.6}\" rpy=\"1.5707963267949 0 0\"/><geometry>\
+                "    <collision><origin xyz=\"{:.6} 0 {:.6}\" rpy=\"{ALONG_AXLE_RPY}\"/><geometry>\
                  <capsule radius=\"{radius:.6}\" length=\"{length:.6}\"/></geometry></collision>",
                 centre * a.cos(),
                 centre * a.sin(),
