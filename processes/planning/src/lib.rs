@@ -14,6 +14,8 @@
 //! - every control period: [`LocalPlanner::command`] with the previous command, stopping
 //!   (and re-planning) when it returns `None`, and stopping at the goal.
 //!
+//! [`Replanner`] is that outline as the planning node runs it, step by step.
+//!
 //! ```
 //! use caravan_planning::*;
 //! use caravan_schemas::Pose2D;
@@ -43,6 +45,7 @@ mod error;
 mod global;
 mod local;
 mod path;
+mod replan;
 mod trace;
 mod window;
 
@@ -51,4 +54,5 @@ pub use error::{PlanError, Point};
 pub use global::{GlobalParams, GlobalPlanner};
 pub use local::{LocalParams, LocalPlanner};
 pub use path::{fill_path2d, nearest_pose_index, path_blocked, path_length};
+pub use replan::{Decision, Replanner};
 pub use window::CellWindow;

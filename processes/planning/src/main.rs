@@ -8,14 +8,12 @@
 //! blocked, when the local planner finds no safe rollout, and at least every
 //! `replan_period_s` while the map changes (the world is discovered as the leader drives). An
 //! unreachable goal is reported once, with the planner's reason, and nothing is commanded:
-//! the leader stops when its commands go stale.
+//! the leader stops when its commands go stale. The rules are the library's `Replanner`
+//! (`replan.rs`); this file wires it to the topics.
 
 use caravan::{Error, Node, Trigger};
-use caravan_planning::{
-    Costmap, CostmapParams, GlobalParams, GlobalPlanner, LocalParams, LocalPlanner, fill_path2d,
-    nearest_pose_index, path_blocked,
-};
-use caravan_schemas::{Goal, Pose2D, Twist, topics};
+use caravan_planning::{CostmapParams, GlobalParams, LocalParams, Replanner, fill_path2d};
+use caravan_schemas::{Twist, topics};
 use serde::Deserialize;
 use std::process::ExitCode;
 
@@ -84,22 +82,6 @@ fn main() -> ExitCode {
     )
 }
 
-/// What the planner is working on.
-#[derive(Default)]
-struct State {
-    costmap: Option<Costmap>,
-    map_seq: Option<u64>,
-    map_changed: bool,
-    goal: Option<Goal>,
-    path: Vec<Pose2D>,
-    last_plan_s: f64,
-    replan: bool,
-    /// The last command sent, the local planner's starting point.
-    command: (f64, f64),
-    /// The last planning failure reported, to report each once.
-    reported: Option<String>,
-}
-
 fn plan(mut node: Node, p: &Params) -> Result<(), Error> {
     let i = p.robot;
     let map_sub = node.subscriber(&topics::map())?;
@@ -107,75 +89,32 @@ fn plan(mut node: Node, p: &Params) -> Result<(), Error> {
     let goal_sub = node.subscriber(&topics::goal())?;
     let path_pub = node.publisher(&topics::path(i))?;
     let cmd_pub = node.publisher(&topics::cmd_vel(i))?;
-    let mut global = GlobalPlanner::new(p.global.clone());
-    let local = LocalPlanner::new(p.local.clone());
-    let mut s = State::default();
+    let mut r = Replanner::new(
+        p.replan_period_s,
+        p.costmap.clone(),
+        p.global.clone(),
+        p.local.clone(),
+    );
     let name = node.name().to_string();
     node.run(Trigger::every_hz(10.0), |step| {
         let now = step.now().as_secs_f64();
-        if let Some(map) = map_sub.latest()?
-            && s.map_seq != Some(map.header().seq)
-        {
-            s.map_seq = Some(map.header().seq);
-            match &mut s.costmap {
-                Some(c) => c.update(&map),
-                None => s.costmap = Some(Costmap::from_grid(&map, &p.costmap)),
-            }
-            s.map_changed = true;
+        if let Some(map) = map_sub.latest()? {
+            r.map(map.header().seq, &map);
         }
-        if let Some(goal) = goal_sub.latest()?
-            && s.goal.map(|g| (g.index, g.pose)) != Some((goal.index, goal.pose))
-        {
-            s.goal = Some(*goal);
-            s.replan = true;
+        if let Some(goal) = goal_sub.latest()? {
+            r.goal(*goal);
         }
-        let (Some(costmap), Some(goal), Some(pose)) =
-            (&s.costmap, s.goal, pose_sub.latest()?.map(|m| *m))
-        else {
-            return Ok(());
-        };
-        if goal.index >= goal.total {
-            return Ok(()); // every goal reached
+        let decision = r.step(now, pose_sub.latest()?.map(|m| *m));
+        if let Some(text) = &decision.failure {
+            eprintln!("{name}: cannot plan to {text}");
         }
-        if s.map_changed && !s.path.is_empty() {
-            let from = nearest_pose_index(&s.path, pose.x, pose.y).unwrap_or(0);
-            if path_blocked(costmap, &s.path, from) || now - s.last_plan_s >= p.replan_period_s {
-                s.replan = true;
-            }
-            s.map_changed = false;
+        if decision.new_path {
+            let mut msg = path_pub.loan()?;
+            fill_path2d(&mut msg, r.path());
+            msg.send()?;
         }
-        if s.replan || s.path.is_empty() {
-            s.last_plan_s = now;
-            s.replan = false;
-            match global.plan(costmap, pose, goal.pose) {
-                Ok(path) => {
-                    s.path = path;
-                    s.reported = None;
-                    let mut msg = path_pub.loan()?;
-                    fill_path2d(&mut msg, &s.path);
-                    msg.send()?;
-                }
-                Err(e) => {
-                    let text = format!("goal {} of {}: {e}", goal.index + 1, goal.total);
-                    if s.reported.as_deref() != Some(text.as_str()) {
-                        eprintln!("{name}: cannot plan to {text}");
-                        s.reported = Some(text);
-                    }
-                    s.path.clear();
-                    return Ok(());
-                }
-            }
-        }
-        match local.command(costmap, pose, s.command, &s.path) {
-            Some((v, omega)) => {
-                s.command = (v, omega);
-                cmd_pub.publish(&Twist::planar(v, omega))?;
-            }
-            // Every rollout collides: stop (no command) and plan afresh next step.
-            None => {
-                s.command = (0.0, 0.0);
-                s.replan = true;
-            }
+        if let Some((v, omega)) = decision.command {
+            cmd_pub.publish(&Twist::planar(v, omega))?;
         }
         Ok(())
     })?;
