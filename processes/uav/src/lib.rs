@@ -5,6 +5,7 @@
 //!
 //! - [`curve`]: learning curves of training logs;
 //! - [`encounter`]: the environment's constants, actions, observation, reward and episode ends;
+//! - [`episode`]: the environment node's episodes: start, actions, steps, ends;
 //! - [`metrics`]: the measures of an episode the reference never took;
 //! - [`mlp`]: a trained actor, run without the training stack;
 //! - [`opponent`]: the scripted opponents (straight, zigzag, pursuit);
@@ -16,6 +17,7 @@
 
 pub mod curve;
 pub mod encounter;
+pub mod episode;
 pub mod metrics;
 pub mod mlp;
 pub mod opponent;
