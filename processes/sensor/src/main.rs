@@ -7,18 +7,17 @@
 //!      `robot/j/pose_true` of the other robots (for the laser to see their chassis); with
 //!      `link`, `robot/i/link_states` instead of pose and twist (see `attach.rs`).
 //! Out: `robot/i/encoder_ticks`, `robot/i/scan` (if `laser`), `robot/i/imu` (if `imu`).
+//!
+//! What the sensors do with each input and when they publish is the library's `SensorSuite`
+//! (`suite.rs`); this file opens the ports and drains them into it each step.
 
 use caravan::{Node, NodeIdentity, Subscriber, Trigger, parse_rate};
-use caravan_schemas::{Pose2D, Twist, WheelState, topics};
-use caravan_sensor::attach::{check_force_joint, check_link, link_state};
-use caravan_sensor::encoders::encoder_ticks;
-use caravan_sensor::force_accel::ForceAccelerometer;
-use caravan_sensor::imu::{BodyState, Mount, VirtualImu};
-use caravan_sensor::laser::Laser;
+use caravan_schemas::{Pose2D, topics};
+use caravan_sensor::attach::{check_force_joint, check_link};
 use caravan_sensor::params::Accelerometer;
 use caravan_sensor::params::Params;
-use caravan_sensor::schedule::{due, every_nth};
-use caravan_sensor::sync::Pairer;
+use caravan_sensor::schedule::every_nth;
+use caravan_sensor::suite::SensorSuite;
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -107,42 +106,25 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     let wheels = node.subscriber(&topics::wheel_state(i))?;
     let ticks_out = node.publisher(&topics::encoder_ticks(i))?;
 
+    let mut suite = SensorSuite::new(&p, &world, robot.as_ref(), seed, encoder_every, laser_every);
     // The laser sees the other robots at their latest true poses, if it knows their shape.
-    let mut laser = p.laser.then(|| match &robot {
-        Some(robot) => Laser::new(p.laser_config(), &world, robot, seed),
-        None => Laser::world_only(p.laser_config(), &world, seed),
-    });
-    let others: Vec<Subscriber<Pose2D>> = if p.laser && robot.is_some() {
-        (0..p.count)
-            .filter(|&j| j != i)
-            .map(sub_pose)
-            .collect::<Result<_, _>>()?
-    } else {
-        Vec::new()
-    };
+    let others: Vec<Subscriber<Pose2D>> = suite
+        .others()
+        .iter()
+        .map(|&j| sub_pose(j))
+        .collect::<Result<_, _>>()?;
     let scan_out = if p.laser {
         Some(node.publisher(&topics::scan(i))?)
     } else {
         None
     };
 
-    // The IMU needs pose and twist of the same instant; they come on two topics.
-    let mount = Mount {
-        offset: p.imu_offset.into(),
-    };
-    let mut imu = p.imu.then(|| {
-        let imu = VirtualImu::new(mount, p.imu_noise(), seed);
-        match &p.imu_errors {
-            Some(e) => imu.with_errors(e),
-            None => imu,
-        }
-    });
-    // The force-sensor accelerometer pairs force readings with link states by stamp.
-    let mut force_accel = (p.imu && p.imu_accelerometer == Accelerometer::ForceSensor)
-        .then(|| ForceAccelerometer::new(&p.imu_force_joint, p.imu_test_mass_kg));
-    let forces_in = match force_accel {
-        Some(_) => Some(node.subscriber(&topics::force_torque(i))?),
-        None => None,
+    // The IMU needs pose and twist of the same instant; they come on two topics. The
+    // force-sensor accelerometer pairs force readings with link states by stamp.
+    let forces_in = if suite.reads_forces() {
+        Some(node.subscriber(&topics::force_torque(i))?)
+    } else {
+        None
     };
     let links_in = match &p.link {
         Some(_) => Some(node.subscriber(&topics::link_states(i))?),
@@ -179,46 +161,22 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         },
     );
 
-    let mut pairer = Pairer::<Pose2D, Twist>::new(16);
-    let mut own: Option<Pose2D> = None;
-    let mut other_poses: Vec<Option<Pose2D>> = vec![None; others.len()];
-    let mut visible: Vec<Pose2D> = Vec::with_capacity(others.len());
-    let mut wheel: Option<WheelState> = None;
-    let mut fresh_imu = None;
-    let mut warned_silent = false;
-
     node.run(Trigger::Every(period), |step| {
         // Drain every input each step, so none overflows its queue between uses.
         if let (Some(links_in), Some(link)) = (&links_in, &p.link) {
-            // Nothing after a second: physics does not publish this robot's link states, or
-            // not this link. Say so once rather than stay silent.
-            if own.is_none() && !warned_silent && step.now() >= Duration::from_secs(1) {
-                warned_silent = true;
+            if suite.link_silent(step.now()) {
                 eprintln!(
                     "caravan-sensor: no state of link '{link}' on robot/{i}/link_states after \
                      1 s; give physics `link_states = true` for robot {i}"
                 );
             }
-            if let (Some(fa), Some(forces_in)) = (force_accel.as_mut(), &forces_in) {
+            if let Some(forces_in) = &forces_in {
                 while let Some(m) = forces_in.receive()? {
-                    fa.push(m.header().stamp_ns, &m);
+                    suite.forces(m.header().stamp_ns, &m);
                 }
             }
             while let Some(m) = links_in.receive()? {
-                let stamp_ns = m.header().stamp_ns;
-                let Some((body, planar, z)) = link_state(stamp_ns, &m, link) else {
-                    continue;
-                };
-                own = Some(planar);
-                if let Some(laser) = laser.as_mut() {
-                    laser.set_mount_height(z);
-                }
-                let force = force_accel
-                    .as_ref()
-                    .and_then(|f| f.specific_force(stamp_ns));
-                if let Some(r) = imu.as_mut().and_then(|imu| imu.update_with(&body, force)) {
-                    fresh_imu = Some(r);
-                }
+                suite.link_states(m.header().stamp_ns, &m);
             }
         }
         while let Some(m) = own_pose
@@ -227,49 +185,35 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
             .transpose()?
             .flatten()
         {
-            own = Some(*m);
-            if imu.is_some() {
-                pairer.push_a(m.header().stamp_ns, *m);
-            }
+            suite.pose(m.header().stamp_ns, *m);
         }
         if let Some(twist_in) = &twist_in {
             while let Some(m) = twist_in.receive()? {
-                pairer.push_b(m.header().stamp_ns, *m);
+                suite.twist(m.header().stamp_ns, *m);
             }
         }
-        if let Some(imu) = imu.as_mut() {
-            while let Some((stamp, pose, twist)) = pairer.pop() {
-                if let Some(r) = imu.update(&BodyState::planar(stamp, &pose, &twist)) {
-                    fresh_imu = Some(r);
-                }
-            }
-        }
-        for (sub, slot) in others.iter().zip(other_poses.iter_mut()) {
+        suite.pair_imu();
+        for (k, sub) in others.iter().enumerate() {
             if let Some(m) = sub.latest()? {
-                *slot = Some(*m);
+                suite.other_pose(k, *m);
             }
         }
         if let Some(m) = wheels.latest()? {
-            wheel = Some(*m);
+            suite.wheel(*m);
         }
 
-        if due(step.index(), encoder_every)
-            && let Some(w) = &wheel
-        {
-            ticks_out.publish(&encoder_ticks(w, p.ticks_per_rev))?;
+        if let Some(ticks) = suite.encoder_ticks(step.index()) {
+            ticks_out.publish(&ticks)?;
         }
-        if let (Some(laser), Some(out), Some(own)) = (laser.as_mut(), &scan_out, &own)
-            && due(step.index(), laser_every)
+        if let Some(out) = &scan_out
+            && suite.scan_due(step.index())
         {
-            visible.clear();
-            visible.extend(other_poses.iter().flatten());
-            // Filled in place in shared memory: a scan is ~8.7 KB.
             let mut scan = out.loan()?;
-            laser.scan(own, &visible, &mut scan);
+            suite.scan(&mut scan);
             scan.send()?;
         }
-        if let (Some(imu), Some(out), Some(r)) = (&imu, &imu_out, fresh_imu.take()) {
-            out.publish(&imu.message(&r))?;
+        if let (Some(out), Some(imu)) = (&imu_out, suite.imu_message()) {
+            out.publish(&imu)?;
         }
         Ok(())
     })?;
