@@ -1,7 +1,7 @@
 //! The payloads of `caravan bench transport`: fixed-size byte blobs.
 //!
 //! They live here, beside the schema types, so that the bridge between hosts can carry them
-//! ([`crate::with_wire_type!`] knows them, [`crate::wire`] has their layout) and the bench can
+//! (`with_wire_type!` knows them, and the wire encoding has their layout) and the bench can
 //! measure the path a topic takes between two hosts. They are not message types of the
 //! registry: recordings, `caravan topic echo` and the Python generator never meet them.
 

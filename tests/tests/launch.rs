@@ -158,6 +158,58 @@ fn lockstep_reruns_are_byte_identical_under_cpu_load() {
     assert!(recording::channels(&a).contains_key("demo/pong"));
 }
 
+#[test]
+fn a_group_run_in_process_records_the_bytes_caravan_launch_records() {
+    let s = Scenario::new("in-process", PINGPONG);
+    let launched = s.run(&["--duration", "3s"]);
+    assert!(launched.status.success(), "{}", stderr(&launched));
+    // The workspace's programs, as the command finds them beside itself.
+    let bin_dir = caravan_tests::workspace_bin("caravan-demo")
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    let path = std::env::join_paths(
+        std::iter::once(bin_dir).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap())),
+    )
+    .unwrap();
+    // SAFETY: nextest runs each test in a process of its own, and no other thread of this one
+    // reads the environment yet.
+    unsafe { std::env::set_var("PATH", path) };
+    let lf = caravan_group::launch::load_file(&s.file, &["group.duration=3s".into()]).unwrap();
+    let mut options = caravan_group::launch::RunOptions::new(s.dir.join("runs"));
+    options.quiet = true;
+    // The recording keeps the command line it was made by; say it was the command's.
+    let (file, runs) = (
+        s.file.display().to_string(),
+        s.dir.join("runs").display().to_string(),
+    );
+    let command = [
+        "launch",
+        &file,
+        "--runs-dir",
+        &runs,
+        "--quiet",
+        "--duration",
+        "3s",
+    ];
+    options.arguments = command.map(String::from).to_vec();
+    let run = caravan_group::launch::start(lf, &options).unwrap();
+    assert_eq!(run.code, 0);
+    let dir = run.dir.expect("a run directory");
+    let dirs = s.run_dirs();
+    assert_eq!(dirs.len(), 2);
+    let by_command = std::fs::read(
+        dirs.iter()
+            .find(|d| **d != dir)
+            .unwrap()
+            .join("record.mcap"),
+    );
+    let in_process = std::fs::read(dir.join("record.mcap")).unwrap();
+    assert!(recording::channels(&in_process).contains_key("demo/pong"));
+    assert!(by_command.unwrap() == in_process, "recordings differ");
+    assert!(dir.join("report.json").is_file());
+}
+
 /// A realtime group of a healthy node and one that exits with status 3 after two steps;
 /// `policy` is appended to the crashing process's table.
 fn crash_scenario(duration: &str, policy: &str) -> String {

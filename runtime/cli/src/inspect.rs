@@ -1,30 +1,11 @@
 //! `caravan topic …` and `caravan node …`: looking into a running group.
 
-use crate::clean::{choose_group, live_nodes};
-use anyhow::{Result, anyhow};
-use caravan::tap::{list_topics, open_listener, open_tap};
+use anyhow::Result;
+use caravan::tap::list_topics;
+use caravan_group::clean::{choose_group, live_nodes};
+use caravan_group::watch::{GroupArg, follow, seconds_arg};
 use clap::{Args, Subcommand};
-use iceoryx2::prelude::*;
 use std::time::{Duration, Instant};
-
-/// A `--seconds` value: finite, more than 0, at most ten years.
-pub fn seconds_arg(text: &str) -> Result<Duration, String> {
-    let value: f64 = text
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{text}' is not a number of seconds"))?;
-    if value <= 0.0 {
-        return Err(format!("'{text}': must be more than 0 seconds"));
-    }
-    caravan::seconds(value)
-}
-
-#[derive(Args)]
-pub struct GroupArg {
-    /// The group; defaults to the only running one
-    #[arg(long, short, value_parser = crate::clean::group_arg)]
-    pub group: Option<String>,
-}
 
 /// A list command's arguments.
 #[derive(Args)]
@@ -59,7 +40,7 @@ pub enum TopicCommand {
         json: bool,
     },
     /// Publish a message (JSON) on a topic, once or at a rate
-    Pub(crate::inject::PubArgs),
+    Pub(caravan_group::inject::PubArgs),
     /// Measure a topic's publishing rate
     Hz {
         topic: String,
@@ -84,16 +65,6 @@ pub enum NodeCommand {
         #[arg(long)]
         json: bool,
     },
-}
-
-pub fn iox(group: &str) -> Result<(iceoryx2::config::Config, iceoryx2::node::Node<ipc::Service>)> {
-    let config = caravan::group::config(group)?;
-    let node = NodeBuilder::new()
-        .config(&config)
-        .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
-        .create::<ipc::Service>()
-        .map_err(|e| anyhow!("cannot join group '{group}': {e:?}"))?;
-    Ok((config, node))
 }
 
 pub fn topic(cmd: TopicCommand) -> Result<()> {
@@ -130,7 +101,7 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
             follow(&group, &topic, None, |header, mut json| {
                 // The recording's shape: the message's fields and its header.
                 if let serde_json::Value::Object(fields) = &mut json {
-                    let header = crate::record::schema::header_json(header, true);
+                    let header = caravan_record::schema::header_json(header, true);
                     fields.insert("header".into(), header);
                 }
                 println!("{json}");
@@ -138,9 +109,9 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
                 count.is_some_and(|c| printed >= c)
             })
         }
-        TopicCommand::Pub(args) => crate::inject::publish(&args),
+        TopicCommand::Pub(args) => caravan_group::inject::publish(&args),
         TopicCommand::Info { topic, group, json } => {
-            crate::graph::topic_info(&choose_group(group.group.as_deref())?, &topic, json)
+            caravan_group::graph::topic_info(&choose_group(group.group.as_deref())?, &topic, json)
         }
         TopicCommand::Hz {
             topic,
@@ -160,90 +131,6 @@ pub fn topic(cmd: TopicCommand) -> Result<()> {
                 n as f64 / secs
             );
             Ok(())
-        }
-    }
-}
-
-/// Notices that a group has ended (no process of it but this one is alive), looking at most
-/// once a second: listing nodes is too dear for every message.
-pub struct GroupEnd {
-    group: String,
-    last_look: Instant,
-}
-
-impl GroupEnd {
-    pub fn watch(group: &str) -> Self {
-        Self {
-            group: group.to_string(),
-            last_look: Instant::now(),
-        }
-    }
-
-    /// Whether the group has ended, if a second has passed since the last look; else false.
-    pub fn ended(&mut self) -> Result<bool> {
-        if self.last_look.elapsed() < Duration::from_secs(1) {
-            return Ok(false);
-        }
-        self.last_look = Instant::now();
-        let me = std::process::id() as i32;
-        Ok(!live_nodes(&self.group)?.iter().any(|n| n.pid != me))
-    }
-}
-
-/// Calls `each` for every message on `topic` until it returns true, `limit` passes, the group
-/// ends (looked at once a second) or Ctrl-C.
-pub fn follow(
-    group: &str,
-    topic: &str,
-    limit: Option<Duration>,
-    mut each: impl FnMut(&caravan::Header, serde_json::Value) -> bool,
-) -> Result<()> {
-    let (config, node) = iox(group)?;
-    let info = list_topics(&config, true)?
-        .into_iter()
-        .find(|t| t.name == topic)
-        .ok_or_else(|| anyhow!("group '{group}' has no topic '{topic}'"))?;
-    let tap = open_tap(&node, topic, &info.type_name)?;
-    let listener = open_listener(&node, topic)?;
-    let waitset = WaitSetBuilder::new()
-        .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
-        .create::<ipc::Service>()
-        .map_err(|e| anyhow!("{e:?}"))?;
-    let _guard = waitset
-        .attach_notification(&listener)
-        .map_err(|e| anyhow!("{e:?}"))?;
-    let end = limit.map(|l| Instant::now() + l);
-    let mut batch = Vec::new();
-    let mut group_end = GroupEnd::watch(group);
-    loop {
-        let wait = end.map_or(Duration::from_secs(1), |e| {
-            e.saturating_duration_since(Instant::now())
-                .min(Duration::from_secs(1))
-        });
-        let result = waitset
-            .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, wait)
-            .map_err(|e| anyhow!("{e:?}"))?;
-        if !matches!(
-            result,
-            iceoryx2::waitset::WaitSetRunResult::AllEventsHandled
-        ) {
-            return Ok(());
-        }
-        let _ = listener.try_wait(|_| {});
-        // Looked at before draining, so that what was published before the end is printed.
-        let ended = group_end.ended()?;
-        tap.drain(&mut batch)?;
-        for m in batch.drain(..) {
-            if each(&m.header, m.json()?) {
-                return Ok(());
-            }
-        }
-        if end.is_some_and(|e| Instant::now() >= e) {
-            return Ok(());
-        }
-        if ended {
-            eprintln!("caravan: group '{group}' has ended");
-            return Ok(());
         }
     }
 }
@@ -275,7 +162,7 @@ pub fn node(cmd: NodeCommand) -> Result<()> {
             Ok(())
         }
         NodeCommand::Info { name, group, json } => {
-            crate::graph::node_info(&choose_group(group.group.as_deref())?, &name, json)
+            caravan_group::graph::node_info(&choose_group(group.group.as_deref())?, &name, json)
         }
     }
 }

@@ -1,20 +1,12 @@
 //! The `caravan` command.
 
-mod bench;
-mod bridge;
-mod clean;
-mod graph;
-mod inject;
+mod info;
 mod inspect;
-mod launch;
-mod play;
 mod record;
-mod report;
-mod resim;
-mod run;
 mod schemas_py;
-mod sweep;
 mod top;
+
+use caravan_group::{clean, launch, play, report, resim};
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -33,9 +25,9 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Launch a process group from a launch file
-    Launch(launch::command::LaunchArgs),
+    Launch(launch::LaunchArgs),
     /// Run a launch file over a grid of overrides × seeds, several groups at once
-    Sweep(sweep::SweepArgs),
+    Sweep(caravan_sweep::SweepArgs),
     /// Topics of a running group
     #[command(subcommand)]
     Topic(inspect::TopicCommand),
@@ -45,14 +37,14 @@ enum Command {
     /// A live table of a group's nodes: rate, deadline misses, jitter, compute time, CPU, memory
     Top(top::TopArgs),
     /// Record a running group's topics to an MCAP file
-    Record(record::command::RecordArgs),
+    Record(record::RecordArgs),
     /// Play a recording's topics into a running group at their recorded times
     Play(play::PlayArgs),
     /// Run one node of a lockstep recording again, fed the recorded inputs, and compare its
     /// outputs with the recorded ones (deterministic re-simulation)
     Resim(resim::ResimArgs),
     /// What a recording holds: time span, channels with schema and count, metadata
-    Info(record::info::InfoArgs),
+    Info(info::InfoArgs),
     /// Recompute report.json and report.md of a run directory
     Report {
         /// The run directory (runs/<group>-<time>)
@@ -63,7 +55,7 @@ enum Command {
     Clean(clean::CleanArgs),
     /// Latency benchmarks
     #[command(subcommand)]
-    Bench(bench::BenchCommand),
+    Bench(caravan_bench::BenchCommand),
     /// Message layouts for other languages: a Python module (--python) or JSON (--layout)
     Schemas(schemas_py::SchemasArgs),
     /// Print a shell completion script: `source <(caravan completions bash)`
@@ -81,12 +73,12 @@ fn main() -> ExitCode {
         unsafe { libc::signal(libc::SIGPIPE, libc::SIG_DFL) };
     }
     let result = match cli.command {
-        Command::Launch(args) => launch::command::launch(&args).map(ExitCode::from),
-        Command::Sweep(args) => sweep::run(&args).map(ExitCode::from),
+        Command::Launch(args) => launch::launch(&args).map(ExitCode::from),
+        Command::Sweep(args) => caravan_sweep::run(&args).map(ExitCode::from),
         Command::Topic(cmd) => inspect::topic(cmd).map(|_| ExitCode::SUCCESS),
         Command::Node(cmd) => inspect::node(cmd).map(|_| ExitCode::SUCCESS),
-        Command::Record(args) => record::command::record(args).map(|_| ExitCode::SUCCESS),
-        Command::Info(args) => record::info::info(&args).map(|_| ExitCode::SUCCESS),
+        Command::Record(args) => record::record(args).map(|_| ExitCode::SUCCESS),
+        Command::Info(args) => info::info(&args).map(|_| ExitCode::SUCCESS),
         Command::Report { run_dir } => report::write(&run_dir).map(|w| {
             println!("{}", report_summary(&w.report));
             for failure in &w.failures {
@@ -99,7 +91,7 @@ fn main() -> ExitCode {
             }
         }),
         Command::Clean(args) => clean::clean(&args).map(|_| ExitCode::SUCCESS),
-        Command::Bench(cmd) => bench::run(cmd).map(|_| ExitCode::SUCCESS),
+        Command::Bench(cmd) => caravan_bench::run(cmd).map(|_| ExitCode::SUCCESS),
         Command::Schemas(args) => schemas_py::run(&args).map(|_| ExitCode::SUCCESS),
         Command::Play(args) => play::play(&args).map(|_| ExitCode::SUCCESS),
         Command::Resim(args) => resim::resim(&args).map(ExitCode::from),

@@ -2,9 +2,9 @@
 //! a second (steps, rate, deadline misses, jitter, compute time, memory) and the processes'
 //! CPU time from `/proc`, as `top` shows processes.
 
-use crate::clean::{choose_group, live_nodes};
-use crate::inspect::{GroupArg, follow};
 use anyhow::Result;
+use caravan_group::clean::{choose_group, live_nodes};
+use caravan_group::watch::{GroupArg, follow};
 use caravan_report::as_u64;
 use clap::Args;
 use serde_json::{Value, json};

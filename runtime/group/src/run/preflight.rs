@@ -1,0 +1,196 @@
+//! Checking every process's params and inputs before the group starts. Each Caravan program
+//! runs once with `CARAVAN_CHECK=1`: it reads its params, world and robot description as it
+//! would to run, and exits 0, or 2 with a message naming the key, without joining the group
+//! (`caravan::node_main`, `caravan.main` in Python). A bad param of any process then stops
+//! the launch before anything started, as a bad key of the launch file does.
+
+use caravan_launch::model::{LaunchFile, ProcessProblem};
+use crossbeam::channel::{RecvTimeoutError, bounded};
+use std::path::Path;
+use std::process::{Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// How long a check may take. Generous: a Python agent's first check creates its virtual
+/// environment and installs its packages.
+pub const CHECK_TIMEOUT: Duration = Duration::from_secs(600);
+
+/// Runs the checks of `lf`'s processes at once and returns what they found wrong.
+pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
+    let mut env = match super::group_environment(lf) {
+        Ok(env) => env,
+        Err(e) => {
+            return vec![problem(
+                0,
+                format!("cannot describe the group's network: {e:#}"),
+            )];
+        }
+    };
+    env.insert(caravan::env_vars::CHECK.into(), "1".into());
+    let mut running = Vec::new();
+    let mut problems = Vec::new();
+    for (index, plan) in super::plan(lf).into_iter().enumerate() {
+        if !is_checked(&plan) {
+            continue;
+        }
+        let name = plan.spec.name.clone();
+        // A check holds no shared memory, and one blocked in a read would sit out a SIGTERM:
+        // it is killed outright if the launcher dies.
+        let child = plan
+            .command(&env, libc::SIGKILL)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn();
+        match child {
+            Ok(child) => {
+                let (tx, rx) = bounded(1);
+                let pid = child.id() as i32;
+                std::thread::spawn(move || {
+                    let _ = tx.send(child.wait_with_output());
+                });
+                running.push((index, name, plan.program, pid, rx));
+            }
+            Err(e) => problems.push(problem(
+                index,
+                format!(
+                    "process '{name}': cannot run {}: {e}",
+                    plan.program.display()
+                ),
+            )),
+        }
+    }
+    let deadline = Instant::now() + CHECK_TIMEOUT;
+    for (index, name, program, pid, rx) in running {
+        // A check longer than a few seconds is said once, so a slow one is not taken for a hang.
+        let said = Instant::now() + Duration::from_secs(10);
+        let mut received =
+            rx.recv_timeout(said.min(deadline).saturating_duration_since(Instant::now()));
+        if matches!(received, Err(RecvTimeoutError::Timeout)) && Instant::now() < deadline {
+            eprintln!(
+                "caravan: still checking process '{name}' (up to {} s; a Python agent's first \
+                 check installs its packages)",
+                CHECK_TIMEOUT.as_secs()
+            );
+            received = rx.recv_timeout(deadline.saturating_duration_since(Instant::now()));
+        }
+        let output = match received {
+            Ok(output) => output,
+            Err(RecvTimeoutError::Timeout) => {
+                // SAFETY: kill(2) on the process group of a child we spawned and not reaped.
+                unsafe { libc::kill(-pid, libc::SIGKILL) };
+                let _ = rx.recv();
+                problems.push(problem(
+                    index,
+                    format!(
+                        "process '{name}': its check of its params did not end within {} s; \\
+                         set `check = false` for a program that does not understand CARAVAN_CHECK",
+                        CHECK_TIMEOUT.as_secs()
+                    ),
+                ));
+                continue;
+            }
+            Err(RecvTimeoutError::Disconnected) => continue,
+        };
+        if let Some(p) = judge(index, &name, &program, output) {
+            problems.push(p);
+        }
+    }
+    problems
+}
+
+/// Whether the launcher checks this process before the start (and, in realtime, expects a
+/// status from it): its `check` key, else whether it is one of Caravan's own programs.
+pub fn is_checked(plan: &super::supervisor::Planned) -> bool {
+    plan.spec
+        .check
+        .unwrap_or_else(|| is_caravan_program(&plan.program))
+}
+
+/// Caravan's own programs understand `CARAVAN_CHECK`: those built in this workspace (beside
+/// the `caravan` binary) and Python agents started through `caravan-python`.
+fn is_caravan_program(program: &Path) -> bool {
+    let beside = std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.parent().map(Path::to_path_buf));
+    program
+        .parent()
+        .is_some_and(|dir| Some(dir) == beside.as_deref())
+        || program.file_name().is_some_and(|f| f == "caravan-python")
+}
+
+fn judge(
+    index: usize,
+    name: &str,
+    program: &Path,
+    output: std::io::Result<Output>,
+) -> Option<ProcessProblem> {
+    let output = match output {
+        Ok(output) if output.status.success() => return None,
+        Ok(output) => output,
+        Err(e) => return Some(problem(index, format!("process '{name}': {e}"))),
+    };
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let text = tidy(stderr.trim(), name, program);
+    let message = match (output.status.code(), text.is_empty()) {
+        (_, false) => format!("process '{name}': {text}"),
+        (Some(code), true) => format!("process '{name}': its check exited {code}"),
+        (None, true) => format!("process '{name}': its check was killed by a signal"),
+    };
+    let key = named_key(text);
+    Some(ProcessProblem {
+        index,
+        key,
+        message,
+    })
+}
+
+/// The node's message without what the launcher says anyway: the program name before it and
+/// "params of node 'NAME': ".
+fn tidy<'a>(text: &'a str, name: &str, program: &Path) -> &'a str {
+    let mut text = text;
+    if let Some(file) = program.file_name().and_then(|f| f.to_str())
+        && let Some(rest) = text.strip_prefix(file).and_then(|t| t.strip_prefix(": "))
+    {
+        text = rest;
+    }
+    let prefix = format!("params of node '{name}': ");
+    text.strip_prefix(prefix.as_str()).unwrap_or(text)
+}
+
+/// The params key a message names as `key 'a.b'`, the form `caravan::parse_params` and the
+/// processes' checks use.
+fn named_key(text: &str) -> Option<String> {
+    let start = text.find("key '")? + 5;
+    let len = text[start..].find('\'')?;
+    Some(text[start..start + len].to_string()).filter(|k| !k.is_empty())
+}
+
+fn problem(index: usize, message: String) -> ProcessProblem {
+    ProcessProblem {
+        index,
+        key: None,
+        message,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn preflight_finds_the_named_key() {
+        assert_eq!(
+            named_key("key 'poses[0].x': expected f64").as_deref(),
+            Some("poses[0].x")
+        );
+        assert_eq!(named_key("cannot read world.toml"), None);
+    }
+
+    #[test]
+    fn preflight_drops_what_the_launcher_says_anyway() {
+        let text = "caravan-physics: params of node 'physics': key 'substeps': must be at least 1";
+        assert_eq!(
+            tidy(text, "physics", Path::new("/x/caravan-physics")),
+            "key 'substeps': must be at least 1"
+        );
+    }
+}
