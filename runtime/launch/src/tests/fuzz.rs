@@ -1,6 +1,6 @@
 //! The launch-file loader under mutation fuzzing: shipped launch files, edited at random
 //! (`caravan_report::fuzz`), must load or give problems, never panic. CI runs 2,000 inputs;
-//! `PROPTEST_CASES=1000000 cargo nextest run --release -p caravan-cli fuzz_launch` is the
+//! `PROPTEST_CASES=1000000 cargo nextest run --release -p caravan-launch fuzz_launch` is the
 //! long run (docs/reliability.md).
 
 use super::{BASE, resolve};
