@@ -278,10 +278,10 @@ fn import_circles(src: &Path) -> Vec<Vec<PathBuf>> {
                 &module[..module.len().saturating_sub(1)]
             };
             let full: Vec<String> = base.iter().cloned().chain(segs).collect();
-            if let Some(target) = (1..=full.len()).rev().find_map(|k| mods.get(&full[..k])) {
-                if target != path {
-                    edges[index[path]].insert(index[target]);
-                }
+            if let Some(target) = (1..=full.len()).rev().find_map(|k| mods.get(&full[..k]))
+                && target != path
+            {
+                edges[index[path]].insert(index[target]);
             }
         }
     }

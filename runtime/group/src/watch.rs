@@ -130,8 +130,9 @@ pub fn record(
     patterns: &[String],
     seconds: Option<Duration>,
 ) -> Result<caravan_record::Recording> {
+    let config = caravan::group::config(group)?;
     let mut recorder = caravan_record::Recorder::create(
-        &caravan::group::config(&group)?,
+        &config,
         output,
         patterns,
         false,
@@ -145,7 +146,6 @@ pub fn record(
         },
     )?;
     let end = seconds.map(|s| Instant::now() + s);
-    let config = caravan::group::config(&group)?;
     let mut group_end = GroupEnd::watch(group);
     let mut ended = false;
     crate::run::driver::record_until(
