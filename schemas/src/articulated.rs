@@ -2,6 +2,7 @@
 //! applied wrenches and contacts a perception estimated. Joints and links travel by name (at most [`NAME_BYTES`] bytes), as in
 //! ROS's `sensor_msgs/JointState`, so that a reader needs no URDF to interpret them.
 
+use crate::describe::Describe;
 use crate::{FixedString, FixedVec, Pose3D, Twist, Vector3};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
@@ -23,7 +24,9 @@ pub type Name = FixedString<NAME_BYTES>;
 /// One joint's position, velocity and effort: rad, rad/s, N·m for a revolute or continuous
 /// joint; m, m/s, N for a prismatic one.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::JointValue")]
 pub struct JointValue {
     /// The URDF joint's name. In a command, empty means "the joint at this index of
@@ -37,7 +40,7 @@ pub struct JointValue {
 /// Readings of a robot's movable joints, in URDF order (`robot/i/joint_states`). `effort` is
 /// the torque (force) its actuator applied over the last physics step, 0 for a passive joint.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::JointState")]
 pub struct JointState {
     pub joints: FixedVec<JointValue, MAX_JOINTS>,
@@ -48,7 +51,7 @@ pub struct JointState {
 /// feed-forward torque), a velocity actuator `velocity`, an effort actuator `effort`. NaN
 /// leaves a field's target as it was; targets are held until changed.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::JointCommand")]
 pub struct JointCommand {
     pub joints: FixedVec<JointValue, MAX_JOINTS>,
@@ -56,7 +59,9 @@ pub struct JointCommand {
 
 /// One link's ground-truth pose and velocity in the world frame.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::LinkState")]
 pub struct LinkState {
     pub name: Name,
@@ -78,7 +83,7 @@ impl LinkState {
 
 /// Every link of a robot, in URDF order (`robot/i/link_states`), as Gazebo's `LinkStates`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::LinkStates")]
 pub struct LinkStates {
     pub links: FixedVec<LinkState, MAX_LINKS>,
@@ -86,7 +91,9 @@ pub struct LinkStates {
 
 /// A contact point between one of a robot's links and something else.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Contact")]
 pub struct Contact {
     /// The robot's link.
@@ -127,7 +134,7 @@ impl Contact {
 
 /// A robot's contact points after the last step (`robot/i/contacts`).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::Contacts")]
 pub struct Contacts {
     pub contacts: FixedVec<Contact, MAX_CONTACTS>,
@@ -137,7 +144,9 @@ pub struct Contacts {
 /// (`robot/i/wrench`): a person's push, a lifting force. A new wrench on a link replaces the
 /// one acting on it; a zero wrench ends it.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Wrench")]
 pub struct Wrench {
     pub link: Name,
@@ -163,7 +172,9 @@ impl Wrench {
 /// A force–torque sensor's reading: what the parent exerts on the child through a fixed
 /// joint, in the child link's frame, as Gazebo's ForceTorque sensor (child, child-to-parent).
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::ForceTorque")]
 pub struct ForceTorque {
     /// The fixed joint that carries the sensor.
@@ -176,7 +187,7 @@ pub struct ForceTorque {
 
 /// A robot's force–torque sensors after the last step (`robot/i/force_torque`).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::ForceTorques")]
 pub struct ForceTorques {
     pub sensors: FixedVec<ForceTorque, MAX_FORCE_TORQUE>,
@@ -205,7 +216,9 @@ impl LinkStates {
 /// A contact force and its point as a perception process estimated them
 /// (`robot/i/contact_estimate`), e.g. from joint torques. World frame.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::ContactEstimate")]
 pub struct ContactEstimate {
     /// The link touched; empty when no contact was found.

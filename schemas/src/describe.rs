@@ -12,15 +12,8 @@
 //! `poses: FixedVec<Pose2D, N>` becomes `poses_len: u32` and `poses: [Pose2D; N]`, each at the
 //! offset the compiler gave it.
 
-use crate::lockstep::{Done, Grant, Hello};
-use crate::{
-    AgentAction, Collision, Contact, ContactEstimate, Contacts, EncoderTicks, EnvStep, EpisodeEnd,
-    FixedString, FixedVec, ForceTorque, ForceTorques, Goal, Header, Imu, JointCommand, JointState,
-    JointValue, LaserScan, LinkState, LinkStates, Metrics, NamedValue, NodeStatus, OccupancyGrid,
-    Odometry, Path2D, Pose2D, Pose3D, Quaternion, Scene, Shape, Twist, Vector3, WheelSetpoint,
-    WheelState, Wrench,
-};
-use core::mem::{align_of, offset_of, size_of};
+use crate::{FixedString, FixedVec};
+use core::mem::size_of;
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 
 /// Arrays whose JSON view holds only their valid part, counted by other fields: (type, array
@@ -149,10 +142,14 @@ pub trait ElementKind: Sized {
     const ELEMENT: Element;
 }
 
-/// A type with a layout description.
+/// A type with a layout description: `#[derive(Describe)]` on a `#[repr(C)]` struct writes it
+/// from the struct's declaration (field names from the declaration, offsets, sizes and types
+/// from the compiler).
 pub trait Describe {
     fn layout() -> TypeLayout;
 }
+
+pub use caravan_schemas_derive::Describe;
 
 fn kind_of(element: Element) -> Kind {
     match element {
@@ -210,156 +207,6 @@ macro_rules! scalars {
 
 scalars!(f64 => F64, f32 => F32, u64 => U64, i64 => I64, u32 => U32, i32 => I32, u8 => U8, i8 => I8);
 
-/// Adds the field that `access` reaches, at `offset`; `access` only lets the compiler name the
-/// field's type.
-fn push_field<S, F: FieldKind>(
-    name: &str,
-    offset: usize,
-    _access: fn(&S) -> &F,
-    out: &mut Vec<Field>,
-) {
-    F::push(name, offset, out);
-}
-
-macro_rules! describe {
-    ($($ty:ident { $($field:ident),* $(,)? })*) => {
-        $(
-            impl ElementKind for $ty {
-                const ELEMENT: Element = Element::Struct(stringify!($ty));
-            }
-
-            impl Describe for $ty {
-                fn layout() -> TypeLayout {
-                    let mut fields = Vec::new();
-                    $(push_field(
-                        stringify!($field),
-                        offset_of!($ty, $field),
-                        |v: &$ty| &v.$field,
-                        &mut fields,
-                    );)*
-                    TypeLayout {
-                        name: stringify!($ty),
-                        // SAFETY: reading the type name has no preconditions.
-                        type_name: unsafe { <$ty as ZeroCopySend>::type_name() },
-                        size: size_of::<$ty>(),
-                        align: align_of::<$ty>(),
-                        fields,
-                    }
-                }
-            }
-        )*
-
-        /// Every described type, each after the types it contains.
-        pub fn layouts() -> Vec<TypeLayout> {
-            vec![$(<$ty as Describe>::layout()),*]
-        }
-    };
-}
-
-describe! {
-    Header { seq, stamp_ns, send_wall_ns, source_id }
-    Vector3 { x, y, z }
-    Quaternion { x, y, z, w }
-    Pose2D { x, y, theta }
-    Pose3D { position, orientation }
-    Twist { linear, angular }
-    WheelSetpoint { left_rad_s, right_rad_s }
-    WheelState { left_angle_rad, right_angle_rad, left_rad_s, right_rad_s, left_voltage, right_voltage }
-    EncoderTicks { left, right, ticks_per_rev, _reserved }
-    Odometry { pose, pose_covariance, twist, twist_covariance }
-    LaserScan {
-        angle_min, angle_max, angle_increment, time_increment, scan_time, range_min, range_max,
-        beam_count, ranges, intensities,
-    }
-    Imu {
-        orientation, orientation_covariance, angular_velocity, angular_velocity_covariance,
-        linear_acceleration, linear_acceleration_covariance,
-    }
-    OccupancyGrid { resolution, origin, width, height, data }
-    Path2D { poses }
-    Goal { index, total, pose, tolerance_m }
-    Shape { kind, attached, pose, size, color }
-    Scene { shapes }
-    NodeStatus {
-        node, host, period_ns, steps, deadline_misses, jitter_p50_ns, jitter_p99_ns,
-        jitter_max_ns, compute_mean_ns, compute_p99_ns, compute_max_ns, messages_missed,
-        sim_time_ns, running, _reserved, rss_kib, compute_cpu_mean_ns,
-    }
-    Collision { robot, other_robot, started, _reserved }
-    JointValue { name, position, velocity, effort }
-    JointState { joints }
-    JointCommand { joints }
-    LinkState { name, pose, twist }
-    LinkStates { links }
-    Contact { link, other_robot, other_link, _reserved, point, normal, normal_force }
-    Contacts { contacts }
-    Wrench { link, frame, _reserved, point, force, torque, duration_s }
-    ForceTorque { joint, force, torque }
-    ForceTorques { sensors }
-    ContactEstimate { link, status, first_candidate, last_candidate, _reserved, point, force }
-    EnvStep { episode, step, terminated, truncated, _reserved, reward, observation }
-    AgentAction { episode, step, discrete, continuous }
-    NamedValue { name, value }
-    EpisodeEnd { episode, steps, _reserved, outcome, total_reward, metrics }
-    Metrics { values }
-    Hello { node, period_ns, triggers, inputs, outputs, declared, _reserved }
-    Grant { now_ns, tick_ns, stop, _reserved }
-    Done { node_hash, now_ns, wake_ns, published, undeclared, _reserved }
-}
-
-/// Erases the message types of [`crate::topics`] helpers, keeping how they name topics, and
-/// names each entry after its helper so that the table cannot drift from the functions.
-macro_rules! topic_names {
-    ($($constant:ident = $helper:ident),* $(,)?) => {
-        &[$((stringify!($constant), || crate::topics::$helper().name().to_owned())),*]
-    };
-    ($($helper:ident),* $(,)?) => {
-        &[$((stringify!($helper), |i| crate::topics::$helper(i).name().to_owned())),*]
-    };
-}
-
-/// A global topic helper with its message type erased: the topic's name.
-pub type GlobalTopic = fn() -> String;
-
-/// The global topics of [`crate::topics`], by the constant names other languages give them.
-pub const TOPIC_CONSTANTS: &[(&str, GlobalTopic)] = topic_names![
-    STATUS = status,
-    MAP = map,
-    GOAL = goal,
-    SCENE = scene,
-    COLLISIONS = collisions,
-    AGENT_OBSERVATION = agent_observation,
-    AGENT_ACTION = agent_action,
-    AGENT_EPISODE = agent_episode,
-];
-
-/// A per-robot topic helper with its message type erased: robot index to topic name.
-pub type RobotTopic = fn(usize) -> String;
-
-/// The per-robot topic helpers of [`crate::topics`], by their Rust names.
-pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
-    scan,
-    imu,
-    pose_true,
-    twist_true,
-    pose,
-    odometry,
-    wheel_setpoint,
-    wheel_state,
-    encoder_ticks,
-    cmd_vel,
-    path,
-    joint_states,
-    joint_command,
-    link_states,
-    contacts,
-    wrench,
-    force_torque,
-    ground_truth,
-    contact_estimate,
-    set_pose,
-];
-
 /// Alignment of a field's element: a scalar's size, or a described struct's alignment.
 fn element_align(element: Element, known: &[TypeLayout]) -> Option<usize> {
     match element {
@@ -401,43 +248,12 @@ pub fn check(layout: &TypeLayout, known: &[TypeLayout]) -> Result<(), String> {
     Ok(())
 }
 
-/// All layouts as JSON: `[{name, type_name, size, align, fields: [{name, offset, size, type,
-/// len?}]}]`, where `type` is a scalar name (`f64`) or a struct name and `len` marks an array.
-pub fn layouts_json() -> serde_json::Value {
-    let layouts: Vec<serde_json::Value> = layouts()
-        .iter()
-        .map(|l| {
-            let fields: Vec<serde_json::Value> = l
-                .fields
-                .iter()
-                .map(|f| {
-                    let mut v = serde_json::json!({
-                        "name": f.name,
-                        "offset": f.offset,
-                        "size": f.size,
-                        "type": f.kind.element().name(),
-                    });
-                    if let Some(len) = f.kind.array_len() {
-                        v["len"] = len.into();
-                    }
-                    v
-                })
-                .collect();
-            serde_json::json!({
-                "name": l.name,
-                "type_name": l.type_name,
-                "size": l.size,
-                "align": l.align,
-                "fields": fields,
-            })
-        })
-        .collect();
-    serde_json::Value::Array(layouts)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::catalog::{layouts, layouts_json};
+    use crate::lockstep::Hello;
+    use crate::{NodeStatus, Path2D};
 
     #[test]
     fn offsets_increase_and_end_within_the_size() {

@@ -2,6 +2,7 @@
 //! environment publishes each step's observation and reward (and whether the episode ended),
 //! the agent answers with an action, and each finished episode is summed up once.
 
+use crate::describe::Describe;
 use crate::{FixedString, FixedVec};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
@@ -19,7 +20,7 @@ pub type ShortName = FixedString<28>;
 /// One step of an episodic environment, to its agent (`agent/observation`), as Gymnasium's
 /// `reset` (step 0) and `step` return it.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::EnvStep")]
 pub struct EnvStep {
     /// Episode number, from 1.
@@ -38,7 +39,7 @@ pub struct EnvStep {
 
 /// An agent's answer to one [`EnvStep`] (`agent/action`).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::AgentAction")]
 pub struct AgentAction {
     /// The episode and step it answers.
@@ -51,7 +52,9 @@ pub struct AgentAction {
 
 /// A named number.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::NamedValue")]
 pub struct NamedValue {
     pub name: ShortName,
@@ -60,7 +63,7 @@ pub struct NamedValue {
 
 /// A finished episode, summed up once (`agent/episode`).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::EpisodeEnd")]
 pub struct EpisodeEnd {
     pub episode: u64,

@@ -9,7 +9,8 @@
 //! A `header` key is ignored, so a recorded message can be given whole. Unknown keys, wrong
 //! types, numbers outside their type's range and over-long arrays are errors naming the key.
 
-use crate::describe::{COUNTED_ARRAYS, Element, Kind, Scalar, TypeLayout, layouts};
+use crate::catalog::layouts;
+use crate::describe::{COUNTED_ARRAYS, Element, Kind, Scalar, TypeLayout};
 use serde_json::Value;
 
 /// Writes `json` into `bytes`, a value of the message type named `type_name` (its stable name,

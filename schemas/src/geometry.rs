@@ -1,9 +1,12 @@
+use crate::describe::Describe;
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
 
 /// A pose in the plane: metres and radians, REP 103 (x forward, y left, θ counter-clockwise).
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Pose2D")]
 pub struct Pose2D {
     pub x: f64,
@@ -12,7 +15,9 @@ pub struct Pose2D {
 }
 
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Vector3")]
 pub struct Vector3 {
     pub x: f64,
@@ -22,7 +27,7 @@ pub struct Vector3 {
 
 /// A unit quaternion (x, y, z, w) as in geometry_msgs/Quaternion.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::Quaternion")]
 pub struct Quaternion {
     pub x: f64,
@@ -70,7 +75,9 @@ pub fn wrap_angle(a: f64) -> f64 {
 
 /// A pose in space, as geometry_msgs/Pose.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Pose3D")]
 pub struct Pose3D {
     pub position: Vector3,
@@ -79,7 +86,9 @@ pub struct Pose3D {
 
 /// Linear and angular velocity, as geometry_msgs/Twist (m/s, rad/s).
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Twist")]
 pub struct Twist {
     pub linear: Vector3,

@@ -1,9 +1,12 @@
+use crate::describe::Describe;
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
 
 /// Stamped on every message by the publisher; travels as iceoryx2's user header.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Header")]
 pub struct Header {
     /// Per-publisher sequence number, starting at 1; a gap means lost messages.

@@ -5,8 +5,12 @@
 //! type name (`caravan::<Name>`) that iceoryx2 uses to reject mismatched publishers and
 //! subscribers. The stamped [`Header`] travels as iceoryx2's user header, beside the payload.
 
+// The derive writes `::caravan_schemas::…` paths, which this crate's own types use too.
+extern crate self as caravan_schemas;
+
 mod articulated;
 pub mod bench;
+pub mod catalog;
 pub mod describe;
 mod episodes;
 mod fixed;
@@ -78,6 +82,13 @@ impl<T> Message for T where
 pub fn type_name<T: Message>() -> &'static str {
     // SAFETY: `type_name` is `unsafe` only because implementors promise uniqueness; reading it
     // has no preconditions.
+    unsafe { <T as iceoryx2::prelude::ZeroCopySend>::type_name() }
+}
+
+/// The stable cross-language type name of any type that can live in shared memory (the
+/// lockstep protocol's messages and the header included).
+pub fn type_name_of<T: iceoryx2::prelude::ZeroCopySend>() -> &'static str {
+    // SAFETY: as in `type_name`.
     unsafe { <T as iceoryx2::prelude::ZeroCopySend>::type_name() }
 }
 

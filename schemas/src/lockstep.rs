@@ -3,6 +3,7 @@
 //! A node announces itself with [`Hello`], then waits for a [`Grant`] on its own grant service,
 //! steps at the granted simulated time and answers with [`Done`]. See `caravan::lockstep`.
 
+use crate::describe::Describe;
 use crate::{FixedString, FixedVec};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
@@ -35,7 +36,7 @@ pub const fn name_hash(name: &str) -> u64 {
 }
 
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::lockstep::Hello")]
 pub struct Hello {
     pub node: FixedString<64>,
@@ -56,7 +57,9 @@ pub struct Hello {
 
 /// Permission to step once at simulated time `now_ns`.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::lockstep::Grant")]
 pub struct Grant {
     pub now_ns: u64,
@@ -91,7 +94,7 @@ impl Grant {
 
 /// A finished step.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::lockstep::Done")]
 pub struct Done {
     pub node_hash: u64,

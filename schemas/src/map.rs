@@ -1,3 +1,4 @@
+use crate::describe::Describe;
 use crate::{FixedVec, Pose2D};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
@@ -11,7 +12,7 @@ pub const PATH_MAX_POSES: usize = 1024;
 /// An occupancy grid as nav_msgs/OccupancyGrid: −1 unknown, 0 free … 100 occupied.
 /// Cells are row-major from `origin`, `width` cells per row.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Describe)]
 #[type_name("caravan::OccupancyGrid")]
 pub struct OccupancyGrid {
     /// Metres per cell.
@@ -39,7 +40,7 @@ impl OccupancyGrid {
 
 /// A planned path in the map frame.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::Path2D")]
 pub struct Path2D {
     pub poses: FixedVec<Pose2D, PATH_MAX_POSES>,
@@ -47,7 +48,9 @@ pub struct Path2D {
 
 /// An operator goal: reach `pose` within `tolerance_m`.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Goal")]
 pub struct Goal {
     /// 0-based index in the goal sequence (A = 0, B = 1, …); equal to `total` once the last

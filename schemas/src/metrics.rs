@@ -3,6 +3,7 @@
 //! that Foxglove's Plot panel can draw it (`"convoy/metrics".values[:]{name=="gap_1"}.value`)
 //! without the report.
 
+use crate::describe::Describe;
 use crate::{FixedVec, NamedValue};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
@@ -12,7 +13,7 @@ pub const MAX_METRICS: usize = 32;
 
 /// Named values at the message's stamp (units in the names, e.g. `gap_1_m`).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::Metrics")]
 pub struct Metrics {
     pub values: FixedVec<NamedValue, MAX_METRICS>,

@@ -1,10 +1,13 @@
+use crate::describe::Describe;
 use crate::{Pose3D, Twist};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
 
 /// Wheel-speed set-points for the motor controller, in rad/s.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::WheelSetpoint")]
 pub struct WheelSetpoint {
     pub left_rad_s: f64,
@@ -13,7 +16,9 @@ pub struct WheelSetpoint {
 
 /// Measured state of the two driven wheels.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::WheelState")]
 pub struct WheelState {
     /// Accumulated wheel angle, rad.
@@ -29,7 +34,9 @@ pub struct WheelState {
 
 /// Accumulated encoder counts of the two driven wheels.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::EncoderTicks")]
 pub struct EncoderTicks {
     pub left: i64,
@@ -41,7 +48,7 @@ pub struct EncoderTicks {
 
 /// Pose and twist estimate with covariances, as nav_msgs/Odometry.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::Odometry")]
 pub struct Odometry {
     pub pose: Pose3D,
@@ -62,7 +69,9 @@ impl Default for Odometry {
 
 /// A contact between a robot and another robot or an obstacle began or ended.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Collision")]
 pub struct Collision {
     /// Index of the robot.

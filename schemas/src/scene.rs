@@ -3,6 +3,7 @@
 //! its world on [`crate::topics::scene`] (again every simulated second, so a late viewer gets
 //! it), and the recorder and the live view turn it into Foxglove's `SceneUpdate`.
 
+use crate::describe::Describe;
 use crate::{FixedVec, Pose3D, Vector3};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
@@ -12,7 +13,9 @@ pub const SCENE_MAX_SHAPES: usize = 2048;
 
 /// One solid: a box, an upright cylinder (its axis along its own z) or a sphere.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Shape")]
 pub struct Shape {
     /// [`Shape::BOX`], [`Shape::CYLINDER`] or [`Shape::SPHERE`].
@@ -36,7 +39,7 @@ impl Shape {
 
 /// A world's solids (floor, walls, obstacles, goal markers) and its robots' bodies.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
 #[type_name("caravan::Scene")]
 pub struct Scene {
     pub shapes: FixedVec<Shape, SCENE_MAX_SHAPES>,

@@ -1,3 +1,4 @@
+use crate::describe::Describe;
 use crate::{Quaternion, Vector3};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
@@ -7,7 +8,7 @@ pub const SCAN_MAX_BEAMS: usize = 1081;
 
 /// A planar laser scan, with the fields of sensor_msgs/LaserScan.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Describe)]
 #[type_name("caravan::LaserScan")]
 pub struct LaserScan {
     /// Start and end angle of the scan, rad.
@@ -42,7 +43,9 @@ impl LaserScan {
 
 /// Inertial measurement, as sensor_msgs/Imu.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::Imu")]
 pub struct Imu {
     pub orientation: Quaternion,

@@ -1,10 +1,13 @@
 use crate::FixedString;
+use crate::describe::Describe;
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
 
 /// Execution statistics of one node, published on `status` at 1 Hz and on exit.
 #[repr(C)]
-#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
 #[type_name("caravan::NodeStatus")]
 pub struct NodeStatus {
     pub node: FixedString<64>,

@@ -9,7 +9,8 @@
 //! Numbers travel in native byte order: the bridge's hosts must agree on it.
 
 use crate::Message;
-use crate::describe::{Element, TypeLayout, layouts};
+use crate::catalog::layouts;
+use crate::describe::{Element, TypeLayout};
 use core::mem::{MaybeUninit, size_of};
 use std::collections::BTreeMap;
 use std::sync::OnceLock;

@@ -246,3 +246,45 @@ fn a_scheduled_node_steps_exactly_when_it_asks() {
     assert_eq!(times("sink"), vec![1, 11, 41, 91, 161]);
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A message type declared in a crate of its own (here, this test crate), as a scenario
+/// declares its messages: the derive describes it from the declaration alone.
+mod outside_message {
+    use caravan_schemas::describe::{Describe, Element, Kind, Scalar, check};
+    use caravan_schemas::{FixedString, Vector3};
+    use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+
+    #[repr(C)]
+    #[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, serde::Serialize, Describe)]
+    #[type_name("outside::Beacon")]
+    pub struct Beacon {
+        pub id: u32,
+        pub _reserved: u32,
+        pub position: Vector3,
+        pub label: FixedString<12>,
+    }
+
+    #[test]
+    fn a_message_declared_outside_the_schemas_crate_describes_itself() {
+        let layout = Beacon::layout();
+        assert_eq!(layout.name, "Beacon");
+        assert_eq!(layout.type_name, "outside::Beacon");
+        assert_eq!(layout.size, size_of::<Beacon>());
+        let fields: Vec<(&str, usize, Kind)> = layout
+            .fields
+            .iter()
+            .map(|f| (f.name.as_str(), f.offset, f.kind))
+            .collect();
+        assert_eq!(
+            fields,
+            [
+                ("id", 0, Kind::Scalar(Scalar::U32)),
+                ("_reserved", 4, Kind::Scalar(Scalar::U32)),
+                ("position", 8, Kind::Struct("Vector3")),
+                ("label_len", 32, Kind::Scalar(Scalar::U32)),
+                ("label", 36, Kind::Array(Element::Scalar(Scalar::U8), 12)),
+            ]
+        );
+        check(&layout, &[Vector3::layout()]).unwrap();
+    }
+}

@@ -5,9 +5,8 @@
 //! the descriptions as JSON, which the layout test compares with what ctypes makes of the module.
 
 use anyhow::{Context, Result, bail};
-use caravan_schemas::describe::{
-    self, Element, Field, Kind, ROBOT_TOPICS, Scalar, TOPIC_CONSTANTS, TypeLayout,
-};
+use caravan_schemas::catalog::{self, ROBOT_TOPICS, TOPIC_CONSTANTS};
+use caravan_schemas::describe::{Element, Field, Kind, Scalar, TypeLayout};
 use caravan_schemas::lockstep;
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -34,7 +33,7 @@ pub fn run(args: &SchemasArgs) -> Result<()> {
     let text = if args.python {
         python_module()?
     } else {
-        serde_json::to_string_pretty(&describe::layouts_json())? + "\n"
+        serde_json::to_string_pretty(&catalog::layouts_json())? + "\n"
     };
     match &args.output {
         Some(path) => {
@@ -274,7 +273,7 @@ pub fn python_module() -> Result<String> {
     }
     py.push_str(HELPERS);
 
-    let layouts = describe::layouts();
+    let layouts = catalog::layouts();
     for (i, layout) in layouts.iter().enumerate() {
         let fields = ctypes_fields(layout, &layouts[..i])?;
         write!(
@@ -286,7 +285,7 @@ pub fn python_module() -> Result<String> {
             writeln!(py, "        (\"{name}\", {ty}),")?;
         }
         py.push_str("    ]\n");
-        let counts: Vec<String> = describe::COUNTED_ARRAYS
+        let counts: Vec<String> = caravan_schemas::describe::COUNTED_ARRAYS
             .iter()
             .filter(|(t, _, _)| *t == layout.name)
             .map(|(_, array, by)| format!("\"{array}\": (\"{}\",)", by.join("\", \"")))
@@ -388,7 +387,7 @@ mod tests {
 
     #[test]
     fn padding_appears_where_c_and_ctypes_differ() {
-        let layouts = describe::layouts();
+        let layouts = catalog::layouts();
         let status = layouts.iter().find(|l| l.name == "NodeStatus").unwrap();
         let fields = ctypes_fields(status, &layouts).unwrap();
         // node_len, node, host_len, host, then u64s: C and ctypes agree, no padding needed.

@@ -9,7 +9,8 @@
 //! stamps (simulated or since the group's start) stay integers; they are exact up to 2⁵³
 //! (104 days in ns).
 
-use caravan_schemas::describe::{Element, Kind, Scalar, TypeLayout, layouts};
+use caravan_schemas::catalog::layouts;
+use caravan_schemas::describe::{Element, Kind, Scalar, TypeLayout};
 use serde_json::{Value, json};
 
 fn scalar(s: Scalar) -> Value {
@@ -155,7 +156,7 @@ mod tests {
 
     #[test]
     fn every_array_of_every_message_type_has_items() {
-        for layout in caravan_schemas::describe::layouts() {
+        for layout in caravan_schemas::catalog::layouts() {
             let Some(s) = super::for_type(layout.type_name, true) else {
                 continue; // not a message type (a field struct or the lockstep protocol)
             };
