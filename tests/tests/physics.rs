@@ -292,3 +292,39 @@ fn a_sensor_on_a_missing_link_exits_2_naming_it() {
         "{err}"
     );
 }
+
+/// A physics process without its world, or without its robots, is refused before anything
+/// starts, naming the key at the process's params in the launch file: neither has a default.
+#[test]
+fn a_physics_process_without_world_or_robots_is_refused() {
+    let robots = workspace_root().join("processes/physics/tests/robots");
+    let world = robots.join("empty.toml").display().to_string();
+    let urdf = robots.join("box.urdf").display().to_string();
+    for (tag, params, says) in [
+        (
+            "physics-noworld",
+            format!("{{ urdf = \"{urdf}\", count = 1 }}"),
+            "key 'world': missing",
+        ),
+        (
+            "physics-norobots",
+            format!("{{ world = \"{world}\" }}"),
+            "key 'robots': missing",
+        ),
+    ] {
+        let body = format!(
+            "clock = \"lockstep\"\nduration = \"1s\"\n\n[[process]]\nname = \"physics\"\n\
+             exec = \"caravan-physics\"\nparams = {params}\n"
+        );
+        let s = caravan_tests::Scenario::new(tag, &body);
+        let out = s.run(&[]);
+        let line = std::fs::read_to_string(&s.file)
+            .unwrap()
+            .lines()
+            .position(|l| l.starts_with("params = "))
+            .unwrap()
+            + 1;
+        let at = format!("launch.toml:{line}");
+        caravan_tests::assert_refused(&s, &out, &[&at, "process 'physics'", says]);
+    }
+}

@@ -27,7 +27,8 @@ fn sim(params: serde_json::Value, dir: &Path, dt_ns: u64) -> Simulation {
 fn convoy(precision: &str) -> Simulation {
     let dir = crate_dir().join("../../launch/convoy");
     let mut s = sim(
-        serde_json::json!({ "precision": precision }),
+        serde_json::json!({ "world": "worlds/lab.toml", "urdf": "robots/convoy_bot.urdf",
+            "count": 5, "precision": precision }),
         &dir,
         2_000_000,
     );

@@ -41,7 +41,7 @@ pub fn simulation(
     poses: &[[f64; 3]],
     cfg: ConvoyConfig,
 ) -> Simulation {
-    let spec = RobotSpec::convoy(
+    let spec = RobotSpec::dc_motor_diff_drive(
         &d.file,
         poses.len(),
         poses,
@@ -50,8 +50,9 @@ pub fn simulation(
         cfg.motor,
         cfg.pid,
     );
-    let actuators = crate::setup::actuators(&spec, d).expect("the convoy spec fits its robot");
-    let drive = crate::setup::diff_drive(d).expect("a differential drive");
+    let actuators =
+        crate::setup::check::actuators(&spec, d).expect("the convoy spec fits its robot");
+    let drive = crate::setup::check::diff_drive(d).expect("a differential drive");
     let reflected: Vec<f64> = actuators
         .iter()
         .map(|a| a.as_ref().map_or(0.0, |a| a.reflected_inertia()))

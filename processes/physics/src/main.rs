@@ -13,7 +13,7 @@
 
 use caravan::{Node, NodeIdentity, Publisher, Subscriber, Trigger};
 use caravan_physics::messages::{self, CommandReader};
-use caravan_physics::{Params, Simulation};
+use caravan_physics::{Params, Simulation, setup};
 use caravan_schemas::{
     Contacts, ForceTorques, JointCommand, JointState, LinkStates, Odometry, Pose2D, Pose3D, Twist,
     WheelSetpoint, WheelState, Wrench, topics,
@@ -54,15 +54,16 @@ fn setup(params: Params, identity: &NodeIdentity) -> Result<Ready, String> {
             params.substeps
         ));
     }
-    let sim = caravan_physics::load(&params, &identity.launch_dir, dt_ns).map_err(|e| e.0)?;
-    // Loaded and checked by `load` already; read again for its solids.
-    let world = caravan_world::load_world(&identity.launch_dir.join(&params.world))
-        .map_err(|e| e.to_string())?;
-    let mut scene = caravan_world::scene::scene_of(&world);
-    // Robots the differential-drive description fits get their bodies drawn; others (arms,
-    // tracks, aircraft) are drawn by their frames alone.
-    if let Ok(robot) = caravan_world::load_robot(&identity.launch_dir.join(&params.urdf)) {
-        caravan_world::scene::add_robot_bodies(&mut scene, &robot, params.count);
+    let checked = setup::check(&params, &identity.launch_dir).map_err(|e| e.0)?;
+    let starts = checked.place().map_err(|e| e.0)?;
+    let sim = setup::build(&checked, &starts, params.sim_config(dt_ns)).map_err(|e| e.0)?;
+    let mut scene = caravan_world::scene::scene_of(&checked.world);
+    // Robots of the one-kind form whose description the differential-drive model fits get
+    // their bodies drawn; others (arms, tracks, aircraft) are drawn by their frames alone.
+    if let (Some(urdf), Some(count)) = (&params.urdf, params.count)
+        && let Ok(robot) = caravan_world::load_robot(&identity.launch_dir.join(urdf))
+    {
+        caravan_world::scene::add_robot_bodies(&mut scene, &robot, count);
     }
     Ok(Ready {
         sim,

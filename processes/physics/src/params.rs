@@ -6,12 +6,12 @@
 //!            motor = { resistance_ohm = 20.0 }, pid = { kp = 0.2, ki = 2.0 } }
 //! ```
 //!
-//! Every key is optional. The defaults are the reference convoy: five robots in the lab world
-//! at its start poses, and the fitted motor and PID constants. The top-level robot keys
-//! (`urdf`, `count`, `poses`, `lifted`, `wheel_friction`, `motor`, `pid`) describe one kind
-//! of differential-drive robot; `robots = [...]` ([`RobotSpec`]) describes any robots, of
-//! several kinds, instead. Robots are numbered in order across kinds: robot i publishes on
-//! `robot/i/…`.
+//! `world` is required, and so are the robots: `robots = [...]` ([`RobotSpec`]) describes
+//! robots of any kind, several kinds in one world; the top-level keys (`urdf` and `count`,
+//! both required, and `poses`, `lifted`, `wheel_friction`, `motor`, `pid`) describe robots
+//! of one kind instead: a differential drive on `dc_motor` actuators, the `robots` entry of
+//! [`RobotSpec::dc_motor_diff_drive`]. Robots are numbered in order across kinds: robot i
+//! publishes on `robot/i/…`.
 
 use crate::firmware::FirmwareParams;
 use crate::motor::MotorParams;
@@ -30,26 +30,31 @@ pub enum Precision {
     F64,
 }
 
-/// `robots`, refused when given empty: an empty list would silently mean the default robot.
-fn non_empty_robots<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<RobotSpec>, D::Error> {
+/// `robots`, refused when given empty.
+fn non_empty_robots<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<Vec<RobotSpec>>, D::Error> {
     let robots = Vec::<RobotSpec>::deserialize(d)?;
     if robots.is_empty() {
         return Err(serde::de::Error::custom(
-            "an empty list; give at least one robot, or leave 'robots' out for the convoy robot",
+            "an empty list; give at least one robot",
         ));
     }
-    Ok(robots)
+    Ok(Some(robots))
 }
 
+/// The params as given. [`Default`] is every key left out, which [`Params::validate`]
+/// refuses: the world and the robots have no default.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Params {
-    /// World file, relative to the launch file's directory.
-    pub world: String,
-    /// Robot description (URDF), relative to the launch file's directory.
-    pub urdf: String,
-    /// Number of robots; robot i publishes on `robot/i/…`.
-    pub count: usize,
+    /// World file, relative to the launch file's directory. Required.
+    pub world: Option<String>,
+    /// Robot description (URDF) of the one-kind form, relative to the launch file's
+    /// directory. Required with any other top-level robot key.
+    pub urdf: Option<String>,
+    /// Number of robots of the one-kind form. Required with `urdf`.
+    pub count: Option<usize>,
     /// Start pose `[x, y, theta]` (m, m, rad) of each robot in the map frame, one per robot;
     /// empty: the world file's `[[start]]` poses.
     pub poses: Vec<[f64; 3]>,
@@ -61,14 +66,15 @@ pub struct Params {
     pub solver_iterations: usize,
     /// Hold every chassis in the air so the wheels spin freely: the motor bench test.
     pub lifted: bool,
-    /// Friction coefficient between wheels and floor.
-    pub wheel_friction: f64,
-    pub motor: MotorParams,
-    pub pid: FirmwareParams,
-    /// Robots of any kind; replaces the top-level robot keys when given (never empty: left
-    /// out, the top-level keys' convoy robot is used).
+    /// Friction coefficient between wheels and floor (default 1).
+    pub wheel_friction: Option<f64>,
+    /// The one-kind form's motor and firmware: the `dc_motor` actuator's keys, whose
+    /// defaults are the measured motor and firmware of the convoy robot.
+    pub motor: Option<MotorParams>,
+    pub pid: Option<FirmwareParams>,
+    /// Robots of any kind, instead of the one-kind form (never empty).
     #[serde(deserialize_with = "non_empty_robots")]
-    pub robots: Vec<RobotSpec>,
+    pub robots: Option<Vec<RobotSpec>>,
     /// Gravitational acceleration, m/s², along −z.
     pub gravity: f64,
     pub precision: Precision,
@@ -77,17 +83,17 @@ pub struct Params {
 impl Default for Params {
     fn default() -> Self {
         Self {
-            world: "worlds/lab.toml".into(),
-            urdf: "robots/convoy_bot.urdf".into(),
-            count: 5,
+            world: None,
+            urdf: None,
+            count: None,
             poses: Vec::new(),
             substeps: 5,
             solver_iterations: crate::robot::SOLVER_ITERATIONS,
             lifted: false,
-            wheel_friction: 1.0,
-            motor: MotorParams::default(),
-            pid: FirmwareParams::default(),
-            robots: Vec::new(),
+            wheel_friction: None,
+            motor: None,
+            pid: None,
+            robots: None,
             gravity: 9.81,
             precision: Precision::F32,
         }
@@ -99,24 +105,74 @@ impl Default for Params {
 pub const MAX_ROBOTS: usize = (caravan_schemas::lockstep::MAX_TOPICS - 1) / 3;
 
 impl Params {
-    /// The kinds of robot, each with its count: `robots`, or the top-level keys' convoy robot.
-    pub fn robot_specs(&self) -> Vec<RobotSpec> {
-        if !self.robots.is_empty() {
-            return self.robots.clone();
+    /// `count` robots of description `urdf` in `world` (the one-kind form), every other key
+    /// left out.
+    pub fn one_kind(world: &str, urdf: &str, count: usize) -> Self {
+        Self {
+            world: Some(world.into()),
+            urdf: Some(urdf.into()),
+            count: Some(count),
+            ..Self::default()
         }
-        vec![RobotSpec::convoy(
-            &self.urdf,
-            self.count,
-            &self.poses,
-            self.lifted,
-            self.wheel_friction,
-            self.motor,
-            self.pid,
-        )]
+    }
+
+    /// The world file as given; refused naming the key when left out.
+    pub fn world(&self) -> Result<&str, String> {
+        self.world.as_deref().ok_or_else(|| {
+            "key 'world': missing; give the world file the robots are in, relative to the \
+             launch file (e.g. world = \"worlds/lab.toml\"); there is no default world"
+                .into()
+        })
+    }
+
+    /// Whether any key of the one-kind form is given.
+    fn one_kind_given(&self) -> bool {
+        self.urdf.is_some()
+            || self.count.is_some()
+            || !self.poses.is_empty()
+            || self.lifted
+            || self.wheel_friction.is_some()
+            || self.motor.is_some()
+            || self.pid.is_some()
+    }
+
+    /// The kinds of robot, each with its count: `robots`, or the `robots` entry the one-kind
+    /// form stands for. Refused naming the key: no robots, both forms, or `urdf` and `count`
+    /// not both given.
+    pub fn robot_specs(&self) -> Result<Vec<RobotSpec>, String> {
+        match (&self.robots, &self.urdf, self.count) {
+            (Some(_), ..) if self.one_kind_given() => Err("key 'robots': give the robots \
+                 either in 'robots' or with the top-level keys (urdf, count, poses, lifted, \
+                 wheel_friction, motor, pid), not both"
+                .into()),
+            (Some(robots), ..) => Ok(robots.clone()),
+            (None, Some(urdf), Some(count)) => Ok(vec![RobotSpec::dc_motor_diff_drive(
+                urdf,
+                count,
+                &self.poses,
+                self.lifted,
+                self.wheel_friction.unwrap_or(1.0),
+                self.motor.unwrap_or_default(),
+                self.pid.unwrap_or_default(),
+            )]),
+            (None, Some(urdf), None) => Err(format!(
+                "key 'count': missing; give the number of robots of urdf = \"{urdf}\" (robots \
+                 of one kind need both 'urdf' and 'count')"
+            )),
+            (None, None, _) if self.one_kind_given() => Err("key 'urdf': missing; give the \
+                 robot description (robots of one kind need both 'urdf' and 'count')"
+                .into()),
+            (None, None, _) => Err("key 'robots': missing; give the robots as robots = \
+                 [{ urdf = \"…\", … }], or robots of one kind as urdf = \"…\" and count = N; \
+                 there is no default robot"
+                .into()),
+        }
     }
 
     /// Checks values serde cannot; the message names the key.
     pub fn validate(&self) -> Result<(), String> {
+        self.world()?;
+        let specs = self.robot_specs()?;
         // Up to 100 g: beyond it no body stays on any floor and rapier's contacts blow up.
         if !(0.0..=1000.0).contains(&self.gravity) {
             return Err(format!(
@@ -124,56 +180,46 @@ impl Params {
                 self.gravity
             ));
         }
-        if !self.robots.is_empty() {
-            let defaults = Params::default();
-            let top_level_given = self.urdf != defaults.urdf
-                || self.count != defaults.count
-                || !self.poses.is_empty()
-                || self.lifted
-                || self.wheel_friction != defaults.wheel_friction
-                || self.motor != defaults.motor
-                || self.pid != defaults.pid;
-            if top_level_given {
-                return Err(
-                    "key 'robots': give the robots either in 'robots' or with the \
-                            top-level keys (urdf, count, poses, lifted, wheel_friction, motor, \
-                            pid), not both"
-                        .into(),
-                );
-            }
-            let total: usize = self.robots.iter().map(|r| r.count).sum();
+        if self.robots.is_some() {
+            let total: usize = specs.iter().map(|r| r.count).sum();
             if total > MAX_ROBOTS {
                 return Err(format!(
                     "key 'robots': {total} robots in all; at most {MAX_ROBOTS}"
                 ));
             }
-            for (k, r) in self.robots.iter().enumerate() {
+            for (k, r) in specs.iter().enumerate() {
                 r.validate()
                     .map_err(|e| format!("key 'robots[{k}].{}", &e[1..]))?;
             }
             return self.validate_step();
         }
-        if self.count == 0 || self.count > MAX_ROBOTS {
+        let count = specs[0].count;
+        if count == 0 || count > MAX_ROBOTS {
             return Err(format!(
-                "key 'count': must be between 1 and {MAX_ROBOTS}, got {}",
-                self.count
+                "key 'count': must be between 1 and {MAX_ROBOTS}, got {count}"
             ));
         }
-        if !self.poses.is_empty() && self.poses.len() != self.count {
+        if !self.poses.is_empty() && self.poses.len() != count {
             return Err(format!(
-                "key 'poses': {} start pose(s) for count = {}; give one [x, y, theta] per \
+                "key 'poses': {} start pose(s) for count = {count}; give one [x, y, theta] per \
                  robot, or none to use the world file's [[start]] poses",
                 self.poses.len(),
-                self.count
             ));
         }
         for (i, p) in self.poses.iter().enumerate() {
             crate::spec::check_pose_values(i, p).map_err(|e| format!("key {e}"))?;
         }
         self.validate_step()?;
-        crate::spec::check_wheel_friction(self.wheel_friction).map_err(|e| format!("key {e}"))?;
-        self.motor.validate().map_err(|e| format!("key {e}"))?;
-        self.pid.validate().map_err(|e| format!("key {e}"))?;
+        crate::spec::check_wheel_friction(specs[0].wheel_friction)
+            .map_err(|e| format!("key {e}"))?;
+        self.motor
+            .unwrap_or_default()
+            .validate()
+            .map_err(|e| format!("key {e}"))?;
+        self.pid
+            .unwrap_or_default()
+            .validate()
+            .map_err(|e| format!("key {e}"))?;
         Ok(())
     }
 
@@ -192,6 +238,16 @@ impl Params {
         }
         Ok(())
     }
+
+    /// The step configuration for physics step `dt_ns`.
+    pub fn sim_config(&self, dt_ns: u64) -> crate::robot::SimConfig {
+        crate::robot::SimConfig {
+            dt_ns,
+            gravity: self.gravity,
+            precision: self.precision,
+            solver_iterations: self.solver_iterations,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -205,41 +261,71 @@ mod tests {
         Ok(p)
     }
 
+    /// `v` with `world` added.
+    fn in_world(mut v: serde_json::Value) -> serde_json::Value {
+        v["world"] = json!("w.toml");
+        v
+    }
+
     #[test]
-    fn defaults_are_the_convoy() {
-        let p = parse(json!({})).unwrap();
-        assert_eq!(p.count, 5);
+    fn the_world_and_the_robots_are_required() {
+        let e = parse(json!({"urdf": "r.urdf", "count": 5})).unwrap_err();
+        assert!(e.starts_with("key 'world': missing"), "{e}");
+        let e = parse(json!({"world": "w.toml"})).unwrap_err();
+        assert!(
+            e.starts_with("key 'robots': missing") && e.contains("urdf"),
+            "{e}"
+        );
+        let e = parse(json!({"world": "w.toml", "urdf": "r.urdf"})).unwrap_err();
+        assert!(e.starts_with("key 'count': missing"), "{e}");
+        for one_kind_key in [json!({"count": 2}), json!({"motor": {"k_t": 0.02}})] {
+            let e = parse(in_world(one_kind_key)).unwrap_err();
+            assert!(e.starts_with("key 'urdf': missing"), "{e}");
+        }
+        let p = parse(json!({"world": "w.toml", "urdf": "r.urdf", "count": 5})).unwrap();
+        assert_eq!(p.robot_specs().unwrap()[0].count, 5);
         assert!(p.poses.is_empty(), "the world's start poses");
     }
 
     #[test]
-    fn nested_motor_keys() {
-        let p = parse(
-            json!({"urdf": "r.urdf", "count": 1, "poses": [[1.0, 1.0, 0.0]],
-                             "motor": {"gear_ratio": 50.0}, "pid": {"kp": 1.0}}),
-        )
+    fn the_one_kind_form_is_a_robots_entry_on_dc_motors() {
+        let top = parse(in_world(
+            json!({"urdf": "r.urdf", "count": 2, "lifted": true,
+            "motor": {"gear_ratio": 50.0}, "pid": {"kp": 1.0}}),
+        ))
         .unwrap();
-        assert_eq!(p.urdf, "r.urdf");
-        assert_eq!(p.motor.gear_ratio, 50.0);
-        assert_eq!(p.motor.supply_v, MotorParams::default().supply_v);
-        assert_eq!(p.pid.kp, 1.0);
+        let entry = parse(in_world(json!({"robots": [{"urdf": "r.urdf", "count": 2,
+            "lifted": true, "joints": "impulse", "drive": "diff", "joint_states": false,
+            "actuators": [{"type": "dc_motor", "joints": ["*"],
+                           "motor": {"gear_ratio": 50.0}, "pid": {"kp": 1.0}}]}]})))
+        .unwrap();
+        assert_eq!(top.robot_specs(), entry.robot_specs());
+        let spec = &top.robot_specs().unwrap()[0];
+        let crate::spec::ActuatorSpec::DcMotor { motor, pid, .. } = &spec.actuators[0] else {
+            panic!("{spec:?}")
+        };
+        // The keys left out keep the dc_motor's defaults: the convoy robot's measured motor.
+        assert_eq!(motor.supply_v, MotorParams::default().supply_v);
+        assert_eq!(pid.ki, FirmwareParams::default().ki);
     }
 
     #[test]
     fn pose_count_mismatch_names_the_key() {
-        let e = parse(json!({"count": 2, "poses": [[1.0, 1.0, 0.0]]})).unwrap_err();
+        let e = parse(in_world(json!({"urdf": "r.urdf", "count": 2,
+            "poses": [[1.0, 1.0, 0.0]]})))
+        .unwrap_err();
         assert!(e.contains("'poses'") && e.contains("count = 2"), "{e}");
     }
 
     #[test]
     fn robots_of_several_kinds() {
-        let p = parse(json!({"robots": [
+        let p = parse(in_world(json!({"robots": [
             {"urdf": "arm.urdf", "base": "fixed", "actuators": [
                 {"type": "position", "joints": ["*"], "kp": 50.0}]},
             {"urdf": "drone.urdf", "base": "kinematic", "count": 2,
-             "poses": [[1.0, 1.0, 2.0, 0.0, 0.0, 0.0], [2.0, 1.0, 0.0]]}]}))
+             "poses": [[1.0, 1.0, 2.0, 0.0, 0.0, 0.0], [2.0, 1.0, 0.0]]}]})))
         .unwrap();
-        let specs = p.robot_specs();
+        let specs = p.robot_specs().unwrap();
         assert_eq!(specs.len(), 2);
         assert_eq!(specs[1].count, 2);
         assert_eq!(specs[0].joint_model(), crate::spec::JointModel::Multibody);
@@ -247,34 +333,45 @@ mod tests {
     }
 
     #[test]
-    fn an_empty_robot_list_is_an_error_not_the_default_robot() {
-        let e = parse(json!({"robots": []})).unwrap_err();
+    fn an_empty_robot_list_is_an_error() {
+        let e = parse(in_world(json!({"robots": []}))).unwrap_err();
         assert!(e.contains("robots") && e.contains("an empty list"), "{e}");
     }
 
     #[test]
     fn robot_kind_errors_name_the_key() {
-        let e = parse(json!({"robots": [{"urdf": "a.urdf", "poses": [[1.0, 2.0]]}]})).unwrap_err();
+        let robots = |r: serde_json::Value| parse(in_world(json!({ "robots": [r] })));
+        let e = robots(json!({"urdf": "a.urdf", "poses": [[1.0, 2.0]]})).unwrap_err();
         assert!(e.contains("key 'robots[0].poses[0]'"), "{e}");
-        let e = parse(json!({"robots": [{"urdf": "a.urdf",
-            "actuators": [{"type": "position", "joints": ["j"], "kp": -1.0}]}]}))
+        let e = robots(json!({"urdf": "a.urdf",
+            "actuators": [{"type": "position", "joints": ["j"], "kp": -1.0}]}))
         .unwrap_err();
         assert!(
             e.contains("'robots[0].actuators[0]'") && e.contains("kp"),
             "{e}"
         );
-        let e = parse(json!({"robots": [{"urdf": "a.urdf",
-            "actuators": [{"type": "servo", "joints": ["j"], "stiffness": 0.0}]}]}))
+        let e = robots(json!({"urdf": "a.urdf",
+            "actuators": [{"type": "servo", "joints": ["j"], "stiffness": 0.0}]}))
         .unwrap_err();
         assert!(
             e.contains("'robots[0].actuators[0]'") && e.contains("stiffness"),
             "{e}"
         );
-        let e = parse(json!({"robots": [{"urdf": "a.urdf",
-            "actuators": [{"type": "torque", "joints": ["j"]}]}]}))
+        let e = robots(json!({"urdf": "a.urdf",
+            "actuators": [{"type": "dc_motor", "joints": ["j"], "motor": {"k_t": 0.0}}]}))
+        .unwrap_err();
+        assert!(
+            e.contains("'robots[0].actuators[0]'") && e.contains("motor.k_t"),
+            "{e}"
+        );
+        let e = robots(json!({"urdf": "a.urdf",
+            "actuators": [{"type": "torque", "joints": ["j"]}]}))
         .unwrap_err();
         assert!(e.contains("torque"), "{e}");
-        let e = parse(json!({"count": 2, "robots": [{"urdf": "a.urdf"}]})).unwrap_err();
+        let e = parse(in_world(
+            json!({"count": 2, "robots": [{"urdf": "a.urdf"}]}),
+        ))
+        .unwrap_err();
         assert!(e.contains("not both"), "{e}");
     }
 

@@ -57,6 +57,20 @@ pub struct Outputs {
 }
 
 impl Outputs {
+    /// What a robot of kind `spec` with description `d` publishes; `diff_drive`: it is a
+    /// differential drive.
+    pub fn of(spec: &RobotSpec, d: &RobotDescription, diff_drive: bool) -> Self {
+        Outputs {
+            force_torque: !spec.force_torque.is_empty(),
+            ground_truth: spec.ground_truth,
+            wheels: diff_drive,
+            joint_states: (spec.joint_states).unwrap_or(!d.movable_joints().is_empty()),
+            link_states: spec.link_states,
+            contacts: spec.contacts,
+            cmd_vel: spec.base == crate::spec::Base::Kinematic,
+        }
+    }
+
     /// Topics published per step: pose, twist and each output switched on.
     pub fn topic_count(&self) -> usize {
         2 + [

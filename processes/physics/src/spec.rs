@@ -62,8 +62,9 @@ pub enum CmdVelFrame {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ActuatorSpec {
-    /// The convoy's DC gear motor under its wheel-speed firmware (incremental PID at
-    /// `pid.rate_hz`); takes velocity targets.
+    /// A DC gear motor ([`crate::motor`]) under a wheel-speed firmware (an incremental PID
+    /// at `pid.rate_hz`, [`crate::firmware`]); takes velocity targets. The keys left out keep
+    /// the measured motor and firmware of the convoy robot ([`crate::step_response`]).
     DcMotor {
         joints: Vec<String>,
         #[serde(default)]
@@ -535,9 +536,10 @@ fn names(d: &RobotDescription) -> String {
 }
 
 impl RobotSpec {
-    /// The convoy robot as the params' top-level keys describe it: a differential drive on
-    /// the fitted DC motors.
-    pub fn convoy(
+    /// A floating differential drive on impulse joints (what the DC motor was fitted with)
+    /// whose every movable joint is a `dc_motor`, without `joint_states`: the `robots` entry
+    /// the params' top-level one-kind form stands for, and the convoy robot's.
+    pub fn dc_motor_diff_drive(
         urdf: &str,
         count: usize,
         poses: &[[f64; 3]],

@@ -102,15 +102,7 @@ impl Simulation {
                     _ => None,
                 })
                 .collect();
-            let outputs = Outputs {
-                force_torque: !spec.force_torque.is_empty(),
-                ground_truth: spec.ground_truth,
-                wheels: build.drive.is_some(),
-                joint_states: spec.joint_states.unwrap_or(!joints.is_empty()),
-                link_states: spec.link_states,
-                contacts: spec.contacts,
-                cmd_vel: spec.base == Base::Kinematic,
-            };
+            let outputs = Outputs::of(spec, d, build.drive.is_some());
             robots.push(RobotState {
                 outputs,
                 sensors,

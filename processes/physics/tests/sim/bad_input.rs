@@ -19,9 +19,8 @@ fn error(params: &Params, dir: &std::path::Path) -> String {
 
 fn one_robot(pose: [f64; 3]) -> Params {
     Params {
-        count: 1,
         poses: vec![pose],
-        ..Params::default()
+        ..Params::one_kind("worlds/lab.toml", "robots/convoy_bot.urdf", 1)
     }
 }
 
@@ -39,8 +38,8 @@ fn bad_world_file_names_file_line_and_key() {
     )
     .unwrap();
     let params = Params {
-        world: "bad.toml".into(),
-        urdf: "bot.urdf".into(),
+        world: Some("bad.toml".into()),
+        urdf: Some("bot.urdf".into()),
         ..one_robot([0.5, 0.5, 0.0])
     };
     let e = error(&params, &dir);
@@ -52,7 +51,7 @@ fn bad_world_file_names_file_line_and_key() {
 #[test]
 fn missing_world_file_is_named() {
     let params = Params {
-        world: "worlds/nowhere.toml".into(),
+        world: Some("worlds/nowhere.toml".into()),
         ..one_robot([0.5, 0.5, 0.0])
     };
     let e = error(&params, &launch_dir());
@@ -68,8 +67,8 @@ fn bad_urdf_is_named() {
     std::fs::write(dir.join("bad.urdf"), "<robot name='x'><link name='a'>").unwrap();
     std::fs::copy(launch_dir().join("worlds/lab.toml"), dir.join("lab.toml")).unwrap();
     let params = Params {
-        world: "lab.toml".into(),
-        urdf: "bad.urdf".into(),
+        world: Some("lab.toml".into()),
+        urdf: Some("bad.urdf".into()),
         ..one_robot([0.5, 0.5, 0.0])
     };
     let e = error(&params, &dir);
@@ -80,7 +79,7 @@ fn bad_urdf_is_named() {
 #[test]
 fn wrong_number_of_poses_is_rejected() {
     let params = Params {
-        count: 3,
+        count: Some(3),
         ..one_robot([0.5, 0.5, 0.0])
     };
     let e = error(&params, &launch_dir());
@@ -103,9 +102,9 @@ fn pose_inside_an_obstacle_is_rejected() {
 #[test]
 fn overlapping_robots_and_poses_off_the_floor_are_rejected() {
     let params = Params {
-        count: 2,
+        count: Some(2),
         poses: vec![[1.0, 0.7, 0.0], [1.1, 0.7, 0.0]],
-        ..Params::default()
+        ..one_robot([0.5, 0.5, 0.0])
     };
     let e = error(&params, &launch_dir());
     assert!(e.contains("robots 0 and 1"), "{e}");
@@ -115,23 +114,38 @@ fn overlapping_robots_and_poses_off_the_floor_are_rejected() {
 
 #[test]
 fn the_binary_reports_bad_params_without_panicking() {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_caravan-physics"))
-        .env("CARAVAN_GROUP", "physics-bad-input")
-        .env("CARAVAN_NODE", "physics")
-        .env("CARAVAN_LAUNCH_DIR", launch_dir())
-        .env(
-            "CARAVAN_PARAMS",
-            r#"{"world": "worlds/nowhere.toml", "count": 1, "poses": [[0.5, 0.5, 0.0]]}"#,
-        )
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(
-        stderr.starts_with("caravan-physics: ") && stderr.contains("nowhere.toml"),
-        "{stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{stderr}");
+    for (params, says) in [
+        (
+            r#"{"world": "worlds/nowhere.toml", "urdf": "robots/convoy_bot.urdf", "count": 1,
+                "poses": [[0.5, 0.5, 0.0]]}"#,
+            "nowhere.toml",
+        ),
+        // Neither the world nor the robots have a default.
+        (
+            r#"{"urdf": "robots/convoy_bot.urdf", "count": 5}"#,
+            "key 'world': missing",
+        ),
+        (r#"{"world": "worlds/lab.toml"}"#, "key 'robots': missing"),
+        (
+            r#"{"world": "worlds/lab.toml", "urdf": "robots/convoy_bot.urdf"}"#,
+            "key 'count': missing",
+        ),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_caravan-physics"))
+            .env("CARAVAN_GROUP", "physics-bad-input")
+            .env("CARAVAN_NODE", "physics")
+            .env("CARAVAN_LAUNCH_DIR", launch_dir())
+            .env("CARAVAN_PARAMS", params)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.starts_with("caravan-physics: ") && stderr.contains(says),
+            "{says}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
 }
 
 #[test]

@@ -36,7 +36,8 @@ fn start_corridor_is_free() {
 
 #[test]
 fn the_convoy_starts_in_the_lab() {
-    let sim = caravan_physics::load(&Params::default(), &launch_dir(), 2_000_000).unwrap();
+    let params = Params::one_kind("worlds/lab.toml", "robots/convoy_bot.urdf", 5);
+    let sim = caravan_physics::load(&params, &launch_dir(), 2_000_000).unwrap();
     assert_eq!(sim.robot_count(), 5);
     assert!((sim.pose(4).x - 0.6).abs() < 1e-6);
 }
