@@ -14,7 +14,8 @@
 
 use serde::Deserialize;
 
-/// PID gains and rate. Defaults are the fitted values documented in [`crate::step_response`].
+/// PID gains and rate (the `dc_motor` actuator's `pid` keys). Defaults: the convoy robot's
+/// firmware, fitted as [`crate::step_response`] documents.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FirmwareParams {

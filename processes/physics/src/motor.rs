@@ -18,8 +18,8 @@
 
 use serde::Deserialize;
 
-/// Motor and gearbox constants. Defaults are the fitted values documented in
-/// [`crate::step_response`].
+/// Motor and gearbox constants (the `dc_motor` actuator's `motor` keys). Defaults: the convoy
+/// robot's motor, a property of that motor, fitted as [`crate::step_response`] documents.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MotorParams {

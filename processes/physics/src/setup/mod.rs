@@ -1,6 +1,6 @@
 //! From params to a running simulation, with every input checked, in three steps:
-//! [`check`] the params, the world file and each robot description against its kind's spec;
-//! [`place`] each robot at its start pose on the world's floor; [`build`] the bodies, which
+//! [`check()`] the params, the world file and each robot description against its kind's spec;
+//! [`place()`] each robot at its start pose on the world's floor; [`build()`] the bodies, which
 //! tells whether a robot starts inside an obstacle or another robot. Errors are one
 //! paragraph naming the file or key.
 
@@ -30,7 +30,7 @@ impl fmt::Display for SetupError {
 impl std::error::Error for SetupError {}
 
 /// Loads the world and the robots named in `params` (paths relative to `launch_dir`) and
-/// builds the simulation with physics step `dt_ns`: [`check`], [`place`], [`build`].
+/// builds the simulation with physics step `dt_ns`: [`check()`], [`place()`], [`build()`].
 pub fn load(params: &Params, launch_dir: &Path, dt_ns: u64) -> Result<Simulation, SetupError> {
     let checked = check(params, launch_dir)?;
     let starts = checked.place()?;
