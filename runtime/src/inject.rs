@@ -4,7 +4,9 @@
 
 use crate::Error;
 use crate::transport::{self, Shared};
-use caravan_schemas::{Header, Message};
+use crate::untyped;
+use caravan_schemas::Header;
+use caravan_schemas::descriptor::Descriptor;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
 use std::rc::Rc;
@@ -17,29 +19,30 @@ pub trait DynInject {
     fn publish_json(&self, header: Header, json: &serde_json::Value) -> Result<(), Error>;
 }
 
-struct Inject<T: Message> {
+struct Inject {
     topic: String,
-    port: iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>,
+    descriptor: Descriptor,
+    port: untyped::Publisher,
     topic_hash: u64,
     notifier: Notifier<ipc::Service>,
     /// The node publishing, when the injector belongs to one ([`crate::Node::injectors`]):
     /// in lockstep its scheduler, not the notifier, wakes subscribers.
     node: Option<Rc<Shared>>,
+    /// The type's default value, which the JSON's fields are written over.
+    default: Box<[u8]>,
 }
 
-impl<T: Message> DynInject for Inject<T> {
+impl DynInject for Inject {
     fn topic(&self) -> &str {
         &self.topic
     }
 
     fn publish_json(&self, header: Header, json: &serde_json::Value) -> Result<(), Error> {
-        let mut sample = crate::publisher::loan_default(&self.port, &self.topic)?;
-        caravan_schemas::from_json::write_into(sample.payload_mut(), json)
+        let mut bytes = self.default.clone();
+        self.descriptor
+            .write(json, &mut bytes)
             .map_err(|e| Error::topic(&self.topic, e))?;
-        *sample.user_header_mut() = header;
-        sample
-            .send()
-            .map_err(|e| Error::topic(&self.topic, format!("cannot send: {e:?}")))?;
+        untyped::publish(&self.port, &self.topic, header, &bytes)?;
         match &self.node {
             Some(shared) => shared.sent(self.topic_hash, &self.notifier),
             None => transport::wake(&self.notifier),
@@ -94,41 +97,29 @@ fn open_for(
     type_name: &str,
     delivery: crate::Delivery,
 ) -> Result<Box<dyn DynInject>, Error> {
-    fn open<T: Message>(
-        iox: &iceoryx2::node::Node<ipc::Service>,
-        node: Option<Rc<Shared>>,
-        topic: &str,
-        delivery: crate::Delivery,
-    ) -> Result<Box<dyn DynInject>, Error> {
-        let service = match transport::open_existing::<T>(iox, topic) {
-            Ok(service) => service,
-            Err(_) => transport::open_pubsub::<T>(iox, topic, delivery)?,
-        };
-        let lossless = !service.static_config().has_safe_overflow();
-        let port = service
-            .publisher_builder()
-            .backpressure_strategy(transport::backpressure(lossless))
-            .max_loaned_samples(2)
-            .create()
-            .map_err(|e| Error::topic(topic, format!("cannot create publisher: {e:?}")))?;
-        Ok(Box::new(Inject::<T> {
-            topic: topic.to_string(),
-            topic_hash: caravan_schemas::lockstep::name_hash(topic),
-            port,
-            notifier: transport::notifier(iox, topic)?,
-            node,
-        }))
-    }
-    caravan_schemas::with_message_type!(type_name, |T| open::<T>(
-        iox,
-        node.clone(),
-        topic,
-        delivery
-    ))
-    .unwrap_or_else(|| {
-        Err(Error::topic(
-            topic,
-            format!("unknown message type '{type_name}'"),
-        ))
-    })
+    let descriptor =
+        crate::types::lookup(iox.config(), type_name).map_err(|e| Error::topic(topic, e))?;
+    let service = match untyped::open_existing(iox, topic, &descriptor) {
+        Ok(service) => service,
+        Err(_) => untyped::open_or_create(iox, topic, &descriptor, delivery)?,
+    };
+    let lossless = !service.static_config().has_safe_overflow();
+    let port = service
+        .publisher_builder()
+        .backpressure_strategy(transport::backpressure(lossless))
+        .max_loaned_samples(2)
+        .create()
+        .map_err(|e| Error::topic(topic, format!("cannot create publisher: {e:?}")))?;
+    let default = descriptor
+        .default_bytes()
+        .map_err(|e| Error::topic(topic, e))?;
+    Ok(Box::new(Inject {
+        topic: topic.to_string(),
+        topic_hash: caravan_schemas::lockstep::name_hash(topic),
+        descriptor,
+        port,
+        notifier: transport::notifier(iox, topic)?,
+        node,
+        default,
+    }))
 }

@@ -45,6 +45,8 @@ mod stats;
 mod subscriber;
 pub mod tap;
 mod transport;
+pub mod types;
+pub mod untyped;
 
 pub use caravan_schemas as schemas;
 pub use caravan_schemas::Header;

@@ -1,12 +1,14 @@
-//! Relay ports: a topic's subscriber and publisher opened by type name, moving messages as
-//! bytes with their original [`Header`]. A bridge between hosts uses them: the outlet reads
+//! Relay ports: a topic's subscriber and publisher opened by type name (a catalog type or one
+//! registered with the group, [`crate::types`]), moving messages as bytes with their original
+//! [`Header`]. A bridge between hosts uses them: the outlet reads
 //! a topic on one host, the inlet publishes the same messages, header untouched, on another.
 //!
 //! Bytes are the message's wire form ([`caravan_schemas::wire`]): its data at the offsets of
 //! the type's layout and zeros in its padding, so no uninitialised byte is ever read.
 
-use crate::{Delivery, Error, transport};
-use caravan_schemas::{Header, Message};
+use crate::{Delivery, Error, transport, untyped};
+use caravan_schemas::Header;
+use caravan_schemas::descriptor::Descriptor;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
 
@@ -25,12 +27,15 @@ pub trait Inlet {
     fn publish(&self, header: &Header, wire: &[u8]) -> Result<(), Error>;
 }
 
-struct TypedOutlet<T: Message> {
+struct DescribedOutlet {
     topic: String,
-    port: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>,
+    size: usize,
+    /// Where the type's data lies; the rest is padding, sent as zeros.
+    ranges: Vec<(usize, usize)>,
+    port: untyped::Subscriber,
 }
 
-impl<T: Message> Outlet for TypedOutlet<T> {
+impl Outlet for DescribedOutlet {
     fn topic(&self) -> &str {
         &self.topic
     }
@@ -41,46 +46,51 @@ impl<T: Message> Outlet for TypedOutlet<T> {
             .receive()
             .map_err(|e| Error::topic(&self.topic, format!("{e:?}")))?
         {
-            let wire = caravan_schemas::wire::to_wire(sample.payload())
-                .map_err(|e| Error::topic(&self.topic, e))?;
-            each(*sample.user_header(), wire);
+            let payload = untyped::payload_bytes(sample.payload(), self.size);
+            let wire = caravan_schemas::wire::wire_bytes(payload, &self.ranges);
+            each(untyped::header(sample.user_header()), wire);
         }
         Ok(())
     }
 }
 
-struct TypedInlet<T: Message> {
+struct DescribedInlet {
     topic: String,
-    port: iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>,
+    descriptor: Descriptor,
+    port: untyped::Publisher,
     notifier: Notifier<ipc::Service>,
 }
 
-impl<T: Message> Inlet for TypedInlet<T> {
+impl Inlet for DescribedInlet {
     fn topic(&self) -> &str {
         &self.topic
     }
 
     fn publish(&self, header: &Header, wire: &[u8]) -> Result<(), Error> {
-        let mut sample = self
-            .port
-            .loan_uninit()
-            .map_err(|e| Error::topic(&self.topic, format!("cannot loan a sample: {e:?}")))?;
-        caravan_schemas::wire::from_wire::<T>(wire, sample.payload_mut())
-            .map_err(|e| Error::topic(&self.topic, e))?;
-        // SAFETY: from_wire wrote all of the payload's bytes, from a T's wire form; every bit
-        // pattern is a valid Caravan message (numbers and arrays of numbers only).
-        let mut sample = unsafe { sample.assume_init() };
-        *sample.user_header_mut() = *header;
-        sample
-            .send()
-            .map_err(|e| Error::topic(&self.topic, format!("cannot send: {e:?}")))?;
+        let size = self.descriptor.layout().size;
+        if wire.len() != size {
+            return Err(Error::topic(
+                &self.topic,
+                format!(
+                    "{} takes {size} bytes, not {}",
+                    self.descriptor.type_name(),
+                    wire.len()
+                ),
+            ));
+        }
+        untyped::publish(&self.port, &self.topic, *header, wire)?;
         transport::wake(&self.notifier);
         Ok(())
     }
 }
 
-fn unknown(topic: &str, type_name: &str) -> Error {
-    Error::topic(topic, format!("unknown message type '{type_name}'"))
+/// The descriptor of `type_name` in `iox`'s group (see [`crate::types`]).
+fn descriptor(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    type_name: &str,
+) -> Result<Descriptor, Error> {
+    crate::types::lookup(iox.config(), type_name).map_err(|e| Error::topic(topic, e))
 }
 
 /// Opens a subscriber of `topic`, whose messages are `type_name`, creating the topic with
@@ -92,24 +102,22 @@ pub fn open_outlet(
     type_name: &str,
     delivery: Delivery,
 ) -> Result<Box<dyn Outlet>, Error> {
-    fn open<T: Message>(
-        iox: &iceoryx2::node::Node<ipc::Service>,
-        topic: &str,
-        delivery: Delivery,
-    ) -> Result<Box<dyn Outlet>, Error> {
-        let service = transport::open_pubsub::<T>(iox, topic, delivery)?;
-        let port = service
-            .subscriber_builder()
-            .buffer_size(delivery.depth())
-            .create()
-            .map_err(|e| Error::topic(topic, format!("cannot subscribe: {e:?}")))?;
-        Ok(Box::new(TypedOutlet::<T> {
-            topic: topic.to_string(),
-            port,
-        }))
-    }
-    caravan_schemas::with_wire_type!(type_name, |T| open::<T>(iox, topic, delivery))
-        .unwrap_or_else(|| Err(unknown(topic, type_name)))
+    let descriptor = descriptor(iox, topic, type_name)?;
+    let ranges = descriptor
+        .data_ranges()
+        .ok_or_else(|| Error::topic(topic, format!("{type_name}: a faulty layout")))?;
+    let service = untyped::open_or_create(iox, topic, &descriptor, delivery)?;
+    let port = service
+        .subscriber_builder()
+        .buffer_size(delivery.depth())
+        .create()
+        .map_err(|e| Error::topic(topic, format!("cannot subscribe: {e:?}")))?;
+    Ok(Box::new(DescribedOutlet {
+        topic: topic.to_string(),
+        size: descriptor.layout().size,
+        ranges,
+        port,
+    }))
 }
 
 /// Opens a publisher of `topic`, whose messages are `type_name`, with `delivery`; a topic
@@ -120,28 +128,17 @@ pub fn open_inlet(
     type_name: &str,
     delivery: Delivery,
 ) -> Result<Box<dyn Inlet>, Error> {
-    fn open<T: Message>(
-        iox: &iceoryx2::node::Node<ipc::Service>,
-        topic: &str,
-        delivery: Delivery,
-    ) -> Result<Box<dyn Inlet>, Error> {
-        let service = transport::open_pubsub::<T>(iox, topic, delivery)?;
-        let port = service
-            .publisher_builder()
-            .backpressure_strategy(transport::backpressure(delivery.is_lossless()))
-            .create()
-            .map_err(|e| Error::topic(topic, format!("cannot create publisher: {e:?}")))?;
-        Ok(Box::new(TypedInlet::<T> {
-            topic: topic.to_string(),
-            port,
-            notifier: transport::notifier(iox, topic)?,
-        }))
-    }
-    caravan_schemas::with_wire_type!(type_name, |T| open::<T>(iox, topic, delivery))
-        .unwrap_or_else(|| Err(unknown(topic, type_name)))
-}
-
-/// The payload size of the message type named `type_name`, if it is one.
-pub fn payload_size(type_name: &str) -> Option<usize> {
-    caravan_schemas::with_message_type!(type_name, |T| size_of::<T>())
+    let descriptor = descriptor(iox, topic, type_name)?;
+    let service = untyped::open_or_create(iox, topic, &descriptor, delivery)?;
+    let port = service
+        .publisher_builder()
+        .backpressure_strategy(transport::backpressure(delivery.is_lossless()))
+        .create()
+        .map_err(|e| Error::topic(topic, format!("cannot create publisher: {e:?}")))?;
+    Ok(Box::new(DescribedInlet {
+        topic: topic.to_string(),
+        descriptor,
+        port,
+        notifier: transport::notifier(iox, topic)?,
+    }))
 }

@@ -3,9 +3,12 @@
 
 use crate::Error;
 use crate::transport;
-use caravan_schemas::{Header, Message};
+use crate::untyped;
+use caravan_schemas::Header;
+use caravan_schemas::descriptor::Descriptor;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
+use std::sync::Arc;
 
 /// What discovery tells about a publish-subscribe service.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -48,40 +51,21 @@ pub fn list_topics(
     Ok(topics)
 }
 
-/// One message read by a tap: its header and a copy of its payload, converted to JSON only
-/// when asked (the recorder converts on its writer thread, off the scheduler's path).
+/// One message read by a tap: its header and a copy of its payload's bytes, converted to JSON
+/// only when asked (the recorder converts on its writer thread, off the scheduler's path).
 pub struct Tapped {
     pub header: Header,
-    pub payload: Box<dyn TappedPayload>,
-}
-
-/// A payload copied out of shared memory, of a type known only at run time.
-pub trait TappedPayload: Send {
-    fn to_json(&self) -> Result<serde_json::Value, serde_json::Error>;
-}
-
-impl<T: Message> TappedPayload for T {
-    fn to_json(&self) -> Result<serde_json::Value, serde_json::Error> {
-        serde_json::to_value(self)
-    }
+    /// The payload's bytes, as its descriptor lays them out.
+    pub bytes: Box<[u8]>,
+    pub descriptor: Arc<Descriptor>,
 }
 
 impl Tapped {
     /// The payload as JSON (the `header` is not included).
     pub fn json(&self) -> Result<serde_json::Value, Error> {
-        self.payload
-            .to_json()
+        self.descriptor
+            .view(&self.bytes)
             .map_err(|e| Error::Config(format!("cannot convert to JSON: {e}")))
-    }
-}
-
-/// Copies `value` to the heap without a stack temporary: payloads reach megabytes (a map).
-fn boxed_copy<T: Message>(value: &T) -> Box<T> {
-    let mut boxed = Box::<T>::new_uninit();
-    // SAFETY: `T: Copy`, so a bitwise copy is a valid `T`, and the box has room for one.
-    unsafe {
-        std::ptr::copy_nonoverlapping(value, boxed.as_mut_ptr(), 1);
-        boxed.assume_init()
     }
 }
 
@@ -89,6 +73,8 @@ fn boxed_copy<T: Message>(value: &T) -> Box<T> {
 pub trait DynTap {
     fn topic(&self) -> &str;
     fn type_name(&self) -> &'static str;
+    /// How the topic's messages are laid out.
+    fn descriptor(&self) -> &Arc<Descriptor>;
     /// Reads every waiting message, oldest first.
     fn drain(&self, out: &mut Vec<Tapped>) -> Result<(), Error>;
     /// Messages lost before reaching the tap (sequence gaps).
@@ -103,29 +89,35 @@ pub fn open_listener(
     transport::listener(iox, topic)
 }
 
-struct Tap<T: Message> {
+struct Tap {
     topic: String,
-    port: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>,
+    descriptor: Arc<Descriptor>,
+    port: untyped::Subscriber,
     last_seq: std::cell::RefCell<Vec<(u64, u64)>>,
     missed: std::cell::Cell<u64>,
 }
 
-impl<T: Message> DynTap for Tap<T> {
+impl DynTap for Tap {
     fn topic(&self) -> &str {
         &self.topic
     }
 
     fn type_name(&self) -> &'static str {
-        caravan_schemas::type_name::<T>()
+        self.descriptor.type_name()
+    }
+
+    fn descriptor(&self) -> &Arc<Descriptor> {
+        &self.descriptor
     }
 
     fn drain(&self, out: &mut Vec<Tapped>) -> Result<(), Error> {
+        let size = self.descriptor.layout().size;
         while let Some(sample) = self
             .port
             .receive()
             .map_err(|e| Error::topic(&self.topic, format!("{e:?}")))?
         {
-            let header = *sample.user_header();
+            let header = untyped::header(sample.user_header());
             let mut last_seq = self.last_seq.borrow_mut();
             match last_seq.iter_mut().find(|(s, _)| *s == header.source_id) {
                 Some((_, last)) => {
@@ -137,7 +129,8 @@ impl<T: Message> DynTap for Tap<T> {
             }
             out.push(Tapped {
                 header,
-                payload: boxed_copy::<T>(sample.payload()),
+                bytes: untyped::payload_bytes(sample.payload(), size).into(),
+                descriptor: self.descriptor.clone(),
             });
         }
         Ok(())
@@ -148,37 +141,31 @@ impl<T: Message> DynTap for Tap<T> {
     }
 }
 
-/// Opens a tap on `topic`, whose payload type is named `type_name`. The subscriber takes the
+/// Opens a tap on `topic`, whose payload type is named `type_name`: a type of the catalog or
+/// one a process of the group registered ([`crate::types`]). The subscriber takes the
 /// service's own buffer settings, so it fits whatever contract the publishers chose.
 pub fn open_tap(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
     type_name: &str,
 ) -> Result<Box<dyn DynTap>, Error> {
-    fn open<T: Message>(
-        iox: &iceoryx2::node::Node<ipc::Service>,
-        topic: &str,
-    ) -> Result<Box<dyn DynTap>, Error> {
-        let service = transport::open_existing::<T>(iox, topic)?;
-        let depth = service.static_config().subscriber_max_buffer_size();
-        let port = service
-            .subscriber_builder()
-            .buffer_size(depth)
-            .create()
-            .map_err(|e| Error::topic(topic, format!("cannot subscribe: {e:?}")))?;
-        Ok(Box::new(Tap::<T> {
-            topic: topic.to_string(),
-            port,
-            last_seq: Default::default(),
-            missed: Default::default(),
-        }))
-    }
-    caravan_schemas::with_message_type!(type_name, |T| open::<T>(iox, topic)).unwrap_or_else(|| {
-        Err(Error::topic(
-            topic,
-            format!("unknown message type '{type_name}'"),
-        ))
-    })
+    let descriptor = Arc::new(
+        crate::types::lookup(iox.config(), type_name).map_err(|e| Error::topic(topic, e))?,
+    );
+    let service = untyped::open_existing(iox, topic, &descriptor)?;
+    let depth = service.static_config().subscriber_max_buffer_size();
+    let port = service
+        .subscriber_builder()
+        .buffer_size(depth)
+        .create()
+        .map_err(|e| Error::topic(topic, format!("cannot subscribe: {e:?}")))?;
+    Ok(Box::new(Tap {
+        topic: topic.to_string(),
+        descriptor,
+        port,
+        last_seq: Default::default(),
+        missed: Default::default(),
+    }))
 }
 
 /// Who is on a topic, as its shared-memory service records it.
@@ -224,38 +211,29 @@ pub fn watch_topic(
     topic: &str,
     type_name: &str,
 ) -> Result<TopicWatch, Error> {
-    fn watch<T: Message>(
-        iox: &iceoryx2::node::Node<ipc::Service>,
-        topic: &str,
-    ) -> Result<TopicWatch, Error> {
-        let service = transport::open_existing::<T>(iox, topic)?;
-        let ports = move || {
-            let config = service.static_config();
-            let mut ports = TopicPorts {
-                lossless: !config.has_safe_overflow(),
-                depth: config.subscriber_max_buffer_size(),
-                publishers: Vec::new(),
-                subscribers: Vec::new(),
-            };
-            let dynamic = service.dynamic_config();
-            dynamic.list_publishers(|p| {
-                ports.publishers.push(p.node_id);
-                CallbackProgression::Continue
-            });
-            dynamic.list_subscribers(|s| {
-                ports.subscribers.push(s.node_id);
-                CallbackProgression::Continue
-            });
-            ports
+    let descriptor =
+        crate::types::lookup(iox.config(), type_name).map_err(|e| Error::topic(topic, e))?;
+    let service = untyped::open_existing(iox, topic, &descriptor)?;
+    let ports = move || {
+        let config = service.static_config();
+        let mut ports = TopicPorts {
+            lossless: !config.has_safe_overflow(),
+            depth: config.subscriber_max_buffer_size(),
+            publishers: Vec::new(),
+            subscribers: Vec::new(),
         };
-        Ok(TopicWatch {
-            ports: Box::new(ports),
-        })
-    }
-    caravan_schemas::with_wire_type!(type_name, |T| watch::<T>(iox, topic)).unwrap_or_else(|| {
-        Err(Error::topic(
-            topic,
-            format!("unknown message type '{type_name}'"),
-        ))
+        let dynamic = service.dynamic_config();
+        dynamic.list_publishers(|p| {
+            ports.publishers.push(p.node_id);
+            CallbackProgression::Continue
+        });
+        dynamic.list_subscribers(|s| {
+            ports.subscribers.push(s.node_id);
+            CallbackProgression::Continue
+        });
+        ports
+    };
+    Ok(TopicWatch {
+        ports: Box::new(ports),
     })
 }

@@ -117,21 +117,6 @@ pub(crate) fn service_name(topic: &str) -> Result<ServiceName, Error> {
     ServiceName::new(topic).map_err(|e| Error::topic(topic, format!("not a valid name: {e:?}")))
 }
 
-/// Opens the publish-subscribe service of a topic that exists, whatever its contract.
-pub(crate) fn open_existing<T: Message>(
-    iox: &iceoryx2::node::Node<ipc::Service>,
-    topic: &str,
-) -> Result<PubSubFactory<ipc::Service, T, Header>, Error> {
-    use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError as Open;
-    let name = service_name(topic)?;
-    repairing_hung(
-        iox,
-        || pubsub_builder::<T>(iox, &name).open(),
-        |e| matches!(e, Open::HangsInCreation),
-    )
-    .map_err(|e| Error::topic(topic, format!("cannot open: {e:?}")))
-}
-
 /// The builder of a topic's publish-subscribe service: its payload and Caravan's header.
 fn pubsub_builder<T: Message>(
     iox: &iceoryx2::node::Node<ipc::Service>,
@@ -163,6 +148,7 @@ pub(crate) fn open_pubsub<T: Message>(
     };
     let depth = delivery.depth();
     let name = service_name(topic)?;
+    crate::types::register_type::<T>(iox.config()).map_err(|e| Error::topic(topic, e))?;
     repairing_hung(
         iox,
         || {
@@ -207,7 +193,7 @@ fn open_event(
 /// Runs `open`, and once more if it failed because a killed process left the service half
 /// made (see [`crate::group::remove_hung_services`]); a restarted node then starts instead of
 /// failing again on what its killed predecessor left.
-fn repairing_hung<T, E>(
+pub(crate) fn repairing_hung<T, E>(
     iox: &iceoryx2::node::Node<ipc::Service>,
     open: impl Fn() -> Result<T, E>,
     hung: impl Fn(&E) -> bool,

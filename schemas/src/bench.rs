@@ -5,7 +5,7 @@
 //! measure the path a topic takes between two hosts. They are not message types of the
 //! registry: recordings, `caravan topic echo` and the Python generator never meet them.
 
-use crate::describe::{Element, Field, Kind, Scalar, TypeLayout};
+use crate::describe::{Describe, Element, Field, Kind, Scalar, TypeLayout};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 
 /// The sizes of blob the bench measures, in bytes: a wheel set-point, a 682-beam laser scan's
@@ -57,28 +57,34 @@ impl<const N: usize> serde::Serialize for Blob<N> {
     }
 }
 
-/// The layouts of the blobs of [`BLOB_SIZES`]: one array of bytes, no padding.
-pub(crate) fn layouts() -> Vec<TypeLayout> {
-    fn layout<const N: usize>() -> TypeLayout {
+/// One array of bytes, no padding.
+impl<const N: usize> Describe for Blob<N> {
+    fn layout() -> TypeLayout {
         TypeLayout {
             name: "Blob",
             type_name: crate::type_name::<Blob<N>>(),
             size: N,
             align: 1,
-            fields: vec![Field {
-                name: "bytes".into(),
-                offset: 0,
-                size: N,
-                kind: Kind::Array(Element::Scalar(Scalar::U8), N),
-            }],
+            fields: vec![Field::new(
+                "bytes",
+                0,
+                N,
+                Kind::Array(Element::Scalar(Scalar::U8), N),
+            )],
         }
     }
+
+    fn dependencies(_out: &mut Vec<TypeLayout>) {}
+}
+
+/// The layouts of the blobs of [`BLOB_SIZES`].
+pub(crate) fn layouts() -> Vec<TypeLayout> {
     vec![
-        layout::<16>(),
-        layout::<2_728>(),
-        layout::<65_536>(),
-        layout::<1_048_576>(),
-        layout::<4_194_304>(),
+        Blob::<16>::layout(),
+        Blob::<2_728>::layout(),
+        Blob::<65_536>::layout(),
+        Blob::<1_048_576>::layout(),
+        Blob::<4_194_304>::layout(),
     ]
 }
 

@@ -4,6 +4,7 @@
 //! `caravan schemas --python` and `--layout` print it.
 
 use crate::describe::{Describe, TypeLayout};
+use crate::descriptor::{Descriptor, layout_json};
 use crate::lockstep::{Done, Grant, Hello};
 use crate::{
     AgentAction, Collision, Contact, ContactEstimate, Contacts, EncoderTicks, EnvStep, EpisodeEnd,
@@ -12,17 +13,24 @@ use crate::{
     Pose2D, Pose3D, Quaternion, Scene, Shape, Twist, Vector3, WheelSetpoint, WheelState, Wrench,
 };
 
+/// Runs `$apply!(Type …)` over every type of the catalog, each after the types it contains.
+macro_rules! catalog {
+    ($apply:ident) => {
+        $apply!(Header Vector3 Quaternion Pose2D Pose3D Twist WheelSetpoint WheelState EncoderTicks
+            Odometry LaserScan Imu OccupancyGrid Path2D Goal Shape Scene NodeStatus Collision
+            JointValue JointState JointCommand LinkState LinkStates Contact Contacts Wrench
+            ForceTorque ForceTorques ContactEstimate EnvStep AgentAction NamedValue EpisodeEnd
+            Metrics Hello Grant Done)
+    };
+}
+
 /// Every described type, each after the types it contains.
 pub fn layouts() -> Vec<TypeLayout> {
     macro_rules! layouts {
         ($($ty:ident)*) => { vec![$(<$ty as Describe>::layout()),*] };
     }
-    layouts!(Header Vector3 Quaternion Pose2D Pose3D Twist WheelSetpoint WheelState EncoderTicks
-        Odometry LaserScan Imu OccupancyGrid Path2D Goal Shape Scene NodeStatus Collision JointValue
-        JointState JointCommand LinkState LinkStates Contact Contacts Wrench ForceTorque ForceTorques
-        ContactEstimate EnvStep AgentAction NamedValue EpisodeEnd Metrics Hello Grant Done)
+    catalog!(layouts)
 }
-
 /// Erases the message types of [`crate::topics`] helpers, keeping how they name topics, and
 /// names each entry after its helper so that the table cannot drift from the functions.
 macro_rules! topic_names {
@@ -77,35 +85,21 @@ pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
 ];
 
 /// All layouts as JSON: `[{name, type_name, size, align, fields: [{name, offset, size, type,
-/// len?}]}]`, where `type` is a scalar name (`f64`) or a struct name and `len` marks an array.
+/// len?, count?, text?}]}]`, where `type` is a scalar name (`f64`) or a struct name, `len`
+/// marks an array, `count` the fields that count its valid items and `text` a string's bytes.
 pub fn layouts_json() -> serde_json::Value {
-    let layouts: Vec<serde_json::Value> = layouts()
-        .iter()
-        .map(|l| {
-            let fields: Vec<serde_json::Value> = l
-                .fields
-                .iter()
-                .map(|f| {
-                    let mut v = serde_json::json!({
-                        "name": f.name,
-                        "offset": f.offset,
-                        "size": f.size,
-                        "type": f.kind.element().name(),
-                    });
-                    if let Some(len) = f.kind.array_len() {
-                        v["len"] = len.into();
-                    }
-                    v
-                })
-                .collect();
-            serde_json::json!({
-                "name": l.name,
-                "type_name": l.type_name,
-                "size": l.size,
-                "align": l.align,
-                "fields": fields,
-            })
-        })
-        .collect();
-    serde_json::Value::Array(layouts)
+    serde_json::Value::Array(layouts().iter().map(layout_json).collect())
+}
+
+/// The descriptor of the catalog's type named `type_name` (`caravan::Pose2D`), with its default
+/// value: the types every process knows without being told. `None` for another type.
+pub fn descriptor(type_name: &str) -> Option<&'static Descriptor> {
+    // Built once: `caravan play` looks a type up for every message it writes.
+    static ALL: std::sync::LazyLock<Vec<Descriptor>> = std::sync::LazyLock::new(|| {
+        macro_rules! descriptors {
+            ($($ty:ident)*) => { vec![$(crate::descriptor_of::<$ty>()),*] };
+        }
+        catalog!(descriptors)
+    });
+    ALL.iter().find(|d| d.type_name() == type_name)
 }

@@ -16,15 +16,6 @@ use crate::{FixedString, FixedVec};
 use core::mem::size_of;
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 
-/// Arrays whose JSON view holds only their valid part, counted by other fields: (type, array
-/// field, count fields whose product is the count). A `FixedVec` is counted by its own `_len`
-/// and is not listed.
-pub const COUNTED_ARRAYS: &[(&str, &str, &[&str])] = &[
-    ("LaserScan", "ranges", &["beam_count"]),
-    ("LaserScan", "intensities", &["beam_count"]),
-    ("OccupancyGrid", "data", &["width", "height"]),
-];
-
 /// A plain number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scalar {
@@ -117,6 +108,27 @@ pub struct Field {
     /// Bytes the field occupies.
     pub size: usize,
     pub kind: Kind,
+    /// For an array of which only a front part is valid: the fields (of the same struct) whose
+    /// product is the number of valid items. A `FixedVec`'s or `FixedString`'s array is counted
+    /// by its own `_len`; `#[count(width, height)]` on a field of a derived type names others.
+    /// Empty for a single value or an array that is valid whole.
+    pub count: Vec<String>,
+    /// The array holds UTF-8 text (a `FixedString`'s bytes), shown as a string.
+    pub text: bool,
+}
+
+impl Field {
+    /// A field valid whole (no count), not text.
+    pub fn new(name: &str, offset: usize, size: usize, kind: Kind) -> Self {
+        Field {
+            name: name.to_string(),
+            offset,
+            size,
+            kind,
+            count: Vec::new(),
+            text: false,
+        }
+    }
 }
 
 /// Size, alignment and fields of one type.
@@ -135,18 +147,35 @@ pub struct TypeLayout {
 /// A type that can appear as a field: it adds its field(s) to a description.
 pub trait FieldKind {
     fn push(name: &str, offset: usize, out: &mut Vec<Field>);
+    /// Adds the layouts of the structs the field holds (theirs first), unless `out` has them.
+    fn dependencies(_out: &mut Vec<TypeLayout>) {}
 }
 
 /// A type that can be an array element: a number or a described struct.
 pub trait ElementKind: Sized {
     const ELEMENT: Element;
+    /// A described struct adds its own layout after those of the structs it holds.
+    fn dependencies(_out: &mut Vec<TypeLayout>) {}
 }
 
 /// A type with a layout description: `#[derive(Describe)]` on a `#[repr(C)]` struct writes it
 /// from the struct's declaration (field names from the declaration, offsets, sizes and types
-/// from the compiler).
+/// from the compiler; `#[count(a, b)]` on an array field says that only its first `a × b`
+/// items are valid).
 pub trait Describe {
     fn layout() -> TypeLayout;
+
+    /// The layouts of the structs this type holds, each after those it holds in turn.
+    fn dependencies(out: &mut Vec<TypeLayout>);
+
+    /// Everything a tool needs to read this type: the layouts of the structs it holds, then
+    /// its own.
+    fn descriptor() -> crate::descriptor::Descriptor {
+        let mut layouts = Vec::new();
+        Self::dependencies(&mut layouts);
+        layouts.push(Self::layout());
+        crate::descriptor::Descriptor::new(layouts)
+    }
 }
 
 pub use caravan_schemas_derive::Describe;
@@ -160,30 +189,42 @@ fn kind_of(element: Element) -> Kind {
 
 impl<T: ElementKind> FieldKind for T {
     fn push(name: &str, offset: usize, out: &mut Vec<Field>) {
-        out.push(Field {
-            name: name.to_string(),
+        out.push(Field::new(
+            name,
             offset,
-            size: size_of::<T>(),
-            kind: kind_of(T::ELEMENT),
-        });
+            size_of::<T>(),
+            kind_of(T::ELEMENT),
+        ));
+    }
+
+    fn dependencies(out: &mut Vec<TypeLayout>) {
+        <T as ElementKind>::dependencies(out)
     }
 }
 
 impl<T: ElementKind, const N: usize> FieldKind for [T; N] {
     fn push(name: &str, offset: usize, out: &mut Vec<Field>) {
-        out.push(Field {
-            name: name.to_string(),
+        out.push(Field::new(
+            name,
             offset,
-            size: size_of::<[T; N]>(),
-            kind: Kind::Array(T::ELEMENT, N),
-        });
+            size_of::<[T; N]>(),
+            Kind::Array(T::ELEMENT, N),
+        ));
+    }
+
+    fn dependencies(out: &mut Vec<TypeLayout>) {
+        T::dependencies(out)
     }
 }
 
 impl<const N: usize> FieldKind for FixedString<N> {
     fn push(name: &str, offset: usize, out: &mut Vec<Field>) {
-        u32::push(&format!("{name}_len"), offset + Self::LEN_OFFSET, out);
+        let len = format!("{name}_len");
+        u32::push(&len, offset + Self::LEN_OFFSET, out);
         <[u8; N]>::push(name, offset + Self::BYTES_OFFSET, out);
+        let bytes = out.last_mut().expect("just pushed");
+        bytes.count = vec![len];
+        bytes.text = true;
     }
 }
 
@@ -192,8 +233,14 @@ where
     T: ElementKind + Copy + PlacementDefault + ZeroCopySend,
 {
     fn push(name: &str, offset: usize, out: &mut Vec<Field>) {
-        u32::push(&format!("{name}_len"), offset + Self::LEN_OFFSET, out);
+        let len = format!("{name}_len");
+        u32::push(&len, offset + Self::LEN_OFFSET, out);
         <[T; N]>::push(name, offset + Self::ITEMS_OFFSET, out);
+        out.last_mut().expect("just pushed").count = vec![len];
+    }
+
+    fn dependencies(out: &mut Vec<TypeLayout>) {
+        T::dependencies(out)
     }
 }
 

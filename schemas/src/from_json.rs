@@ -9,29 +9,37 @@
 //! A `header` key is ignored, so a recorded message can be given whole. Unknown keys, wrong
 //! types, numbers outside their type's range and over-long arrays are errors naming the key.
 
-use crate::catalog::layouts;
-use crate::describe::{COUNTED_ARRAYS, Element, Kind, Scalar, TypeLayout};
+use crate::describe::{Element, Kind, Scalar, TypeLayout};
+use crate::descriptor::{Descriptor, is_hidden_count};
 use serde_json::Value;
 
 /// Writes `json` into `bytes`, a value of the message type named `type_name` (its stable name,
 /// `caravan::Pose2D`). `bytes` must hold a valid value of that type (a default one, say): the
 /// fields the JSON leaves out keep theirs.
 pub fn write_message(type_name: &str, json: &Value, bytes: &mut [u8]) -> Result<(), String> {
-    // Built once: `caravan play` writes every message of a recording through here.
-    static KNOWN: std::sync::LazyLock<Vec<TypeLayout>> = std::sync::LazyLock::new(layouts);
-    let known: &[TypeLayout] = &KNOWN;
-    let layout = known
-        .iter()
-        .find(|l| l.type_name == type_name)
-        .ok_or_else(|| format!("unknown message type '{type_name}'"))?;
-    if bytes.len() != layout.size {
-        return Err(format!(
-            "{type_name} takes {} bytes, not {}",
-            layout.size,
-            bytes.len()
-        ));
+    crate::catalog::descriptor(type_name)
+        .ok_or_else(|| format!("unknown message type '{type_name}'"))?
+        .write(json, bytes)
+}
+
+impl Descriptor {
+    /// Writes `json` into `bytes`, a valid value of the described type (a default one, say):
+    /// the fields the JSON leaves out keep theirs. See the module doc for the rules.
+    pub fn write(&self, json: &Value, bytes: &mut [u8]) -> Result<(), String> {
+        let layout = self.layout();
+        if bytes.len() != layout.size {
+            return Err(format!(
+                "{} takes {} bytes, not {}",
+                layout.type_name,
+                layout.size,
+                bytes.len()
+            ));
+        }
+        Writer {
+            known: self.layouts(),
+        }
+        .object(layout, json, bytes, "")
     }
-    Writer { known }.object(layout, json, bytes, "")
 }
 
 struct Writer<'k> {
@@ -61,8 +69,9 @@ impl Writer<'_> {
             ));
         };
         let field = |n: &str| layout.fields.iter().find(|f| f.name == n);
-        // `x_len` of a string or vector `x` is set from `x`, never given.
-        let is_count = |n: &str| n.strip_suffix("_len").is_some_and(|b| field(b).is_some());
+        // `x_len` of a string or vector `x` (or a scan's `beam_count`) is set from `x`, never
+        // given.
+        let is_count = |n: &str| is_hidden_count(layout, n);
         for (key, value) in map {
             let path = if at.is_empty() {
                 key.clone()
@@ -87,25 +96,17 @@ impl Writer<'_> {
             };
             // A count the JSON view leaves out (one field counting the array) is set from the
             // array's length; a product of fields (a grid's width × height) is given instead.
-            let counter = field(&format!("{key}_len")).map(|c| c.offset).or_else(|| {
-                COUNTED_ARRAYS
-                    .iter()
-                    .find(|(t, array, _)| *t == layout.name && *array == key)
-                    .and_then(|(_, _, counts)| match counts {
-                        [count] => field(count),
-                        _ => None,
-                    })
-                    .map(|c| c.offset)
-            });
+            let counter = match f.count.as_slice() {
+                [count] => field(count).map(|c| (c.offset, c.kind)),
+                _ => None,
+            };
             let slot = &mut bytes[f.offset..f.offset + f.size];
             let written = match f.kind {
                 Kind::Scalar(s) => scalar(s, value, slot, &path).map(|_| None)?,
                 Kind::Struct(n) => self
                     .object(self.layout(n)?, value, slot, &path)
                     .map(|_| None)?,
-                Kind::Array(Element::Scalar(Scalar::U8), n)
-                    if counter.is_some() && value.is_string() =>
-                {
+                Kind::Array(Element::Scalar(Scalar::U8), n) if f.text && value.is_string() => {
                     let text = value.as_str().unwrap_or_default().as_bytes();
                     if text.len() > n {
                         return Err(format!(
@@ -119,8 +120,9 @@ impl Writer<'_> {
                 }
                 Kind::Array(element, n) => Some(self.array(element, n, value, slot, &path)?),
             };
-            if let (Some(count), Some(offset)) = (written, counter) {
-                bytes[offset..offset + 4].copy_from_slice(&(count as u32).to_ne_bytes());
+            if let (Some(count), Some((offset, Kind::Scalar(s)))) = (written, counter) {
+                let slot = &mut bytes[offset..offset + s.size()];
+                scalar(s, &Value::from(count), slot, &path)?;
             }
         }
         Ok(())

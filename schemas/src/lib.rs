@@ -12,6 +12,7 @@ mod articulated;
 pub mod bench;
 pub mod catalog;
 pub mod describe;
+pub mod descriptor;
 mod episodes;
 mod fixed;
 pub mod from_json;
@@ -29,6 +30,7 @@ mod sensors;
 mod status;
 mod topic;
 pub mod topics;
+mod view;
 pub mod wire;
 
 pub use articulated::{
@@ -55,9 +57,11 @@ pub use topic::{Delivery, Topic};
 ///
 /// Implemented for every schema type. `Copy` keeps them plain data; `Serialize` feeds
 /// recordings and `caravan topic echo`; `PlacementDefault` lets a
-/// publisher initialise a megabyte-sized message in shared memory without a stack copy.
+/// publisher initialise a megabyte-sized message in shared memory without a stack copy;
+/// `Describe` gives the layout that tools compiled without the type read it by.
 pub trait Message:
     iceoryx2::prelude::ZeroCopySend
+    + describe::Describe
     + serde::Serialize
     + iceoryx2::prelude::PlacementDefault
     + core::fmt::Debug
@@ -69,6 +73,7 @@ pub trait Message:
 
 impl<T> Message for T where
     T: iceoryx2::prelude::ZeroCopySend
+        + describe::Describe
         + serde::Serialize
         + iceoryx2::prelude::PlacementDefault
         + core::fmt::Debug
@@ -90,6 +95,13 @@ pub fn type_name<T: Message>() -> &'static str {
 pub fn type_name_of<T: iceoryx2::prelude::ZeroCopySend>() -> &'static str {
     // SAFETY: as in `type_name`.
     unsafe { <T as iceoryx2::prelude::ZeroCopySend>::type_name() }
+}
+
+/// The descriptor of `T` with its default value, as a tool compiled without `T` needs it.
+pub fn descriptor_of<T: Message>() -> descriptor::Descriptor {
+    let default = serde_json::to_value(boxed_placement_new::<T>().as_ref())
+        .expect("a message's default serialises");
+    T::descriptor().with_default(default)
 }
 
 /// A value initialised field by field with `PlacementDefault` (zeros, identity quaternions…).

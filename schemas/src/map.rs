@@ -21,6 +21,7 @@ pub struct OccupancyGrid {
     pub origin: Pose2D,
     pub width: u32,
     pub height: u32,
+    #[count(width, height)]
     pub data: [i8; MAP_MAX_CELLS],
 }
 

@@ -25,7 +25,9 @@ pub struct LaserScan {
     pub range_max: f32,
     /// Number of valid entries in `ranges` and `intensities`.
     pub beam_count: u32,
+    #[count(beam_count)]
     pub ranges: [f32; SCAN_MAX_BEAMS],
+    #[count(beam_count)]
     pub intensities: [f32; SCAN_MAX_BEAMS],
 }
 

@@ -79,6 +79,28 @@ fn ranges_of(layout: &TypeLayout, known: &BTreeMap<&str, Ranges>) -> Option<Rang
     (end <= layout.size).then_some(out)
 }
 
+impl crate::descriptor::Descriptor {
+    /// The byte ranges of the described type that hold data (see [`data_ranges`]); `None` if
+    /// the layouts are out of order.
+    pub fn data_ranges(&self) -> Option<Vec<(usize, usize)>> {
+        let mut known = BTreeMap::new();
+        for layout in self.layouts() {
+            known.insert(layout.name, ranges_of(layout, &known)?);
+        }
+        known.remove(self.layout().name)
+    }
+}
+
+/// A message's bytes as they go on the wire: `payload`'s bytes in `ranges` (from
+/// [`crate::descriptor::Descriptor::data_ranges`]), zeros in its padding.
+pub fn wire_bytes(payload: &[u8], ranges: &[(usize, usize)]) -> Vec<u8> {
+    let mut out = vec![0u8; payload.len()];
+    for &(offset, len) in ranges {
+        out[offset..offset + len].copy_from_slice(&payload[offset..offset + len]);
+    }
+    out
+}
+
 /// Appends a range after the last one, merging them when adjacent; `None` if it goes back.
 fn push(ranges: &mut Ranges, offset: usize, len: usize) -> Option<()> {
     match ranges.last_mut() {
@@ -196,12 +218,7 @@ mod tests {
     #[test]
     fn padded_elements_repeat_at_their_stride() {
         use crate::describe::{Field, Kind, Scalar};
-        let field = |offset, size, kind| Field {
-            name: String::new(),
-            offset,
-            size,
-            kind,
-        };
+        let field = |offset, size, kind| Field::new("", offset, size, kind);
         // `[E; 3]` where `E` is `{ u64, u32 }` and 4 bytes of padding.
         let known = BTreeMap::from([("E", vec![(0, 12)])]);
         let mut outer = TypeLayout {

@@ -102,6 +102,7 @@ fn ctypes_fields(layout: &TypeLayout, done: &[TypeLayout]) -> Result<Vec<(String
         offset,
         size,
         kind,
+        ..
     } in &layout.fields
     {
         let align = ctypes_align(kind.element(), done)?;
@@ -285,10 +286,12 @@ pub fn python_module() -> Result<String> {
             writeln!(py, "        (\"{name}\", {ty}),")?;
         }
         py.push_str("    ]\n");
-        let counts: Vec<String> = caravan_schemas::describe::COUNTED_ARRAYS
+        // Arrays counted by other fields (a `FixedVec`'s own `_len` needs no entry).
+        let counts: Vec<String> = layout
+            .fields
             .iter()
-            .filter(|(t, _, _)| *t == layout.name)
-            .map(|(_, array, by)| format!("\"{array}\": (\"{}\",)", by.join("\", \"")))
+            .filter(|f| !f.count.is_empty() && f.count != [format!("{}_len", f.name)])
+            .map(|f| format!("\"{}\": (\"{}\",)", f.name, f.count.join("\", \"")))
             .collect();
         if !counts.is_empty() {
             writeln!(py, "    _counts_ = {{{}}}", counts.join(", "))?;
@@ -401,25 +404,10 @@ mod tests {
             size: 24,
             align: 8,
             fields: vec![
-                Field {
-                    name: "a".into(),
-                    offset: 0,
-                    size: 4,
-                    kind: Kind::Scalar(Scalar::U32),
-                },
+                Field::new("a", 0, 4, Kind::Scalar(Scalar::U32)),
                 // A nested FixedVec<u64, 1>: its length sits at 8, not at 4.
-                Field {
-                    name: "v_len".into(),
-                    offset: 8,
-                    size: 4,
-                    kind: Kind::Scalar(Scalar::U32),
-                },
-                Field {
-                    name: "v".into(),
-                    offset: 16,
-                    size: 8,
-                    kind: Kind::Array(Element::Scalar(Scalar::U64), 1),
-                },
+                Field::new("v_len", 8, 4, Kind::Scalar(Scalar::U32)),
+                Field::new("v", 16, 8, Kind::Array(Element::Scalar(Scalar::U64), 1)),
             ],
         };
         let fields = ctypes_fields(&odd, &[]).unwrap();

@@ -74,11 +74,11 @@ pub fn publish(args: &PubArgs) -> Result<()> {
         serde_json::from_str(&args.message).map_err(|e| anyhow!("the message is not JSON: {e}"))?;
     let type_name = topic_type(&group, &args.topic, args.type_name.as_deref())?;
     // Checked before joining the group, so a bad message leaves nothing behind.
-    caravan_schemas::with_message_type!(type_name.as_str(), |T| {
-        caravan_schemas::from_json::message_from_json::<T>(&json).map(|_| ())
-    })
-    .unwrap_or_else(|| Err(format!("unknown message type '{type_name}'")))
-    .map_err(|e| anyhow!("{type_name}: {e}"))?;
+    let descriptor = caravan::types::lookup(&caravan::group::config(&group)?, &type_name)?;
+    descriptor
+        .default_bytes()
+        .and_then(|mut bytes| descriptor.write(&json, &mut bytes))
+        .map_err(|e| anyhow!("{type_name}: {e}"))?;
     let (_config, node) = iox(&group)?;
     let injector = open_injector(
         &node,

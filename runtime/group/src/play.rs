@@ -72,7 +72,8 @@ pub struct Recorded {
     pub data: Vec<u8>,
 }
 
-/// A recording's Caravan messages (JSON channels of a registry type, `status` left out).
+/// A recording's Caravan messages (JSON channels of a Caravan message type, whose names are
+/// paths such as `caravan::Pose2D`; `status` and the Foxglove views left out).
 pub struct Recording {
     /// Type of every selected channel, by topic; a channel without messages is listed too.
     pub types: BTreeMap<String, String>,
@@ -95,7 +96,7 @@ pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
             && c.topic != "status"
             && c.schema
                 .as_ref()
-                .is_some_and(|s| caravan_schemas::message_type_names().contains(&s.name.as_str()))
+                .is_some_and(|s| s.encoding == "jsonschema" && s.name.contains("::"))
     };
     let chosen = |topic: &str| patterns.is_empty() || patterns.iter().any(|p| glob_match(p, topic));
     let mut recording = Recording {

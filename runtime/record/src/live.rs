@@ -52,10 +52,15 @@ impl LiveView {
         self.server.as_ref().map_or(0, |s| s.port())
     }
 
-    /// Advertises a raw Caravan topic: JSON with the schema generated for `type_name`.
-    pub fn advertise_raw(&mut self, topic: &str, type_name: &str, wall_clock: bool) -> Result<()> {
-        let schema =
-            super::schema::for_type(type_name, wall_clock).unwrap_or_else(|| serde_json::json!({}));
+    /// Advertises a raw Caravan topic: JSON with the schema generated for its type.
+    pub fn advertise_raw(
+        &mut self,
+        topic: &str,
+        descriptor: &caravan_schemas::descriptor::Descriptor,
+        wall_clock: bool,
+    ) -> Result<()> {
+        let type_name = descriptor.type_name();
+        let schema = super::schema::for_type(descriptor, wall_clock);
         let data = schema.to_string().into_bytes();
         self.advertise(topic, "json", Schema::new(type_name, "jsonschema", data))
     }

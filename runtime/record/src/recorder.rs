@@ -170,12 +170,9 @@ impl Recorder {
             if !wanted {
                 continue;
             }
-            if caravan_schemas::with_message_type!(&info.type_name, |T| ()).is_none() {
-                // A type outside the schemas (a user's own) cannot be decoded; say so once.
-                eprintln!(
-                    "caravan: not recording '{}': unknown message type '{}'",
-                    info.name, info.type_name
-                );
+            if let Err(e) = caravan::types::lookup(self.iox.config(), &info.type_name) {
+                // Not published through Caravan (its type undescribed): say so once.
+                eprintln!("caravan: not recording '{}': {e}", info.name);
                 continue;
             }
             match open_tap(&self.iox, &info.name, &info.type_name) {
@@ -183,7 +180,7 @@ impl Recorder {
                     // Served live (wall-clock measurements are fine there), never recorded.
                     self.writer.send(Command::StatusTopic {
                         topic: status.name().to_string(),
-                        type_name: tap.type_name().to_string(),
+                        descriptor: tap.descriptor().clone(),
                     })?;
                     self.status_tap = Some(tap)
                 }
@@ -208,6 +205,7 @@ impl Recorder {
                 id,
                 topic: tap.topic().to_string(),
                 type_name: tap.type_name(),
+                descriptor: tap.descriptor().clone(),
                 recorded: self.is_recorded(tap.topic()),
             });
             let hash = caravan_schemas::lockstep::name_hash(tap.topic());

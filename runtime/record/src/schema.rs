@@ -9,8 +9,8 @@
 //! stamps (simulated or since the group's start) stay integers; they are exact up to 2⁵³
 //! (104 days in ns).
 
-use caravan_schemas::catalog::layouts;
 use caravan_schemas::describe::{Element, Kind, Scalar, TypeLayout};
+use caravan_schemas::descriptor::Descriptor;
 use serde_json::{Value, json};
 
 fn scalar(s: Scalar) -> Value {
@@ -86,18 +86,18 @@ fn describe(sample: &Value, layout: Option<&TypeLayout>, known: &[TypeLayout]) -
     }
 }
 
-/// The schema of a recorded message of type `type_name`: the payload's fields plus `header`.
-pub fn for_type(type_name: &str, with_wall_clock: bool) -> Option<Value> {
-    let payload = caravan_schemas::with_message_type!(type_name, |T| {
-        serde_json::to_value(caravan_schemas::boxed_placement_new::<T>().as_ref())
-            .unwrap_or(Value::Null)
-    })?;
-    let known = layouts();
-    let layout = known.iter().find(|l| l.type_name == type_name);
-    let mut schema = describe(&payload, layout, &known);
-    schema["title"] = json!(type_name);
+/// The schema of a recorded message of the type `descriptor` describes: the payload's fields
+/// plus `header`.
+pub fn for_type(descriptor: &Descriptor, with_wall_clock: bool) -> Value {
+    let payload = descriptor
+        .default_bytes()
+        .and_then(|bytes| descriptor.view(&bytes))
+        .unwrap_or(Value::Null);
+    let known = descriptor.layouts();
+    let mut schema = describe(&payload, Some(descriptor.layout()), known);
+    schema["title"] = json!(descriptor.type_name());
     schema["properties"]["header"] = header_schema(with_wall_clock);
-    Some(schema)
+    schema
 }
 
 fn header_schema(with_wall_clock: bool) -> Value {
@@ -144,9 +144,17 @@ mod tests {
         }
     }
 
+    /// The schema of the catalog's type `name`.
+    fn for_name(name: &str, with_wall_clock: bool) -> Value {
+        super::for_type(
+            caravan_schemas::catalog::descriptor(name).unwrap(),
+            with_wall_clock,
+        )
+    }
+
     #[test]
     fn pose_schema_lists_fields_and_header() {
-        let s = super::for_type("caravan::Pose2D", false).unwrap();
+        let s = for_name("caravan::Pose2D", false);
         assert_eq!(s["properties"]["theta"]["type"], "number");
         let header = &s["properties"]["header"]["properties"];
         assert_eq!(header["seq"]["type"], "integer");
@@ -156,10 +164,9 @@ mod tests {
 
     #[test]
     fn every_array_of_every_message_type_has_items() {
-        for layout in caravan_schemas::catalog::layouts() {
-            let Some(s) = super::for_type(layout.type_name, true) else {
-                continue; // not a message type (a field struct or the lockstep protocol)
-            };
+        for name in caravan_schemas::message_type_names() {
+            let s = for_name(name, true);
+            let layout = caravan_schemas::catalog::descriptor(name).unwrap().layout();
             let mut missing = Vec::new();
             arrays_without_items(&s, layout.type_name, &mut missing);
             assert!(missing.is_empty(), "arrays without items: {missing:?}");
@@ -168,14 +175,14 @@ mod tests {
 
     #[test]
     fn arrays_are_typed_by_their_elements() {
-        let scan = super::for_type("caravan::LaserScan", false).unwrap();
+        let scan = for_name("caravan::LaserScan", false);
         assert_eq!(scan["properties"]["ranges"]["items"]["type"], "number");
-        let path = super::for_type("caravan::Path2D", false).unwrap();
+        let path = for_name("caravan::Path2D", false);
         let pose = &path["properties"]["poses"]["items"]["properties"];
         assert_eq!(pose["theta"]["type"], "number");
-        let map = super::for_type("caravan::OccupancyGrid", false).unwrap();
+        let map = for_name("caravan::OccupancyGrid", false);
         assert_eq!(map["properties"]["data"]["items"]["type"], "integer");
-        let joints = super::for_type("caravan::JointState", false).unwrap();
+        let joints = for_name("caravan::JointState", false);
         let joint = &joints["properties"]["joints"]["items"]["properties"];
         assert_eq!(joint["name"]["type"], "string");
         assert_eq!(joint["effort"]["type"], "number");

@@ -11,13 +11,15 @@
 use super::{scene, schema};
 use anyhow::{Context, Result, anyhow};
 use caravan::tap::Tapped;
+use caravan_schemas::descriptor::Descriptor;
 use crossbeam::channel::{Receiver, Sender};
 use hdrhistogram::Histogram;
-use serde_json::{Value, json};
+use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Batches the writer may fall behind by before the recorder waits for it. A lockstep advance
 /// is one batch; the bound keeps memory in check when writing is slower than the group.
@@ -47,6 +49,8 @@ pub struct NewTopic {
     pub id: usize,
     pub topic: String,
     pub type_name: &'static str,
+    /// How its messages are laid out.
+    pub descriptor: Arc<Descriptor>,
     /// Whether it goes into the file (else it is served live only).
     pub recorded: bool,
 }
@@ -67,7 +71,10 @@ pub enum Command {
     /// Newly discovered topics, sorted by name: their channels, before any of their messages.
     Topics(Vec<NewTopic>),
     /// The status topic: served live, never written.
-    StatusTopic { topic: String, type_name: String },
+    StatusTopic {
+        topic: String,
+        descriptor: Arc<Descriptor>,
+    },
     /// Messages drained together, with the wall clock then (for the latency statistics).
     Batch {
         messages: Vec<Drained>,
@@ -182,9 +189,9 @@ impl Writer {
                     self.add_topic(topic)?;
                 }
             }
-            Command::StatusTopic { topic, type_name } => {
+            Command::StatusTopic { topic, descriptor } => {
                 if let Some(live) = &mut self.live {
-                    live.advertise_raw(&topic, &type_name, true)?;
+                    live.advertise_raw(&topic, &descriptor, true)?;
                 }
             }
             Command::Batch {
@@ -219,7 +226,7 @@ impl Writer {
         }
         self.topics[new.id] = (new.topic.as_str().into(), new.type_name);
         if new.recorded {
-            self.channel(&new.topic, new.type_name)?;
+            self.channel(&new.topic, &new.descriptor)?;
         }
         for (view, schema) in scene::topics_of(&new.topic, new.type_name) {
             if new.recorded {
@@ -230,7 +237,7 @@ impl Writer {
             }
         }
         if let Some(live) = &mut self.live {
-            live.advertise_raw(&new.topic, new.type_name, !self.lockstep)?;
+            live.advertise_raw(&new.topic, &new.descriptor, !self.lockstep)?;
         }
         Ok(())
     }
@@ -247,11 +254,12 @@ impl Writer {
     }
 
     /// The raw channel of `topic`, added at discovery.
-    fn channel(&mut self, topic: &str, type_name: &str) -> Result<u16> {
+    fn channel(&mut self, topic: &str, descriptor: &Descriptor) -> Result<u16> {
         if let Some(&id) = self.channels.get(topic) {
             return Ok(id);
         }
-        let schema = schema::for_type(type_name, !self.lockstep).unwrap_or(json!({}));
+        let type_name = descriptor.type_name();
+        let schema = schema::for_type(descriptor, !self.lockstep);
         let schema_id = self.schema_id(type_name, "jsonschema", schema.to_string().as_bytes())?;
         self.add_channel(topic, schema_id, "json")
     }
