@@ -219,10 +219,14 @@ impl Executor<'_> {
             if interrupted(result) {
                 break Ok(());
             }
+            // Draining counts as hearing: a notification that came after the wait returned for
+            // another reason (the status interval) would otherwise be consumed unheard, and the
+            // message it announced would wait for the next one, which may never come.
             if let Some(listener) = &listener {
-                listener
+                let drained = listener
                     .try_wait(|_| {})
                     .map_err(|e| Error::transport("listener", e))?;
+                fired |= drained > 0;
             }
             stepped = fired;
             if fired {

@@ -92,14 +92,22 @@ pub fn layouts_json() -> serde_json::Value {
 }
 
 /// The descriptor of the catalog's type named `type_name` (`caravan::Pose2D`), with its default
-/// value: the types every process knows without being told. `None` for another type.
+/// value: the types every process knows without being told (and the bench's blobs, whose
+/// default is all zeros). `None` for another type.
 pub fn descriptor(type_name: &str) -> Option<&'static Descriptor> {
     // Built once: `caravan play` looks a type up for every message it writes.
     static ALL: std::sync::LazyLock<Vec<Descriptor>> = std::sync::LazyLock::new(|| {
         macro_rules! descriptors {
             ($($ty:ident)*) => { vec![$(crate::descriptor_of::<$ty>()),*] };
         }
-        catalog!(descriptors)
+        let mut all = catalog!(descriptors);
+        // The bench's blobs cross hosts through the bridge like any topic.
+        all.extend(
+            crate::bench::layouts()
+                .into_iter()
+                .map(|l| Descriptor::new(vec![l])),
+        );
+        all
     });
     ALL.iter().find(|d| d.type_name() == type_name)
 }

@@ -267,15 +267,26 @@ fn element_align(element: Element, known: &[TypeLayout]) -> Option<usize> {
 /// within the size; nested structs are described earlier in `known`.
 pub fn check(layout: &TypeLayout, known: &[TypeLayout]) -> Result<(), String> {
     let mut end: usize = 0;
-    for f in &layout.fields {
-        let align = element_align(f.kind.element(), known).ok_or_else(|| {
+    let align_of = |f: &Field| {
+        element_align(f.kind.element(), known).ok_or_else(|| {
             format!(
                 "{}.{}: {} is not described before it",
                 layout.name,
                 f.name,
                 f.kind.element().name()
             )
-        })?;
+        })
+    };
+    for (i, f) in layout.fields.iter().enumerate() {
+        let mut align = align_of(f)?;
+        // A `FixedVec`'s or `FixedString`'s length opens the container, which is aligned as
+        // its items are: after a `u32`, a `FixedVec<f64, N>` starts 8 bytes on.
+        if let Some(next) = layout.fields.get(i + 1)
+            && next.count == [f.name.as_str()]
+            && next.name.len() + 4 == f.name.len()
+        {
+            align = align.max(align_of(next)?);
+        }
         let expected = end.next_multiple_of(align);
         if f.offset != expected {
             return Err(format!(

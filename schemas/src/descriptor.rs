@@ -341,6 +341,24 @@ mod tests {
         }
     }
 
+    /// A `FixedVec` of 8-byte items after a `u32`: its length sits 8 bytes on, not 4.
+    #[test]
+    fn a_container_aligned_past_its_predecessor_is_described() {
+        use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
+        #[repr(C)]
+        #[derive(Clone, Copy, ZeroCopySend, PlacementDefault, Describe)]
+        #[type_name("test::Gap")]
+        struct Gap {
+            a: u32,
+            v: crate::FixedVec<f64, 2>,
+        }
+        let layout = Gap::layout();
+        assert_eq!(layout.fields[1].offset, 8);
+        check(&layout, &[]).unwrap();
+        let d = Gap::descriptor();
+        assert_eq!(Descriptor::from_json(&d.to_json()).unwrap(), d);
+    }
+
     #[test]
     fn counts_come_from_the_declaration() {
         let scan = LaserScan::layout();

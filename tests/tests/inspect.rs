@@ -388,3 +388,80 @@ fn pong_steps(s: &Scenario) -> u64 {
         .and_then(|v| v["status"]["steps"].as_u64())
         .unwrap_or(0)
 }
+
+/// A message type declared in a crate of its own (`examples/beacon`), which nothing in
+/// Caravan's tree names: its publisher registers its descriptor with the group, and the
+/// recorder, `topic echo` and `topic pub` read and write it through that.
+#[test]
+fn a_message_type_declared_outside_caravan_is_recorded_echoed_and_published_from_json() {
+    let body = r#"clock = "realtime"
+record = ["beacon*"]
+
+[[process]]
+name = "beacon"
+exec = "caravan-beacon"
+rate = "10Hz"
+"#;
+    let s = Scenario::new("outside-type", body);
+    let child = s.start_realtime(1);
+    let g = s.group.name.as_str();
+    wait_until("the beacon broadcasts", || {
+        topic_info(g, "beacon").is_some()
+    });
+    let info = topic_info(g, "beacon").unwrap();
+    assert_eq!(info["type"], "beacon::Beacon", "{info}");
+
+    let echo = json_of(&caravan(&[
+        "topic", "echo", "beacon", "-n", "1", "--group", g,
+    ]));
+    assert_eq!(echo["label"], "unset", "{echo}");
+    assert!(echo["id"].as_u64().unwrap() >= 1, "{echo}");
+    assert!(echo["history"].as_array().unwrap().len() <= 4, "{echo}");
+    assert!(echo.get("label_len").is_none() && echo.get("history_len").is_none());
+
+    let set = r#"{"label": "from json", "position": {"x": 1.5, "y": -2.0, "z": 0.25}}"#;
+    let publish = caravan(&["topic", "pub", "beacon/set", set, "-n", "3", "--group", g]);
+    assert!(publish.status.success(), "{}", stderr(&publish));
+    // A field the type lacks is named, with the type's own fields.
+    let bad = caravan(&[
+        "topic",
+        "pub",
+        "beacon/set",
+        r#"{"colour": 1}"#,
+        "--group",
+        g,
+    ]);
+    assert!(
+        stderr(&bad).contains("Beacon has no field 'colour'; its fields: id, strength_dbm"),
+        "{}",
+        stderr(&bad)
+    );
+    wait_until("the beacon says what it was told", || {
+        let out = caravan(&["topic", "echo", "beacon", "-n", "1", "--group", g]);
+        serde_json::from_slice::<serde_json::Value>(&out.stdout)
+            .is_ok_and(|m| m["label"] == "from json")
+    });
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(child.wait_with_output().unwrap().status.success());
+
+    let run = s.run_dirs().pop().expect("a run directory");
+    let bytes = caravan_tests::recording::read(&run.join("record.mcap"));
+    let told: Vec<serde_json::Value> = caravan_tests::recording::messages(&bytes, "beacon")
+        .iter()
+        .map(|m| serde_json::from_slice(m).unwrap())
+        .filter(|m: &serde_json::Value| m["label"] == "from json")
+        .collect();
+    let last = told
+        .last()
+        .expect("recorded broadcasts with the label set from JSON");
+    assert_eq!(last["position"]["x"], 1.5);
+    assert_eq!(last["position"]["z"], 0.25);
+    let history = last["history"].as_array().unwrap();
+    assert_eq!(history.len(), 4);
+    assert_eq!(
+        history[3].as_f64().unwrap() as f32,
+        last["strength_dbm"].as_f64().unwrap() as f32
+    );
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}
