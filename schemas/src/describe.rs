@@ -165,17 +165,9 @@ pub trait ElementKind: Sized {
 pub trait Describe {
     fn layout() -> TypeLayout;
 
-    /// The layouts of the structs this type holds, each after those it holds in turn.
+    /// The layouts of the structs this type holds, each after those it holds in turn (a
+    /// descriptor, `caravan_schemas::descriptor::Descriptor::of`, is those and its own).
     fn dependencies(out: &mut Vec<TypeLayout>);
-
-    /// Everything a tool needs to read this type: the layouts of the structs it holds, then
-    /// its own.
-    fn descriptor() -> crate::descriptor::Descriptor {
-        let mut layouts = Vec::new();
-        Self::dependencies(&mut layouts);
-        layouts.push(Self::layout());
-        crate::descriptor::Descriptor::new(layouts)
-    }
 }
 
 pub use caravan_schemas_derive::Describe;

@@ -9,7 +9,7 @@
 //! itself last, and the JSON view of the type's default value (`null`: all zeros), which
 //! `topic pub` starts from.
 
-use crate::describe::{Element, Field, Kind, Scalar, TypeLayout, check};
+use crate::describe::{Describe, Element, Field, Kind, Scalar, TypeLayout, check};
 use serde_json::{Value, json};
 use std::collections::BTreeSet;
 use std::sync::Mutex;
@@ -63,6 +63,14 @@ impl Descriptor {
                 .map_err(|e| format!("{}'s default: {e}", self.type_name()))?;
         }
         Ok(bytes)
+    }
+
+    /// Everything a tool needs to read `T`: the layouts of the structs it holds, then its own.
+    pub fn of<T: Describe>() -> Self {
+        let mut layouts = Vec::new();
+        T::dependencies(&mut layouts);
+        layouts.push(T::layout());
+        Descriptor::new(layouts)
     }
 
     /// The type's own layout.
@@ -301,7 +309,6 @@ pub fn is_hidden_count(layout: &TypeLayout, name: &str) -> bool {
 mod tests {
     use super::*;
     use crate::catalog::layouts;
-    use crate::describe::Describe;
     use crate::{LaserScan, OccupancyGrid, Path2D};
 
     #[test]
@@ -355,7 +362,7 @@ mod tests {
         let layout = Gap::layout();
         assert_eq!(layout.fields[1].offset, 8);
         check(&layout, &[]).unwrap();
-        let d = Gap::descriptor();
+        let d = Descriptor::of::<Gap>();
         assert_eq!(Descriptor::from_json(&d.to_json()).unwrap(), d);
     }
 
@@ -369,14 +376,14 @@ mod tests {
         let data = grid.fields.iter().find(|f| f.name == "data").unwrap();
         assert_eq!(data.count, ["width", "height"]);
         assert!(!is_hidden_count(&grid, "width"));
-        let path = Path2D::descriptor();
+        let path = Descriptor::of::<Path2D>();
         assert_eq!(path.layouts()[0].name, "Pose2D");
         assert_eq!(path.layout().fields[1].count, ["poses_len"]);
     }
 
     #[test]
     fn a_descriptor_that_makes_no_sense_is_refused() {
-        let good = Path2D::descriptor().to_json()["layouts"].clone();
+        let good = Descriptor::of::<Path2D>().to_json()["layouts"].clone();
         let refused = |edit: &dyn Fn(&mut Value)| {
             let mut v = good.clone();
             edit(&mut v);

@@ -101,7 +101,7 @@ pub fn type_name_of<T: iceoryx2::prelude::ZeroCopySend>() -> &'static str {
 pub fn descriptor_of<T: Message>() -> descriptor::Descriptor {
     let default = serde_json::to_value(boxed_placement_new::<T>().as_ref())
         .expect("a message's default serialises");
-    T::descriptor().with_default(default)
+    descriptor::Descriptor::of::<T>().with_default(default)
 }
 
 /// A value initialised field by field with `PlacementDefault` (zeros, identity quaternions…).
