@@ -67,17 +67,9 @@ impl Inlet for DescribedInlet {
     }
 
     fn publish(&self, header: &Header, wire: &[u8]) -> Result<(), Error> {
-        let size = self.descriptor.layout().size;
-        if wire.len() != size {
-            return Err(Error::topic(
-                &self.topic,
-                format!(
-                    "{} takes {size} bytes, not {}",
-                    self.descriptor.type_name(),
-                    wire.len()
-                ),
-            ));
-        }
+        self.descriptor
+            .check_size(wire.len())
+            .map_err(|e| Error::topic(&self.topic, e))?;
         untyped::publish(&self.port, &self.topic, *header, wire)?;
         transport::wake(&self.notifier);
         Ok(())

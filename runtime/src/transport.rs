@@ -127,6 +127,24 @@ fn pubsub_builder<T: Message>(
         .user_header::<Header>()
 }
 
+/// A new topic's service made with `delivery`'s contract: latest-value topics overwrite the
+/// oldest message, lossless ones make publishers wait; subscribers hold `depth` messages.
+pub(crate) fn with_contract<P, H>(
+    builder: iceoryx2::service::builder::publish_subscribe::Builder<P, H, ipc::Service>,
+    delivery: crate::Delivery,
+) -> iceoryx2::service::builder::publish_subscribe::Builder<P, H, ipc::Service>
+where
+    P: core::fmt::Debug + IceoryxSend + ?Sized,
+    H: core::fmt::Debug + ZeroCopySend,
+{
+    let depth = delivery.depth();
+    builder
+        .enable_safe_overflow(!delivery.is_lossless())
+        .subscriber_max_buffer_size(depth)
+        .subscriber_max_borrowed_samples(depth.max(8))
+        .history_size(0)
+}
+
 /// A publisher's behaviour when a subscriber's buffer is full: wait on a lossless topic,
 /// drop the oldest on a latest-value one.
 pub(crate) fn backpressure(lossless: bool) -> BackpressureStrategy {
@@ -146,19 +164,11 @@ pub(crate) fn open_pubsub<T: Message>(
     use iceoryx2::service::builder::publish_subscribe::{
         PublishSubscribeOpenError as Open, PublishSubscribeOpenOrCreateError as Either,
     };
-    let depth = delivery.depth();
     let name = service_name(topic)?;
     crate::types::register_type::<T>(iox.config()).map_err(|e| Error::topic(topic, e))?;
     repairing_hung(
         iox,
-        || {
-            pubsub_builder::<T>(iox, &name)
-                .enable_safe_overflow(!delivery.is_lossless())
-                .subscriber_max_buffer_size(depth)
-                .subscriber_max_borrowed_samples(depth.max(8))
-                .history_size(0)
-                .open_or_create()
-        },
+        || with_contract(pubsub_builder::<T>(iox, &name), delivery).open_or_create(),
         |e| matches!(e, Either::PublishSubscribeOpenError(Open::HangsInCreation)),
     )
     .map_err(|e| {

@@ -93,18 +93,10 @@ pub fn open_or_create(
     use iceoryx2::service::builder::publish_subscribe::{
         PublishSubscribeOpenError as Open, PublishSubscribeOpenOrCreateError as Either,
     };
-    let depth = delivery.depth();
     let (name, detail) = names(topic, descriptor)?;
     repairing_hung(
         iox,
-        || {
-            builder(iox, &name, &detail)
-                .enable_safe_overflow(!delivery.is_lossless())
-                .subscriber_max_buffer_size(depth)
-                .subscriber_max_borrowed_samples(depth.max(8))
-                .history_size(0)
-                .open_or_create()
-        },
+        || crate::transport::with_contract(builder(iox, &name, &detail), delivery).open_or_create(),
         |e| matches!(e, Either::PublishSubscribeOpenError(Open::HangsInCreation)),
     )
     .map_err(|e| {

@@ -73,6 +73,19 @@ impl Descriptor {
         Descriptor::new(layouts)
     }
 
+    /// Checks that `len` bytes are one value of the type.
+    pub fn check_size(&self, len: usize) -> Result<(), String> {
+        let layout = self.layout();
+        if len == layout.size {
+            Ok(())
+        } else {
+            Err(format!(
+                "{} takes {} bytes, not {len}",
+                layout.type_name, layout.size
+            ))
+        }
+    }
+
     /// The type's own layout.
     pub fn layout(&self) -> &TypeLayout {
         self.layouts.last().expect("never empty")

@@ -27,14 +27,7 @@ impl Descriptor {
     /// the fields the JSON leaves out keep theirs. See the module doc for the rules.
     pub fn write(&self, json: &Value, bytes: &mut [u8]) -> Result<(), String> {
         let layout = self.layout();
-        if bytes.len() != layout.size {
-            return Err(format!(
-                "{} takes {} bytes, not {}",
-                layout.type_name,
-                layout.size,
-                bytes.len()
-            ));
-        }
+        self.check_size(bytes.len())?;
         Writer {
             known: self.layouts(),
         }

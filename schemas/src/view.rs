@@ -12,14 +12,7 @@ impl Descriptor {
     /// The JSON view of one message of this type, from its `size` bytes.
     pub fn view(&self, bytes: &[u8]) -> Result<Value, String> {
         let layout = self.layout();
-        if bytes.len() != layout.size {
-            return Err(format!(
-                "{} takes {} bytes, not {}",
-                layout.type_name,
-                layout.size,
-                bytes.len()
-            ));
-        }
+        self.check_size(bytes.len())?;
         Ok(self.object(layout, bytes))
     }
 
