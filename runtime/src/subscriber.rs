@@ -67,6 +67,8 @@ pub struct Subscriber<T: Message> {
     /// Per link, the queue of messages being sent to this subscriber.
     queues: RefCell<Vec<LinkQueue>>,
     topic_hash: u64,
+    /// Measures a message's bytes on a link (built once: it reads the type's layout).
+    wire_size: caravan_schemas::wire_size::WireSize,
     /// Last sequence number seen per source, to count gaps. Groups have few publishers per
     /// topic, so a small vector beats a map and does not allocate after the first messages.
     last_seq: RefCell<Vec<(u64, u64)>>,
@@ -103,6 +105,7 @@ impl<T: Message> Subscriber<T> {
                     .map_or(Vec::new(), |n| vec![LinkQueue::default(); n.links.len()]),
             ),
             topic_hash: caravan_schemas::lockstep::name_hash(topic.name()),
+            wire_size: caravan_schemas::wire_size::WireSize::of::<T>(),
             last_seq: RefCell::new(Vec::with_capacity(4)),
             missed: Cell::new(0),
             received: Cell::new(0),
@@ -267,7 +270,7 @@ impl<T: Message> Subscriber<T> {
             seq: header.seq,
             subscriber: net.node_hash,
         };
-        let bytes = caravan_schemas::wire_size(&*payload);
+        let bytes = size_of::<Header>() + self.wire_size.measure(&*payload);
         let mut queues = self.queues.borrow_mut();
         let arrival = net.links[link].arrival(&id, bytes, sent, &mut queues[link]);
         let arrival = arrival.map(|t| {

@@ -13,7 +13,7 @@
 
 use crate::Error;
 use caravan_schemas::Message;
-use caravan_schemas::descriptor::Descriptor;
+use caravan_schemas::descriptor::{Descriptor, layout_json};
 use iceoryx2::config::Config;
 use std::collections::BTreeSet;
 use std::io::Write;
@@ -91,6 +91,23 @@ pub fn register(config: &Config, descriptor: &Descriptor) -> Result<(), Error> {
             "cannot register message type '{type_name}' at {}: {e}",
             target.display()
         ))),
+    }
+}
+
+/// Makes a type that a recording describes known to the group of `config`, for replaying it:
+/// a catalog type must be laid out as recorded (a recording of an older Caravan may not be);
+/// any other type is registered as if a process of the group had opened a port of it.
+pub fn adopt(config: &Config, recorded: &Descriptor) -> Result<(), Error> {
+    let type_name = recorded.type_name();
+    match caravan_schemas::catalog::descriptor(type_name) {
+        Some(known) if known.layouts() == recorded.layouts() => Ok(()),
+        Some(known) => Err(Error::Config(format!(
+            "message type '{type_name}' was recorded with the layout {}, but this Caravan \
+             lays it out as {}; replay the recording with the Caravan that made it",
+            serde_json::Value::Array(recorded.layouts().iter().map(layout_json).collect()),
+            serde_json::Value::Array(known.layouts().iter().map(layout_json).collect()),
+        ))),
+        None => register(config, recorded),
     }
 }
 

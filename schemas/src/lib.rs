@@ -32,6 +32,7 @@ mod topic;
 pub mod topics;
 mod view;
 pub mod wire;
+pub mod wire_size;
 
 pub use articulated::{
     Contact, ContactEstimate, Contacts, ForceTorque, ForceTorques, JointCommand, JointState,
@@ -124,50 +125,10 @@ pub fn boxed_placement_new<T: iceoryx2::prelude::PlacementDefault>() -> Box<T> {
     }
 }
 
-/// Bytes a message would take on a network: its fixed size, except for the containers sized
-/// for the largest case (scans, maps, paths), which count only what they hold, as a ROS
-/// message would. Used to emulate link bandwidth.
+/// Bytes a message would take on a network: its header and what [`wire_size::WireSize`]
+/// counts of it. A subscriber that measures every message builds the `WireSize` once instead.
 pub fn wire_size<T: Message>(message: &T) -> usize {
-    let any = message as &dyn core::any::Any;
-    let header = core::mem::size_of::<Header>();
-    if let Some(scan) = any.downcast_ref::<LaserScan>() {
-        let beams = (scan.beam_count as usize).min(SCAN_MAX_BEAMS);
-        header + 32 + beams * 8
-    } else if let Some(map) = any.downcast_ref::<OccupancyGrid>() {
-        header + 48 + map.cells().len()
-    } else if let Some(path) = any.downcast_ref::<Path2D>() {
-        header + held(&path.poses)
-    } else if let Some(m) = any.downcast_ref::<JointState>() {
-        header + held(&m.joints)
-    } else if let Some(m) = any.downcast_ref::<JointCommand>() {
-        header + held(&m.joints)
-    } else if let Some(m) = any.downcast_ref::<LinkStates>() {
-        header + held(&m.links)
-    } else if let Some(m) = any.downcast_ref::<Contacts>() {
-        header + held(&m.contacts)
-    } else if let Some(m) = any.downcast_ref::<ForceTorques>() {
-        header + held(&m.sensors)
-    } else if let Some(m) = any.downcast_ref::<EnvStep>() {
-        header + core::mem::offset_of!(EnvStep, observation) + held(&m.observation)
-    } else if let Some(m) = any.downcast_ref::<AgentAction>() {
-        header + core::mem::offset_of!(AgentAction, continuous) + held(&m.continuous)
-    } else if let Some(m) = any.downcast_ref::<EpisodeEnd>() {
-        header + core::mem::offset_of!(EpisodeEnd, metrics) + held(&m.metrics)
-    } else if let Some(m) = any.downcast_ref::<Metrics>() {
-        header + held(&m.values)
-    } else {
-        header + core::mem::size_of::<T>()
-    }
-}
-
-/// Wire bytes of a fixed-capacity vector: its length and the items it holds.
-fn held<
-    T: Copy + iceoryx2::prelude::PlacementDefault + iceoryx2::prelude::ZeroCopySend,
-    const N: usize,
->(
-    v: &FixedVec<T, N>,
-) -> usize {
-    8 + v.len() * core::mem::size_of::<T>()
+    size_of::<Header>() + wire_size::WireSize::of::<T>().measure(message)
 }
 
 #[cfg(test)]

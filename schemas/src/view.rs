@@ -67,20 +67,24 @@ impl Descriptor {
 
 /// The integer field `name` of `layout` in `bytes`; 0 if it is not one.
 fn integer(layout: &TypeLayout, name: &str, bytes: &[u8]) -> u64 {
-    let Some(f) = layout.fields.iter().find(|f| f.name == name) else {
-        return 0;
-    };
-    let slot = &bytes[f.offset..f.offset + f.size];
-    match f.kind {
-        Kind::Scalar(Scalar::U8) => slot[0] as u64,
-        Kind::Scalar(Scalar::U32) => u32::from_ne_bytes(slot.try_into().unwrap_or_default()) as u64,
-        Kind::Scalar(Scalar::I32) => {
-            i32::from_ne_bytes(slot.try_into().unwrap_or_default()).max(0) as u64
-        }
-        Kind::Scalar(Scalar::U64) => u64::from_ne_bytes(slot.try_into().unwrap_or_default()),
-        Kind::Scalar(Scalar::I64) => {
-            i64::from_ne_bytes(slot.try_into().unwrap_or_default()).max(0) as u64
-        }
+    match layout.fields.iter().find(|f| f.name == name) {
+        Some(f) => match f.kind {
+            Kind::Scalar(s) => count_value(s, &bytes[f.offset..f.offset + f.size]),
+            _ => 0,
+        },
+        None => 0,
+    }
+}
+
+/// A count read from its bytes: an integer, a negative one as 0; 0 for a float, which counts
+/// nothing.
+pub(crate) fn count_value(kind: Scalar, slot: &[u8]) -> u64 {
+    match kind {
+        Scalar::U8 => slot[0] as u64,
+        Scalar::U32 => u32::from_ne_bytes(slot.try_into().unwrap_or_default()) as u64,
+        Scalar::I32 => i32::from_ne_bytes(slot.try_into().unwrap_or_default()).max(0) as u64,
+        Scalar::U64 => u64::from_ne_bytes(slot.try_into().unwrap_or_default()),
+        Scalar::I64 => i64::from_ne_bytes(slot.try_into().unwrap_or_default()).max(0) as u64,
         _ => 0,
     }
 }

@@ -253,3 +253,60 @@ fn a_realtime_group_is_fed_a_recording_by_launch_play() {
         .collect();
     assert!(!nodes.contains(&"ping"), "{nodes:?}");
 }
+
+/// A recording carries its types' descriptors: a type of a user's own (`beacon::Beacon`, which
+/// Caravan's tree does not know) replays into a group where no process declares it, and is
+/// recorded again message for message.
+#[test]
+fn a_recording_replays_a_type_that_no_process_of_the_group_knows() {
+    let body = r#"clock = "lockstep"
+record = ["beacon*", "demo/*"]
+
+[[process]]
+name = "beacon"
+exec = "caravan-beacon"
+rate = "10Hz"
+
+[[process]]
+name = "pong"
+exec = "caravan-demo pong"
+on = "demo/ping"
+"#;
+    let (s, rec) = recorded("replay-outside-type", body, "2s");
+    let original = caravan_tests::recording::read(&rec);
+    let broadcasts = caravan_tests::recording::messages(&original, "beacon");
+    assert!(broadcasts.len() >= 19, "{} broadcasts", broadcasts.len());
+    // pong alone: nothing in the group declares beacon::Beacon, the recording's player
+    // publishes it from the descriptor the recording carries.
+    let out = s.run(&[
+        // Longer than the recording, so that its last message is played too.
+        "--duration",
+        "3s",
+        "--only",
+        "pong",
+        "--play",
+        rec.to_str().unwrap(),
+        "--play-topics",
+        "beacon",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let replayed = caravan_tests::recording::read(&s.run_dirs().pop().unwrap().join("record.mcap"));
+    let text = |messages: Vec<Vec<u8>>| -> Vec<String> {
+        messages
+            .into_iter()
+            .map(|m| String::from_utf8(m).unwrap())
+            .collect()
+    };
+    let (broadcasts, again) = (
+        text(broadcasts),
+        text(caravan_tests::recording::messages(&replayed, "beacon")),
+    );
+    // The player makes the topic when its first message is due (so that a topic the group's
+    // nodes make keeps their contract), and the recorder taps a topic from the advance after it
+    // appears: the message at 0 s reaches the group but not the new recording.
+    assert_eq!(
+        again,
+        broadcasts[1..],
+        "the replayed broadcasts are the recorded ones"
+    );
+}

@@ -15,6 +15,7 @@ use anyhow::{Context, Result, bail};
 use caravan::inject::{DynInject, open_injector};
 use caravan::{Delivery, Header, Trigger};
 use caravan_launch::model::{Exec, LaunchFile, ProcessSpec, Restart, glob_match};
+use caravan_schemas::descriptor::Descriptor;
 use caravan_schemas::lockstep::name_hash;
 use clap::Args;
 use serde_json::Value;
@@ -81,6 +82,20 @@ pub struct Recording {
     pub messages: Vec<Recorded>,
     /// Every Caravan channel's topic, selected or not.
     pub topics: Vec<String>,
+    /// The descriptors the selected channels' schemas carry, by type name (none in a
+    /// recording made before recordings carried them).
+    pub descriptors: BTreeMap<String, Descriptor>,
+}
+
+impl Recording {
+    /// Makes the recorded types known to the group of `config`, so that injectors can open
+    /// topics of types that no process of the group knows.
+    pub fn adopt_types(&self, config: &iceoryx2::config::Config) -> Result<()> {
+        for d in self.descriptors.values() {
+            caravan::types::adopt(config, d)?;
+        }
+        Ok(())
+    }
 }
 
 /// Reads the Caravan channels of `path` that `patterns` select (all when empty).
@@ -103,6 +118,29 @@ pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
         types: BTreeMap::new(),
         messages: Vec::new(),
         topics: Vec::new(),
+        descriptors: BTreeMap::new(),
+    };
+    let describe = |recording: &mut Recording, c: &mcap::Channel| -> Result<()> {
+        let schema = c.schema.as_ref().expect("checked");
+        if recording.descriptors.contains_key(&schema.name) {
+            return Ok(());
+        }
+        let Some(d) = caravan_record::schema::recorded_descriptor(&schema.data) else {
+            return Ok(());
+        };
+        let d = d
+            .ok()
+            .filter(|d| d.type_name() == schema.name)
+            .with_context(|| {
+                format!(
+                    "{}: the schema of channel '{}' does not describe '{}'",
+                    at(),
+                    c.topic,
+                    schema.name
+                )
+            })?;
+        recording.descriptors.insert(schema.name.clone(), d);
+        Ok(())
     };
     // Channels without messages appear only in the summary.
     if let Some(summary) = mcap::Summary::read(&bytes).ok().flatten() {
@@ -111,6 +149,7 @@ pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
             if chosen(&c.topic) {
                 let schema = c.schema.as_ref().expect("checked").name.clone();
                 recording.types.insert(c.topic.clone(), schema);
+                describe(&mut recording, c)?;
             }
         }
     }
@@ -127,7 +166,13 @@ pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
             continue;
         }
         let schema = channel.schema.as_ref().expect("checked").name.clone();
-        recording.types.insert(channel.topic.clone(), schema);
+        if recording
+            .types
+            .insert(channel.topic.clone(), schema)
+            .is_none()
+        {
+            describe(&mut recording, channel)?;
+        }
         let json: Value = serde_json::from_slice(&message.data)
             .with_context(|| format!("{}: a message on {} is not JSON", at(), channel.topic))?;
         let h = &json["header"];
@@ -162,14 +207,16 @@ pub fn play(args: &PlayArgs) -> Result<()> {
     if args.in_group {
         return play_in_group(args);
     }
-    let Recording {
-        types, messages, ..
-    } = read_recording(&args.file, &args.topics)?;
-    if messages.is_empty() {
+    let recording = read_recording(&args.file, &args.topics)?;
+    if recording.messages.is_empty() {
         bail!(nothing_to_play(&args.file, &args.topics));
     }
     let group = choose_group(args.group.group.as_deref())?;
-    let (_config, node) = iox(&group)?;
+    let (config, node) = iox(&group)?;
+    recording.adopt_types(&config)?;
+    let Recording {
+        types, messages, ..
+    } = recording;
     let mut injectors: BTreeMap<&str, Box<dyn DynInject>> = BTreeMap::new();
     for (topic, type_name) in &types {
         injectors.insert(topic, open_injector(&node, topic, type_name, NEW_TOPIC)?);
@@ -275,11 +322,15 @@ impl InGroup {
 /// The player as a node of the group: a step at each recorded stamp publishes the messages
 /// stamped then, with their recorded headers.
 fn play_in_group(args: &PlayArgs) -> Result<()> {
+    let recording = read_recording(&args.file, &args.topics)?;
+    let mut node = caravan::Node::from_env()?;
+    recording.adopt_types(&caravan::group::config(node.group())?)?;
     let Recording {
         types,
         mut messages,
         topics: recorded,
-    } = read_recording(&args.file, &args.topics)?;
+        ..
+    } = recording;
     if let Some(name) = &args.under_test {
         let skipped = name_hash(name);
         messages.retain(|m| m.source_id != skipped);
@@ -287,7 +338,6 @@ fn play_in_group(args: &PlayArgs) -> Result<()> {
     // In lockstep recordings log time is the stamp already; in realtime ones the stamp is
     // the group's time, which the player's clock counts too.
     messages.sort_by_key(|m| m.stamp_ns);
-    let mut node = caravan::Node::from_env()?;
     let group = node.group().to_string();
     let injectors = node.injectors();
     let mut open: BTreeMap<String, Box<dyn DynInject>> = BTreeMap::new();

@@ -13,6 +13,11 @@ use caravan_schemas::describe::{Element, Kind, Scalar, TypeLayout};
 use caravan_schemas::descriptor::Descriptor;
 use serde_json::{Value, json};
 
+/// The key under which a recorded channel's schema carries its type's descriptor (layouts and
+/// default), so that a recording replays into a group where no process knows the type. JSON
+/// Schema readers (Foxglove's among them) ignore keys they do not know.
+pub const DESCRIPTOR_KEY: &str = "x-caravan-descriptor";
+
 fn scalar(s: Scalar) -> Value {
     match s {
         Scalar::F64 | Scalar::F32 => json!({"type": "number"}),
@@ -97,7 +102,16 @@ pub fn for_type(descriptor: &Descriptor, with_wall_clock: bool) -> Value {
     let mut schema = describe(&payload, Some(descriptor.layout()), known);
     schema["title"] = json!(descriptor.type_name());
     schema["properties"]["header"] = header_schema(with_wall_clock);
+    schema[DESCRIPTOR_KEY] = descriptor.to_json();
     schema
+}
+
+/// The descriptor a recorded schema (its data) carries: `None` in a recording made before
+/// recordings carried descriptors, an error when it does not describe a type.
+pub fn recorded_descriptor(schema: &[u8]) -> Option<Result<Descriptor, String>> {
+    let json: Value = serde_json::from_slice(schema).ok()?;
+    let d = json.get(DESCRIPTOR_KEY)?;
+    Some(Descriptor::from_json(d))
 }
 
 fn header_schema(with_wall_clock: bool) -> Value {
