@@ -1,12 +1,13 @@
 """Caravan for Python: agents that join a Caravan group through the iceoryx2 Python package.
 
 ``caravan.schemas`` holds the message types as ctypes structures generated from the Rust
-schemas; ``caravan.identity`` the node's identity and params, ``caravan.ports`` typed publishers and
+schemas, ``caravan.types`` builds those of types learned at run time (``node.message_type``);
+``caravan.identity`` the node's identity and params, ``caravan.ports`` typed publishers and
 subscribers, ``caravan.node`` the node and its realtime and lockstep step loops.
 See docs/agents.md, section Python, and examples/python/follower.py.
 """
 
-from . import schemas
+from . import schemas, types
 from .identity import BadInput, CaravanError, Identity, parse_duration, parse_rate
 from .node import Node, Step, main
 from .ports import Publisher, Received, Subscriber
@@ -26,4 +27,5 @@ __all__ = [
     "parse_rate",
     "schemas",
     "topics",
+    "types",
 ]

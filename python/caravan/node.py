@@ -9,6 +9,8 @@ ordinary member of a group:
 - ``node.publisher(T, topic)`` and ``node.subscriber(T, topic)`` open the topic's
   publish-subscribe service exactly as the Rust ``Topic::new`` does (same type names, same
   ``Header`` user header, same buffer settings), so Python and Rust ports connect.
+- ``node.message_type("beacon::Beacon")`` is the class of a type outside ``caravan.schemas``,
+  learned from the descriptor a process of the group registered (``caravan.types``).
 - ``node.run(step, rate="20Hz")`` or ``node.run(step, on="robot/0/scan")`` steps the node under
   the group's clock: ``realtime`` sleeps in an iceoryx2 WaitSet (never busy-waits), ``lockstep``
   follows the launcher's scheduler (hello, grant, step, done) and hides a message stamped t
@@ -44,6 +46,7 @@ from .identity import (
     parse_rate,
     validate_group,
 )
+from .types import lookup as lookup_type, register as register_type
 from .ports import (
     Publisher,
     Subscriber,
@@ -95,6 +98,7 @@ class Node:
             if identity.iceoryx_config
             else group_config(identity.group)
         )
+        self._config = config
         try:
             self._iox = (
                 iox.NodeBuilder.new()
@@ -142,9 +146,9 @@ class Node:
     def publisher(
         self, msg_type: Type[T], topic: str, depth: Optional[int] = None, lossless: bool = False
     ) -> Publisher:
-        """A publisher of ``msg_type`` (a class from ``caravan.schemas``) on ``topic``. The
-        defaults match Rust's ``Topic::new`` (keep the newest 8); ``lossless`` matches
-        ``Topic::lossless`` (depth 256, publishers wait)."""
+        """A publisher of ``msg_type`` (a class from ``caravan.schemas`` or ``message_type``) on
+        ``topic``. The defaults match Rust's ``Topic::new`` (keep the newest 8); ``lossless``
+        matches ``Topic::lossless`` (depth 256, publishers wait)."""
         _end_of_check()
         return Publisher(self, msg_type, topic, depth or (256 if lossless else 8), lossless)
 
@@ -154,6 +158,15 @@ class Node:
         """A subscriber of ``msg_type`` on ``topic``; ``publisher`` explains the delivery."""
         _end_of_check()
         return Subscriber(self, msg_type, topic, depth or (256 if lossless else 8), lossless)
+
+    def message_type(self, type_name: str) -> type:
+        """The message class of ``type_name`` (``"beacon::Beacon"``): a catalog type's class
+        from ``caravan.schemas``, or a class built from the descriptor that a process of the group
+        registered when it opened a port of the type (``caravan.types``). A ``CaravanError`` if no
+        process of the group has yet."""
+        # The type is known only once the group runs: a check of this node's input ends here.
+        _end_of_check()
+        return lookup_type(self, type_name)
 
     def run(self, step: Callable[[Step], Any], rate: Any = None, on: Optional[str] = None) -> None:
         """Runs ``step(s)`` every period (``rate="20Hz"``, ``"50ms"`` or a number of Hz) or when a
@@ -287,6 +300,11 @@ class Node:
 
     def _open_pubsub(self, msg_type: Type[T], topic: str, depth: int, lossless: bool) -> Any:
         """The topic's service, with the settings of Rust's ``transport::open_pubsub``."""
+        try:
+            # As a Rust port does: the group's tools then read a type outside the catalog.
+            register_type(self, msg_type)
+        except CaravanError as e:
+            raise CaravanError(f"topic '{topic}': {e}") from None
         try:
             return (
                 self._iox.service_builder(self._service_name(topic))

@@ -5,16 +5,20 @@ with the Python class of the same name: iceoryx2 type name, ctypes.sizeof and al
 fields in order with their offsets, sizes and element types, and the SIZE/ALIGN/OFFSETS
 constants. The first argument, if given, is JSON with more facts from Rust to compare:
 {"registry": [type names], "hashes": {name: hash}, "topics": {helper: [i, name]},
-"constants": {name: value}, "grant_service": [node, name]}.
+"constants": {name: value}, "grant_service": [node, name], "descriptors": {type name:
+descriptor JSON}}. For each descriptor, the class ``caravan.types.message_class`` builds from it
+must have the generated class's size, alignment, fields and offsets, and read the same bytes
+into the same ``to_dict()``.
 
 Prints every mismatch and exits 1 if there is any; prints a one-line summary otherwise.
 """
 
 import ctypes
 import json
+import random
 import sys
 
-from caravan import schemas
+from caravan import CaravanError, schemas, types
 
 SCALARS = {
     "f64": ctypes.c_double,
@@ -66,6 +70,50 @@ def check_type(layout, cls, errors):
             )
 
 
+def check_descriptor(type_name, descriptor, errors):
+    generated = {cls.type_name(): cls for cls in schemas.ALL_TYPES}.get(type_name)
+    if generated is None:
+        errors.append(f"{type_name}: a descriptor without a generated class")
+        return
+    try:
+        built = types.message_class(descriptor)
+    except CaravanError as e:
+        errors.append(f"{type_name}: {e}")
+        return
+
+    def expect(what, found, wanted):
+        if found != wanted:
+            errors.append(
+                f"{type_name}: {what} is {found!r} from its descriptor, {wanted!r} in schemas.py"
+            )
+
+    expect("type_name()", built.type_name(), type_name)
+    expect("ctypes.sizeof", ctypes.sizeof(built), ctypes.sizeof(generated))
+    expect("ctypes.alignment", ctypes.alignment(built), ctypes.alignment(generated))
+    expect("SIZE", built.SIZE, generated.SIZE)
+    expect("ALIGN", built.ALIGN, generated.ALIGN)
+    expect("OFFSETS", built.OFFSETS, generated.OFFSETS)
+    fields = [n for n, _ in generated._fields_ if not n.startswith("_pad")]
+    expect("the field list", [n for n, _ in built._fields_ if not n.startswith("_pad")], fields)
+    for field in fields:
+        if hasattr(built, field):
+            slot, wanted = getattr(built, field), getattr(generated, field)
+            expect(f"offset of {field}", slot.offset, wanted.offset)
+            expect(f"size of {field}", slot.size, wanted.size)
+    if ctypes.sizeof(built) != ctypes.sizeof(generated):
+        return
+    # One to_dict serves both: the same bytes (random, so counts, text and padding vary) must
+    # read alike. json.dumps, because a NaN is not equal to itself.
+    rng = random.Random(type_name)
+    for _ in range(2):
+        raw = rng.randbytes(ctypes.sizeof(built))
+        a = json.dumps(built.from_buffer_copy(raw).to_dict())
+        b = json.dumps(generated.from_buffer_copy(raw).to_dict())
+        if a != b:
+            errors.append(f"{type_name}: to_dict() differs from the generated class's")
+            break
+
+
 def main():
     rust = json.load(sys.stdin)
     facts = json.loads(sys.argv[1]) if len(sys.argv) > 1 else {}
@@ -100,6 +148,9 @@ def main():
         node, wanted = facts["grant_service"]
         if schemas.lockstep.grant_service(node) != wanted:
             errors.append(f"lockstep.grant_service({node!r}) differs from Rust's {wanted!r}")
+
+    for type_name, descriptor in facts.get("descriptors", {}).items():
+        check_descriptor(type_name, descriptor, errors)
 
     for e in errors:
         print(e)

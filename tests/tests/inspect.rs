@@ -465,3 +465,82 @@ rate = "10Hz"
     );
     assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
 }
+
+/// The same type in Python: an agent that has no class for it looks it up by name in the
+/// group (`node.message_type`), receives broadcasts shown as `caravan topic echo` shows them,
+/// and sets the beacon's label through `beacon/set` with the class it looked up.
+#[test]
+fn a_message_type_declared_outside_caravan_is_received_and_published_from_python() {
+    let body = "clock = \"realtime\"\n\n[[process]]\nname = \"beacon\"\nexec = \"caravan-beacon\"\nrate = \"10Hz\"\n";
+    let s = Scenario::new("outside-py", body);
+    let child = s.start_realtime(1);
+    let g = s.group.name.as_str();
+    wait_until("the beacon broadcasts", || {
+        topic_info(g, "beacon").is_some()
+    });
+    let echo = json_of(&caravan(&[
+        "topic", "echo", "beacon", "-n", "1", "--group", g,
+    ]));
+
+    let root = caravan_tests::workspace_root();
+    let told = r#"{"label": "from python", "position": {"x": 1.5, "y": -2.0, "z": 0.25}}"#;
+    let out = std::process::Command::new(caravan_tests::python_env())
+        .arg(root.join("tests/python/beacon_agent.py"))
+        .arg(told)
+        .env("PYTHONPATH", root.join("python"))
+        .env("CARAVAN_GROUP", g)
+        .env("CARAVAN_NODE", "py-beacon")
+        .output()
+        .unwrap();
+    let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert!(out.status.success(), "{said}");
+    let views: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let [first, answered] = views.as_slice() else {
+        panic!("two broadcasts: {said}");
+    };
+
+    // Python's view has the shape `topic echo` prints: the same fields, nested alike, with the
+    // label as text and the history cut to its length (echo adds the received header).
+    let keys = |v: &serde_json::Value| -> Vec<String> {
+        let keys = v.as_object().unwrap().keys().filter(|k| *k != "header");
+        keys.cloned().collect()
+    };
+    assert_eq!(keys(first), keys(&echo), "{first}\n{echo}");
+    assert_eq!(keys(&first["position"]), keys(&echo["position"]), "{first}");
+    assert_eq!(first["label"], "unset", "{first}");
+    assert_eq!(first["position"], echo["position"], "{first}\n{echo}");
+    // Values as the beacon makes them: id counts broadcasts, strength falls 0.5 dBm a time,
+    // the history keeps the last four strengths.
+    let id = first["id"].as_u64().unwrap();
+    let strength = first["strength_dbm"].as_f64().unwrap();
+    assert!(id >= 1, "{first}");
+    assert_eq!(strength as f32, -40.0 - id as f32 * 0.5, "{first}");
+    let history = first["history"].as_array().unwrap();
+    assert_eq!(history.len() as u64, id.min(4), "{first}");
+    assert_eq!(
+        history.last().unwrap().as_f64().unwrap() as f32,
+        strength as f32
+    );
+    assert_eq!(
+        echo["history"].as_array().unwrap().len() as u64,
+        echo["id"].as_u64().unwrap().min(4)
+    );
+
+    // What Python published, the beacon took: Python saw it, and so does `topic echo`.
+    assert_eq!(answered["position"]["x"], 1.5, "{answered}");
+    assert_eq!(answered["position"]["y"], -2.0, "{answered}");
+    assert_eq!(answered["position"]["z"], 0.25, "{answered}");
+    let echo = json_of(&caravan(&[
+        "topic", "echo", "beacon", "-n", "1", "--group", g,
+    ]));
+    assert_eq!(echo["label"], "from python", "{echo}");
+    assert_eq!(echo["position"], answered["position"], "{echo}");
+
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(child.wait_with_output().unwrap().status.success());
+    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
+}

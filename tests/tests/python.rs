@@ -54,6 +54,18 @@ fn rust_facts() -> serde_json::Value {
     })
 }
 
+/// Every catalog type's descriptor, by type name, as a process registers one.
+fn catalog_descriptors() -> serde_json::Value {
+    let all: serde_json::Map<String, serde_json::Value> = caravan_schemas::catalog::layouts()
+        .iter()
+        .map(|l| {
+            let d = caravan_schemas::catalog::descriptor(l.type_name).unwrap();
+            (l.type_name.to_string(), d.to_json())
+        })
+        .collect();
+    all.into()
+}
+
 /// Runs tests/python/check_layout.py on `layout` with the workspace's `caravan` package.
 fn check_layout(layout: &serde_json::Value, facts: &serde_json::Value) -> Output {
     let root = workspace_root();
@@ -111,6 +123,116 @@ fn python_schemas_have_the_rust_layouts() {
     let out = check_layout(&renamed, &serde_json::json!({}));
     assert!(!out.status.success(), "{}", text(&out));
     assert!(text(&out).contains("caravan::Headr"), "{}", text(&out));
+}
+
+/// A class built at run time from a type's descriptor (`caravan.types.message_class`) has the
+/// layout the generator gives the type's class, and reads bytes into the same `to_dict()`.
+#[test]
+fn python_classes_built_from_descriptors_have_the_generated_layouts() {
+    let layout = rust_layout();
+    let descriptors = catalog_descriptors();
+    let out = check_layout(&layout, &serde_json::json!({"descriptors": descriptors}));
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(text(&out).contains("types match"), "{}", text(&out));
+
+    // The checker catches a layout ctypes can follow but the generated class lacks (theta 8
+    // bytes on), and the builder refuses one ctypes cannot (w between two f64 slots).
+    let mut tampered = descriptors;
+    let pose = &mut tampered["caravan::Pose2D"]["layouts"][0];
+    pose["size"] = 32.into();
+    pose["fields"][2]["offset"] = 24.into();
+    let quaternion = &mut tampered["caravan::Quaternion"]["layouts"][0];
+    quaternion["size"] = 40.into();
+    quaternion["fields"][3]["offset"] = 28.into();
+    let out = check_layout(&layout, &serde_json::json!({"descriptors": tampered}));
+    assert!(!out.status.success(), "{}", text(&out));
+    for expected in [
+        "caravan::Pose2D: ctypes.sizeof is 32 from its descriptor, 24 in schemas.py",
+        "caravan::Pose2D: offset of theta is 24 from its descriptor, 16 in schemas.py",
+        "message type 'caravan::Quaternion': Quaternion.w: offset 28 cannot be expressed with ctypes",
+    ] {
+        assert!(text(&out).contains(expected), "{expected}:\n{}", text(&out));
+    }
+}
+
+/// Python registers and looks up message types outside the catalog in the files Rust uses:
+/// each reads what the other registered, a second layout under one name is refused on either
+/// side, and Python's `to_dict()` of such a type is Rust's JSON view of its bytes.
+#[test]
+fn python_registers_and_looks_up_message_types_as_rust_does() {
+    use caravan_schemas::descriptor::Descriptor;
+    let group = caravan_tests::TestGroup::new("py-types");
+    let config = caravan::group::config(&group.name).unwrap();
+    // The group's directory, which its first iceoryx2 node would create.
+    std::fs::create_dir_all(config.global.root_path().to_string()).unwrap();
+    let vector3 = caravan_schemas::catalog::descriptor("caravan::Vector3")
+        .unwrap()
+        .to_json();
+    let gadget = serde_json::json!({
+        "layouts": [vector3["layouts"][0], {
+            "name": "Gadget", "type_name": "test::Gadget", "size": 64, "align": 8,
+            "fields": [
+                {"name": "name_len", "offset": 0, "size": 4, "type": "u32"},
+                {"name": "name", "offset": 4, "size": 8, "type": "u8", "len": 8,
+                 "count": ["name_len"], "text": true},
+                {"name": "position", "offset": 16, "size": 24, "type": "Vector3"},
+                {"name": "values", "offset": 40, "size": 16, "type": "i32", "len": 4,
+                 "count": ["n"]},
+                {"name": "n", "offset": 56, "size": 1, "type": "u8"},
+            ],
+        }],
+        "default": {"name": "gizmo"},
+    });
+    let gadget = Descriptor::from_json(&gadget).unwrap();
+    caravan::types::register(&config, &gadget).unwrap();
+
+    let root = workspace_root();
+    let out = Command::new(python_env())
+        .arg(root.join("tests/python/check_types.py"))
+        .arg(&group.name)
+        .arg(gadget.to_json().to_string())
+        .env("PYTHONPATH", root.join("python"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("types: registration and lookup as in Rust"),
+        "{}",
+        text(&out)
+    );
+
+    // The gadget Python wrote reads in Rust as Python showed it.
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    let view = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("view "))
+        .unwrap();
+    let mut stream = serde_json::Deserializer::from_str(view).into_iter::<serde_json::Value>();
+    let bytes: Vec<u8> = serde_json::from_value(stream.next().unwrap().unwrap()).unwrap();
+    let python_view = stream.next().unwrap().unwrap();
+    assert_eq!(gadget.view(&bytes).unwrap(), python_view);
+
+    // Rust reads the type Python registered, and refuses another layout under its name.
+    let widget = caravan::types::lookup(&config, "test::Widget").unwrap();
+    let names: Vec<&str> = widget
+        .layout()
+        .fields
+        .iter()
+        .map(|f| f.name.as_str())
+        .collect();
+    assert_eq!(names, ["a", "b_len", "b"]);
+    assert_eq!(widget.layout().fields[2].count, ["b_len"]);
+    assert_eq!(widget.layout().size, 40);
+    let mut other = widget.to_json();
+    other["layouts"][0]["fields"][0]["type"] = "i32".into();
+    let refused =
+        caravan::types::register(&config, &Descriptor::from_json(&other).unwrap()).unwrap_err();
+    assert!(
+        refused
+            .to_string()
+            .contains("'test::Widget' is declared with two layouts"),
+        "{refused}"
+    );
 }
 
 #[test]
