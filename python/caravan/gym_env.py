@@ -3,7 +3,10 @@
 The group holds the environment as processes (physics, an environment process that runs the
 episodes, scripted opponents…) and speaks Gymnasium's protocol on three topics:
 ``agent/observation`` (``EnvStep``: observation, reward, terminated, truncated; step 0 is the
-reset), ``agent/action`` (``AgentAction``) and ``agent/episode`` (``EpisodeEnd``). This module is
+reset), ``agent/action`` (``AgentAction``) and ``agent/episode`` (``EpisodeEnd``). The UAV
+scenario declares those messages (crate ``caravan-uav``, ``messages.rs``); their descriptors and
+topics come with this package as ``uav_messages.json``, which a test keeps equal to the Rust
+declaration, and the classes are built from them (``caravan.types``). This module is
 the agent's side: a ``gymnasium.Env`` whose ``reset`` and ``step`` exchange those messages, so a
 standard RL library (Stable-Baselines3, SBX…) trains against the group as it would against any
 environment. It needs the ``gymnasium`` package (``python/uav/requirements-gym.txt``).
@@ -21,8 +24,10 @@ ports stay on the thread that made them). Run the learner as the group's agent p
 
 from __future__ import annotations
 
+import json
 import queue
 import threading
+from pathlib import Path
 from typing import Any, Optional
 
 import gymnasium as gym
@@ -30,7 +35,14 @@ import numpy as np
 from gymnasium import spaces
 
 from .node import Node
-from .schemas import AgentAction, EnvStep, fixed_vec, set_fixed_vec, topics
+from .schemas import fixed_vec, set_fixed_vec
+from .types import message_class
+
+_MESSAGES = json.loads(Path(__file__).with_name("uav_messages.json").read_text())
+EnvStep, AgentAction, EpisodeEnd = (message_class(d) for d in _MESSAGES["types"])
+AGENT_OBSERVATION = _MESSAGES["topics"]["AGENT_OBSERVATION"]
+AGENT_ACTION = _MESSAGES["topics"]["AGENT_ACTION"]
+AGENT_EPISODE = _MESSAGES["topics"]["AGENT_EPISODE"]
 
 
 class GroupEnded(RuntimeError):
@@ -84,8 +96,8 @@ class CaravanEnv(gym.Env):
     def _serve(self) -> None:
         try:
             node = Node.from_env()
-            observations = node.subscriber(EnvStep, topics.AGENT_OBSERVATION)
-            publisher = node.publisher(AgentAction, topics.AGENT_ACTION)
+            observations = node.subscriber(EnvStep, AGENT_OBSERVATION)
+            publisher = node.publisher(AgentAction, AGENT_ACTION)
         except BaseException as e:  # reported by the constructor
             self._failure = e
             self._ready.set()
@@ -112,7 +124,7 @@ class CaravanEnv(gym.Env):
                 publisher.publish(a)
 
         try:
-            node.run(step, on=topics.AGENT_OBSERVATION)
+            node.run(step, on=AGENT_OBSERVATION)
         finally:
             self._steps.put(None)
 

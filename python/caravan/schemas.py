@@ -150,6 +150,24 @@ class Header(Message):
         return "caravan::Header"
 
 
+class Pose2D(Message):
+    """``caravan::Pose2D``: 24 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("x", ctypes.c_double),
+        ("y", ctypes.c_double),
+        ("theta", ctypes.c_double),
+    ]
+    SIZE = 24
+    ALIGN = 8
+    OFFSETS = {"x": 0, "y": 8, "theta": 16}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::Pose2D"
+
+
 class Vector3(Message):
     """``caravan::Vector3``: 24 bytes, aligned to 8."""
 
@@ -185,24 +203,6 @@ class Quaternion(Message):
     def type_name(cls) -> str:
         """The name iceoryx2 matches across languages."""
         return "caravan::Quaternion"
-
-
-class Pose2D(Message):
-    """``caravan::Pose2D``: 24 bytes, aligned to 8."""
-
-    _fields_ = [
-        ("x", ctypes.c_double),
-        ("y", ctypes.c_double),
-        ("theta", ctypes.c_double),
-    ]
-    SIZE = 24
-    ALIGN = 8
-    OFFSETS = {"x": 0, "y": 8, "theta": 16}
-
-    @classmethod
-    def type_name(cls) -> str:
-        """The name iceoryx2 matches across languages."""
-        return "caravan::Pose2D"
 
 
 class Pose3D(Message):
@@ -442,43 +442,6 @@ class Goal(Message):
     def type_name(cls) -> str:
         """The name iceoryx2 matches across languages."""
         return "caravan::Goal"
-
-
-class Shape(Message):
-    """``caravan::Shape``: 104 bytes, aligned to 8."""
-
-    _fields_ = [
-        ("kind", ctypes.c_uint32),
-        ("attached", ctypes.c_uint32),
-        ("pose", Pose3D),
-        ("size", Vector3),
-        ("color", ctypes.c_float * 4),
-    ]
-    SIZE = 104
-    ALIGN = 8
-    OFFSETS = {"kind": 0, "attached": 4, "pose": 8, "size": 64, "color": 88}
-
-    @classmethod
-    def type_name(cls) -> str:
-        """The name iceoryx2 matches across languages."""
-        return "caravan::Shape"
-
-
-class Scene(Message):
-    """``caravan::Scene``: 213000 bytes, aligned to 8."""
-
-    _fields_ = [
-        ("shapes_len", ctypes.c_uint32),
-        ("shapes", Shape * 2048),
-    ]
-    SIZE = 213000
-    ALIGN = 8
-    OFFSETS = {"shapes_len": 0, "shapes": 8}
-
-    @classmethod
-    def type_name(cls) -> str:
-        """The name iceoryx2 matches across languages."""
-        return "caravan::Scene"
 
 
 class NodeStatus(Message):
@@ -763,88 +726,41 @@ class ForceTorques(Message):
         return "caravan::ForceTorques"
 
 
-class ContactEstimate(Message):
-    """``caravan::ContactEstimate``: 128 bytes, aligned to 8."""
+class Shape(Message):
+    """``caravan::Shape``: 104 bytes, aligned to 8."""
 
     _fields_ = [
-        ("link_len", ctypes.c_uint32),
-        ("link", ctypes.c_uint8 * 60),
-        ("status", ctypes.c_uint32),
-        ("first_candidate", ctypes.c_uint32),
-        ("last_candidate", ctypes.c_uint32),
-        ("_reserved", ctypes.c_uint32),
-        ("point", Vector3),
-        ("force", Vector3),
+        ("kind", ctypes.c_uint32),
+        ("attached", ctypes.c_uint32),
+        ("pose", Pose3D),
+        ("size", Vector3),
+        ("color", ctypes.c_float * 4),
     ]
-    SIZE = 128
+    SIZE = 104
     ALIGN = 8
-    OFFSETS = {
-        "link_len": 0,
-        "link": 4,
-        "status": 64,
-        "first_candidate": 68,
-        "last_candidate": 72,
-        "_reserved": 76,
-        "point": 80,
-        "force": 104,
-    }
+    OFFSETS = {"kind": 0, "attached": 4, "pose": 8, "size": 64, "color": 88}
 
     @classmethod
     def type_name(cls) -> str:
         """The name iceoryx2 matches across languages."""
-        return "caravan::ContactEstimate"
+        return "caravan::Shape"
 
 
-class EnvStep(Message):
-    """``caravan::EnvStep``: 296 bytes, aligned to 8."""
+class Scene(Message):
+    """``caravan::Scene``: 213000 bytes, aligned to 8."""
 
     _fields_ = [
-        ("episode", ctypes.c_uint64),
-        ("step", ctypes.c_uint32),
-        ("terminated", ctypes.c_uint32),
-        ("truncated", ctypes.c_uint32),
-        ("_reserved", ctypes.c_uint32),
-        ("reward", ctypes.c_double),
-        ("observation_len", ctypes.c_uint32),
-        ("observation", ctypes.c_double * 32),
+        ("shapes_len", ctypes.c_uint32),
+        ("shapes", Shape * 2048),
     ]
-    SIZE = 296
+    SIZE = 213000
     ALIGN = 8
-    OFFSETS = {
-        "episode": 0,
-        "step": 8,
-        "terminated": 12,
-        "truncated": 16,
-        "_reserved": 20,
-        "reward": 24,
-        "observation_len": 32,
-        "observation": 40,
-    }
+    OFFSETS = {"shapes_len": 0, "shapes": 8}
 
     @classmethod
     def type_name(cls) -> str:
         """The name iceoryx2 matches across languages."""
-        return "caravan::EnvStep"
-
-
-class AgentAction(Message):
-    """``caravan::AgentAction``: 88 bytes, aligned to 8."""
-
-    _fields_ = [
-        ("episode", ctypes.c_uint64),
-        ("step", ctypes.c_uint32),
-        ("discrete", ctypes.c_int32),
-        ("continuous_len", ctypes.c_uint32),
-        ("continuous", ctypes.c_double * 8),
-    ]
-    SIZE = 88
-    ALIGN = 8
-    OFFSETS = {"episode": 0, "step": 8, "discrete": 12, "continuous_len": 16, "continuous": 24}
-
-    @classmethod
-    def type_name(cls) -> str:
-        """The name iceoryx2 matches across languages."""
-        return "caravan::AgentAction"
+        return "caravan::Scene"
 
 
 class NamedValue(Message):
@@ -863,38 +779,6 @@ class NamedValue(Message):
     def type_name(cls) -> str:
         """The name iceoryx2 matches across languages."""
         return "caravan::NamedValue"
-
-
-class EpisodeEnd(Message):
-    """``caravan::EpisodeEnd``: 704 bytes, aligned to 8."""
-
-    _fields_ = [
-        ("episode", ctypes.c_uint64),
-        ("steps", ctypes.c_uint32),
-        ("_reserved", ctypes.c_uint32),
-        ("outcome_len", ctypes.c_uint32),
-        ("outcome", ctypes.c_uint8 * 28),
-        ("total_reward", ctypes.c_double),
-        ("metrics_len", ctypes.c_uint32),
-        ("metrics", NamedValue * 16),
-    ]
-    SIZE = 704
-    ALIGN = 8
-    OFFSETS = {
-        "episode": 0,
-        "steps": 8,
-        "_reserved": 12,
-        "outcome_len": 16,
-        "outcome": 20,
-        "total_reward": 48,
-        "metrics_len": 56,
-        "metrics": 64,
-    }
-
-    @classmethod
-    def type_name(cls) -> str:
-        """The name iceoryx2 matches across languages."""
-        return "caravan::EpisodeEnd"
 
 
 class Metrics(Message):
@@ -1025,10 +909,6 @@ MESSAGE_TYPES = (
     Contacts,
     Wrench,
     ForceTorques,
-    ContactEstimate,
-    EnvStep,
-    AgentAction,
-    EpisodeEnd,
     Scene,
     Metrics,
 )
@@ -1036,9 +916,9 @@ BY_TYPE_NAME = {t.type_name(): t for t in MESSAGE_TYPES}
 # Every generated structure, the header and lockstep messages included.
 ALL_TYPES = (
     Header,
+    Pose2D,
     Vector3,
     Quaternion,
-    Pose2D,
     Pose3D,
     Twist,
     WheelSetpoint,
@@ -1050,8 +930,6 @@ ALL_TYPES = (
     OccupancyGrid,
     Path2D,
     Goal,
-    Shape,
-    Scene,
     NodeStatus,
     Collision,
     JointValue,
@@ -1064,11 +942,9 @@ ALL_TYPES = (
     Wrench,
     ForceTorque,
     ForceTorques,
-    ContactEstimate,
-    EnvStep,
-    AgentAction,
+    Shape,
+    Scene,
     NamedValue,
-    EpisodeEnd,
     Metrics,
     Hello,
     Grant,
@@ -1084,9 +960,6 @@ class topics:
     GOAL = "goal"
     SCENE = "scene"
     COLLISIONS = "collisions"
-    AGENT_OBSERVATION = "agent/observation"
-    AGENT_ACTION = "agent/action"
-    AGENT_EPISODE = "agent/episode"
 
     @staticmethod
     def scan(i: int) -> str:
@@ -1159,10 +1032,6 @@ class topics:
     @staticmethod
     def ground_truth(i: int) -> str:
         return f"robot/{i}/ground_truth"
-
-    @staticmethod
-    def contact_estimate(i: int) -> str:
-        return f"robot/{i}/contact_estimate"
 
     @staticmethod
     def set_pose(i: int) -> str:

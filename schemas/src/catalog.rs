@@ -1,35 +1,29 @@
 //! The catalog of the shared message types: every type that crosses a process boundary (the
-//! registry's message types, the [`Header`] and the lockstep protocol's messages) with its
-//! layout, and the topics of [`crate::topics`] by the names other languages give them.
+//! registry's message types with the structs they hold, the [`Header`] and the lockstep
+//! protocol's messages) with its layout, and the topics of [`crate::topics`] by the names other languages give them.
 //! `caravan schemas --python` and `--layout` print it.
 
+use crate::Header;
 use crate::describe::{Describe, TypeLayout};
 use crate::descriptor::{Descriptor, layout_json};
 use crate::lockstep::{Done, Grant, Hello};
-use crate::{
-    AgentAction, Collision, Contact, ContactEstimate, Contacts, EncoderTicks, EnvStep, EpisodeEnd,
-    ForceTorque, ForceTorques, Goal, Header, Imu, JointCommand, JointState, JointValue, LaserScan,
-    LinkState, LinkStates, Metrics, NamedValue, NodeStatus, OccupancyGrid, Odometry, Path2D,
-    Pose2D, Pose3D, Quaternion, Scene, Shape, Twist, Vector3, WheelSetpoint, WheelState, Wrench,
-};
 
-/// Runs `$apply!(Type …)` over every type of the catalog, each after the types it contains.
-macro_rules! catalog {
-    ($apply:ident) => {
-        $apply!(Header Vector3 Quaternion Pose2D Pose3D Twist WheelSetpoint WheelState EncoderTicks
-            Odometry LaserScan Imu OccupancyGrid Path2D Goal Shape Scene NodeStatus Collision
-            JointValue JointState JointCommand LinkState LinkStates Contact Contacts Wrench
-            ForceTorque ForceTorques ContactEstimate EnvStep AgentAction NamedValue EpisodeEnd
-            Metrics Hello Grant Done)
-    };
-}
-
-/// Every described type, each after the types it contains.
+/// Every described type, each after the types it contains: the header, the message types
+/// ([`crate::message_types!`]) with the structs they hold, and the lockstep protocol's messages.
 pub fn layouts() -> Vec<TypeLayout> {
     macro_rules! layouts {
-        ($($ty:ident)*) => { vec![$(<$ty as Describe>::layout()),*] };
+        ($($ty:ident)*) => {{
+            let mut all = vec![<Header as Describe>::layout()];
+            $(all.extend(Descriptor::of::<crate::$ty>().layouts().iter().cloned());)*
+            all.extend([Hello::layout(), Grant::layout(), Done::layout()]);
+            all
+        }};
     }
-    catalog!(layouts)
+    let mut seen = std::collections::BTreeSet::new();
+    let all: Vec<TypeLayout> = crate::message_types!([layouts] {});
+    all.into_iter()
+        .filter(|l| seen.insert(l.type_name))
+        .collect()
 }
 /// Erases the message types of [`crate::topics`] helpers, keeping how they name topics, and
 /// names each entry after its helper so that the table cannot drift from the functions.
@@ -52,9 +46,6 @@ pub const TOPIC_CONSTANTS: &[(&str, GlobalTopic)] = topic_names![
     GOAL = goal,
     SCENE = scene,
     COLLISIONS = collisions,
-    AGENT_OBSERVATION = agent_observation,
-    AGENT_ACTION = agent_action,
-    AGENT_EPISODE = agent_episode,
 ];
 
 /// A per-robot topic helper with its message type erased: robot index to topic name.
@@ -80,7 +71,6 @@ pub const ROBOT_TOPICS: &[(&str, RobotTopic)] = topic_names![
     wrench,
     force_torque,
     ground_truth,
-    contact_estimate,
     set_pose,
 ];
 
@@ -98,9 +88,15 @@ pub fn descriptor(type_name: &str) -> Option<&'static Descriptor> {
     // Built once: `caravan play` looks a type up for every message it writes.
     static ALL: std::sync::LazyLock<Vec<Descriptor>> = std::sync::LazyLock::new(|| {
         macro_rules! descriptors {
-            ($($ty:ident)*) => { vec![$(crate::descriptor_of::<$ty>()),*] };
+            ($($ty:ident)*) => { vec![$(crate::descriptor_of::<crate::$ty>()),*] };
         }
-        let mut all = catalog!(descriptors);
+        let mut all = crate::message_types!([descriptors] {});
+        all.extend([
+            crate::descriptor_of::<Header>(),
+            crate::descriptor_of::<Hello>(),
+            crate::descriptor_of::<Grant>(),
+            crate::descriptor_of::<Done>(),
+        ]);
         // The bench's blobs cross hosts through the bridge like any topic.
         all.extend(
             crate::bench::layouts()

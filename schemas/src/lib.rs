@@ -13,7 +13,6 @@ pub mod bench;
 pub mod catalog;
 pub mod describe;
 pub mod descriptor;
-mod episodes;
 mod fixed;
 pub mod from_json;
 mod geometry;
@@ -35,19 +34,14 @@ pub mod wire;
 pub mod wire_size;
 
 pub use articulated::{
-    Contact, ContactEstimate, Contacts, ForceTorque, ForceTorques, JointCommand, JointState,
-    JointValue, LinkState, LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS,
-    NAME_BYTES, Name, Wrench,
-};
-pub use episodes::{
-    AgentAction, EnvStep, EpisodeEnd, MAX_ACTION, MAX_EPISODE_METRICS, MAX_OBSERVATION, NamedValue,
-    ShortName,
+    Contact, Contacts, ForceTorque, ForceTorques, JointCommand, JointState, JointValue, LinkState,
+    LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Wrench,
 };
 pub use fixed::{FixedString, FixedVec};
 pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3, wrap_angle};
 pub use header::Header;
 pub use map::{Goal, MAP_MAX_CELLS, MAP_MAX_SIDE, OccupancyGrid, PATH_MAX_POSES, Path2D};
-pub use metrics::{MAX_METRICS, Metrics};
+pub use metrics::{MAX_METRICS, Metrics, NamedValue, ShortName};
 pub use robot::{Collision, EncoderTicks, Odometry, WheelSetpoint, WheelState};
 pub use scene::{SCENE_MAX_SHAPES, Scene, Shape};
 pub use sensors::{Imu, LaserScan, SCAN_MAX_BEAMS};

@@ -4,9 +4,23 @@
 //! without the report.
 
 use crate::describe::Describe;
-use crate::{FixedVec, NamedValue};
+use crate::{FixedString, FixedVec};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
+
+/// A short name (a metric, an outcome).
+pub type ShortName = FixedString<28>;
+
+/// A named number.
+#[repr(C)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
+#[type_name("caravan::NamedValue")]
+pub struct NamedValue {
+    pub name: ShortName,
+    pub value: f64,
+}
 
 /// Most values in one [`Metrics`] message.
 pub const MAX_METRICS: usize = 32;
@@ -24,7 +38,7 @@ impl Metrics {
     pub fn push(&mut self, name: &str, value: f64) -> bool {
         self.values
             .push(NamedValue {
-                name: crate::ShortName::new(name),
+                name: ShortName::new(name),
                 value,
             })
             .is_ok()

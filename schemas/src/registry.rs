@@ -1,5 +1,20 @@
 //! Every message type by its stable name, for tools that meet types at run time (recorder,
-//! `caravan topic echo`, the Python generator).
+//! `caravan topic echo`, the Python generator). The types are listed once, in
+//! [`message_types!`]; the catalog ([`crate::catalog`]) adds the structs they hold, the header
+//! and the lockstep protocol.
+
+/// Calls `$callback!` (given in brackets) with `$args` followed by every message type of Caravan's own (the
+/// scenarios' types live in their crates): the one list of them.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! message_types {
+    ([$($callback:tt)+] { $($args:tt)* }) => {
+        $($callback)+!($($args)*
+            Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
+            LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision JointState JointCommand
+            LinkStates Contacts Wrench ForceTorques Scene Metrics)
+    };
+}
 
 /// Runs `$body` with `$T` bound to the message type named `$name`; `None` for an unknown name.
 ///
@@ -10,10 +25,7 @@
 #[macro_export]
 macro_rules! with_message_type {
     ($name:expr, |$T:ident| $body:expr) => {
-        $crate::with_message_type!(@arms $name, $T, $body;
-            Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
-            LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision JointState JointCommand
-            LinkStates Contacts Wrench ForceTorques ContactEstimate EnvStep AgentAction EpisodeEnd Scene Metrics)
+        $crate::message_types!([$crate::with_message_type] { @arms $name, $T, $body; })
     };
     (@arms $name:expr, $T:ident, $body:expr; $($ty:ident)*) => {{
         let name: &str = $name;
@@ -56,7 +68,5 @@ pub fn message_type_names() -> Vec<&'static str> {
     macro_rules! names {
         ($($ty:ident)*) => { vec![$(crate::type_name::<crate::$ty>()),*] };
     }
-    names!(Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
-        LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision JointState JointCommand
-        LinkStates Contacts Wrench ForceTorques ContactEstimate EnvStep AgentAction EpisodeEnd Scene Metrics)
+    crate::message_types!([names] {})
 }

@@ -7,24 +7,11 @@
 //! Where only the name is needed (matching recorded messages), use [`Topic::name`].
 
 use crate::{
-    AgentAction, Collision, ContactEstimate, Contacts, EncoderTicks, EnvStep, EpisodeEnd,
-    ForceTorques, Goal, Imu, JointCommand, JointState, LaserScan, LinkStates, NodeStatus,
-    OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Topic, Twist, WheelSetpoint, WheelState,
-    Wrench,
+    Collision, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand, JointState,
+    LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Topic,
+    Twist, WheelSetpoint, WheelState, Wrench,
 };
 
-/// An episodic environment's steps, to its agent (`agent/observation`).
-pub fn agent_observation() -> Topic<EnvStep> {
-    Topic::new("agent/observation")
-}
-/// The agent's actions (`agent/action`).
-pub fn agent_action() -> Topic<AgentAction> {
-    Topic::new("agent/action")
-}
-/// Each finished episode, summed up (`agent/episode`).
-pub fn agent_episode() -> Topic<EpisodeEnd> {
-    Topic::new("agent/episode")
-}
 /// Per-node execution statistics, published by every node (`status`).
 pub fn status() -> Topic<NodeStatus> {
     Topic::new("status")
@@ -128,10 +115,6 @@ pub fn wrench(i: usize) -> Topic<Wrench> {
 pub fn set_pose(i: usize) -> Topic<Pose3D> {
     robot(i, "set_pose")
 }
-/// The contact on robot `i` a perception process estimated (`robot/i/contact_estimate`).
-pub fn contact_estimate(i: usize) -> Topic<ContactEstimate> {
-    robot(i, "contact_estimate")
-}
 
 #[cfg(test)]
 mod tests {
@@ -162,7 +145,6 @@ mod tests {
         check::<LinkStates>(link_states(3), "robot/3/link_states");
         check::<Contacts>(contacts(3), "robot/3/contacts");
         check::<Wrench>(wrench(3), "robot/3/wrench");
-        check::<ContactEstimate>(contact_estimate(3), "robot/3/contact_estimate");
         check::<Pose3D>(set_pose(3), "robot/3/set_pose");
         check::<ForceTorques>(force_torque(3), "robot/3/force_torque");
         check::<Odometry>(ground_truth(3), "robot/3/ground_truth");

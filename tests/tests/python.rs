@@ -54,13 +54,14 @@ fn rust_facts() -> serde_json::Value {
     })
 }
 
-/// Every catalog type's descriptor, by type name, as a process registers one.
+/// Every catalog type's descriptor, by type name, as a process registers one (the structs
+/// that messages only hold are described inside them).
 fn catalog_descriptors() -> serde_json::Value {
     let all: serde_json::Map<String, serde_json::Value> = caravan_schemas::catalog::layouts()
         .iter()
-        .map(|l| {
-            let d = caravan_schemas::catalog::descriptor(l.type_name).unwrap();
-            (l.type_name.to_string(), d.to_json())
+        .filter_map(|l| {
+            let d = caravan_schemas::catalog::descriptor(l.type_name)?;
+            Some((l.type_name.to_string(), d.to_json()))
         })
         .collect();
     all.into()

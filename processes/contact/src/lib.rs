@@ -23,6 +23,7 @@ pub mod depth;
 pub mod identify;
 pub mod joints;
 pub mod live;
+pub mod messages;
 pub mod monte_carlo;
 pub mod optimiser;
 pub mod planar_arm;

@@ -2,9 +2,9 @@
 //! was applying then (its point and force carried into the world by the link's true pose),
 //! once the arm holds still again (`settle_s` after the push began).
 
+use crate::messages::ContactEstimate;
 use crate::monte_carlo::angle_deg;
 use crate::table::{Mean, mean_of};
-use caravan_schemas::ContactEstimate;
 use nalgebra::{Isometry2, Point2, Vector2};
 use serde::Serialize;
 use std::collections::BTreeMap;

@@ -8,11 +8,12 @@
 
 use crate::arm_urdf::ArmModel;
 use crate::live::{AppliedPush, EstimateAt, LinkPoses, score};
+use crate::messages::ContactEstimate;
 use crate::monte_carlo::{Config, run_level};
 use crate::scenario::ArmParams;
 use crate::table::{Mean, row};
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
-use caravan_schemas::{ContactEstimate, Wrench};
+use caravan_schemas::Wrench;
 use nalgebra::{Isometry2, Point2, Quaternion, UnitQuaternion, Vector2};
 use serde::Deserialize;
 use serde_json::Value;

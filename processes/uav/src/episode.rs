@@ -8,12 +8,11 @@
 //! transitions are unit-tested without a group.
 
 use crate::encounter::{Action, Encounter, Outcome, State};
+use crate::messages::{AgentAction, EnvStep, EpisodeEnd};
 use crate::metrics::EpisodeMetrics;
 use crate::scenario::Scenario;
 use crate::world::{Frame, twist};
-use caravan_schemas::{
-    AgentAction, EnvStep, EpisodeEnd, NamedValue, Odometry, Pose3D, ShortName, Twist,
-};
+use caravan_schemas::{NamedValue, Odometry, Pose3D, ShortName, Twist};
 use caravan_sensor::noise::Gaussian;
 use nalgebra::Vector3;
 

@@ -18,6 +18,7 @@
 pub mod curve;
 pub mod encounter;
 pub mod episode;
+pub mod messages;
 pub mod metrics;
 pub mod mlp;
 pub mod opponent;

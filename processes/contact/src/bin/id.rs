@@ -8,8 +8,9 @@ use caravan_contact::arm_urdf::ArmModel;
 use caravan_contact::depth::{Scanner, self_filter};
 use caravan_contact::identify::{NoForce, PointSource, Settings, identify};
 use caravan_contact::joints;
+use caravan_contact::messages::{ContactEstimate, contact_estimate};
 use caravan_contact::scenario::{ArmParams, DEPTH_TOPIC, DepthParams, EstimatorParams};
-use caravan_schemas::{ContactEstimate, LaserScan, Name, Topic, Vector3, topics};
+use caravan_schemas::{LaserScan, Name, Topic, Vector3, topics};
 use caravan_sensor::noise::Gaussian;
 use nalgebra::Point2;
 use serde::Deserialize;
@@ -55,7 +56,7 @@ const NAN3: Vector3 = Vector3 {
 fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
     let states = node.subscriber(&topics::joint_states(0))?;
     let scans = node.subscriber(&Topic::<LaserScan>::new(DEPTH_TOPIC))?;
-    let out = node.publisher(&topics::contact_estimate(0))?;
+    let out = node.publisher(&contact_estimate(0))?;
     let mut noise = Gaussian::new(r.seed, 0);
     let mut ranges: Vec<f64> = Vec::new();
     let trigger = node.trigger(Trigger::on(topics::joint_states(0).name()))?;

@@ -4,8 +4,8 @@
 //! (`weights`, relative to the launch file, for `mlp`: a trained actor).
 
 use caravan::{Node, NodeIdentity, Trigger};
-use caravan_schemas::{AgentAction, topics};
 use caravan_uav::encounter::{Action, Encounter};
+use caravan_uav::messages::{AgentAction, agent_action, agent_observation};
 use caravan_uav::mlp::Mlp;
 use caravan_uav::policy::{DoNothing, Policy, SideStep};
 use serde::Deserialize;
@@ -56,9 +56,9 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Box<dyn Policy>, String> 
 }
 
 fn run(mut node: Node, mut policy: Box<dyn Policy>) -> Result<(), caravan::Error> {
-    let observations = node.subscriber(&topics::agent_observation())?;
-    let actions = node.publisher(&topics::agent_action())?;
-    let trigger = node.trigger(Trigger::on(topics::agent_observation().name()))?;
+    let observations = node.subscriber(&agent_observation())?;
+    let actions = node.publisher(&agent_action())?;
+    let trigger = node.trigger(Trigger::on(agent_observation().name()))?;
     node.run(trigger, |_| {
         while let Some(o) = observations.receive()? {
             if o.step == 0 {

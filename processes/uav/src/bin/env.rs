@@ -6,9 +6,10 @@
 //! episodes' rules are the library's `Episodes` (`episode.rs`); this file wires them to topics.
 
 use caravan::{Node, NodeIdentity, Trigger};
-use caravan_schemas::{EnvStep, topics};
+use caravan_schemas::topics;
 use caravan_uav::encounter::Encounter;
 use caravan_uav::episode::{Episodes, Start};
+use caravan_uav::messages::{EnvStep, agent_action, agent_episode, agent_observation};
 use caravan_uav::scenario::Scenario;
 use caravan_uav::world::{Frame, Truth};
 use serde::Deserialize;
@@ -78,11 +79,11 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
             node.publisher(&topics::set_pose(0))?,
             node.publisher(&topics::set_pose(1))?,
         ],
-        observations: node.publisher(&topics::agent_observation())?,
+        observations: node.publisher(&agent_observation())?,
     };
     let mut truth = Truth::open(&node)?;
-    let summaries = node.publisher(&topics::agent_episode())?;
-    let actions = node.subscriber(&topics::agent_action())?;
+    let summaries = node.publisher(&agent_episode())?;
+    let actions = node.subscriber(&agent_action())?;
     let mut episodes = Episodes::new(r.e, r.scenario, r.frame, r.episodes, r.seed);
     let trigger = node.trigger(Trigger::every_hz(240.0))?;
     node.run(trigger, |step| {

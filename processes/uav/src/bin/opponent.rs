@@ -45,7 +45,7 @@ fn setup(p: Params, _: &NodeIdentity) -> Result<Ready, String> {
 fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
     let cmd_vel = node.publisher(&topics::cmd_vel(1))?;
     let mut truth = Truth::open(&node)?;
-    let observations = node.subscriber(&topics::agent_observation())?;
+    let observations = node.subscriber(&caravan_uav::messages::agent_observation())?;
     let mut started_ns: Option<u64> = None;
     let trigger = node.trigger(Trigger::every_hz(240.0))?;
     node.run(trigger, |step| {
