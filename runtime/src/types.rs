@@ -143,3 +143,46 @@ pub fn lookup(config: &Config, type_name: &str) -> Result<Descriptor, Error> {
     }
     Ok(d)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    /// A group's configuration with its own directory, made the way its first node makes it.
+    fn config(tag: &str) -> Config {
+        let group = format!("types-{tag}-{}", std::process::id());
+        let config = crate::group::config(&group).unwrap();
+        std::fs::create_dir_all(config.global.root_path().to_string()).unwrap();
+        config
+    }
+
+    #[test]
+    fn a_recorded_type_is_adopted_and_a_catalog_type_laid_out_otherwise_is_refused() {
+        let config = config("adopt");
+        // A type no process declares: registered, then found.
+        let mut json = caravan_schemas::catalog::descriptor("caravan::Pose2D")
+            .unwrap()
+            .to_json();
+        json["layouts"][0]["type_name"] = json!("test::Recorded");
+        let recorded = Descriptor::from_json(&json).unwrap();
+        adopt(&config, &recorded).unwrap();
+        assert_eq!(lookup(&config, "test::Recorded").unwrap(), recorded);
+        let _ = std::fs::remove_file(path(&config, "test::Recorded"));
+        // The catalog's own layout is adopted as it is; another is refused, naming both.
+        let pose = caravan_schemas::catalog::descriptor("caravan::Pose2D").unwrap();
+        adopt(&config, pose).unwrap();
+        let mut json = pose.to_json();
+        json["layouts"][0]["fields"][2]["name"] = json!("heading");
+        json["default"] = json!({"x": 0.0, "y": 0.0, "heading": 0.0});
+        let e = adopt(&config, &Descriptor::from_json(&json).unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("'caravan::Pose2D' was recorded with the layout")
+                && e.contains("heading")
+                && e.contains("theta"),
+            "{e}"
+        );
+    }
+}
