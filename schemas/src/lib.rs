@@ -119,11 +119,5 @@ pub fn boxed_placement_new<T: iceoryx2::prelude::PlacementDefault>() -> Box<T> {
     }
 }
 
-/// Bytes a message would take on a network: its header and what [`wire_size::WireSize`]
-/// counts of it. A subscriber that measures every message builds the `WireSize` once instead.
-pub fn wire_size<T: Message>(message: &T) -> usize {
-    size_of::<Header>() + wire_size::WireSize::of::<T>().measure(message)
-}
-
 #[cfg(test)]
 mod layout_tests;
