@@ -544,3 +544,55 @@ fn a_message_type_declared_outside_caravan_is_received_and_published_from_python
     assert!(child.wait_with_output().unwrap().status.success());
     assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
 }
+
+/// A type of a user's own crosses hosts though no process of the recording host declares it:
+/// that host's bridge asks the publisher's for the descriptor and records the messages.
+#[test]
+fn a_message_type_declared_outside_caravan_is_recorded_on_another_host() {
+    use caravan_tests::hosts::{Hosts, Launcher};
+    let hosts = Hosts::new("ot", &["a", "b"]);
+    let s = Scenario::new(
+        "outside-type-hosts",
+        &format!(
+            r#"clock = "lockstep"
+duration = "2s"
+record = ["beacon"]
+
+[[process]]
+name = "pong"
+exec = "caravan-demo pong"
+on = "demo/ping"
+host = "a"
+
+[[process]]
+name = "beacon"
+exec = "caravan-beacon"
+rate = "10Hz"
+host = "b"
+
+[hosts.a]
+listen = ["{a}"]
+clock = true
+
+[hosts.b]
+connect = ["{a}"]
+"#,
+            a = hosts.endpoint("a")
+        ),
+    );
+    let launchers: Vec<(&str, Launcher)> = ["a", "b"]
+        .into_iter()
+        .map(|h| (h, Launcher::start(&hosts, h, &s)))
+        .collect();
+    for (host, launcher) in launchers {
+        let (code, err) = launcher.finish();
+        assert_eq!(code, Some(0), "host {host} ({:?}): {err}", hosts.how());
+    }
+    let run = hosts.run_dir("a", &s.dir);
+    let bytes = caravan_tests::recording::read(&run.join("record.mcap"));
+    let broadcasts = caravan_tests::recording::messages(&bytes, "beacon");
+    assert!(broadcasts.len() >= 19, "{} broadcasts", broadcasts.len());
+    let last: serde_json::Value = serde_json::from_slice(broadcasts.last().unwrap()).unwrap();
+    assert_eq!(last["label"], "unset", "{last}");
+    assert_eq!(last["history"].as_array().unwrap().len(), 4, "{last}");
+}

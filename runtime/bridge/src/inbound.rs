@@ -136,12 +136,16 @@ impl Inbound<'_> {
             return Ok(());
         }
         if !self.inlets.contains_key(topic) {
-            match caravan::relay::open_inlet(
-                &self.iox,
-                topic,
-                &envelope.type_name,
-                envelope.delivery,
-            ) {
+            // The sending host knows the type even when no process of this host uses it.
+            let inlet = super::types::learn(ctx, &envelope.type_name).and_then(|()| {
+                Ok(caravan::relay::open_inlet(
+                    &self.iox,
+                    topic,
+                    &envelope.type_name,
+                    envelope.delivery,
+                )?)
+            });
+            match inlet {
                 Ok(inlet) => {
                     self.inlets.insert(topic.to_string(), inlet);
                 }

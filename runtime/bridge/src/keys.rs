@@ -12,6 +12,8 @@
 //!   of a lockstep run): every host sends it every topic;
 //! - `caravan/G/topic/H/TOPIC`: the messages of TOPIC for host H, with an [`Envelope`] as
 //!   attachment.
+//! - `caravan/G/type/TYPE`: a query, answered by each host whose processes registered message
+//!   type TYPE with its descriptor (`crate::types`).
 //!
 //! Group names, host names, topic names and type names (`caravan::Pose2D`) hold no character
 //! zenoh reserves (`*`, `$`, `#`, `?`), so keys need no escaping.

@@ -20,6 +20,7 @@ pub mod keys;
 mod outbound;
 pub mod presence;
 pub mod relay;
+mod types;
 
 use anyhow::{Result, anyhow, bail};
 use caravan_launch::model::{HostSpec, LaunchFile};

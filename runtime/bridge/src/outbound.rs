@@ -233,6 +233,8 @@ impl Outbound<'_> {
     /// Starts sending `topic` to `host`, and tells it the topic is coming (an empty message),
     /// so the topic exists there before anything that follows.
     fn open(&mut self, topic: &str, host: &str, type_name: &str, delivery: Delivery) -> Result<()> {
+        // The reading host knows the type even when this host's publisher has not started.
+        super::types::learn(self.ctx, type_name)?;
         let outlet = caravan::relay::open_outlet(&self.iox, topic, type_name, delivery)?;
         let listener = caravan::tap::open_listener(&self.iox, topic)?;
         let publisher = z(self

@@ -53,6 +53,8 @@ pub struct Relay {
     /// One message per thread that ended.
     ended: Receiver<()>,
     _subscriber: zenoh::pubsub::Subscriber<()>,
+    /// Answers the other hosts' questions for this host's message types.
+    _types: zenoh::query::Queryable<()>,
 }
 
 impl Relay {
@@ -76,6 +78,7 @@ impl Relay {
         let (tx, rx) = unbounded();
         // Before any wish to read is said: what is sent here because of it finds a reader.
         let subscriber = receive_all(&ctx, tx.clone())?;
+        let types = super::types::serve(&ctx)?;
         let (ended_tx, ended) = unbounded();
         let spawn = |name: &str, body: Body| {
             let ctx = ctx.clone();
@@ -96,6 +99,7 @@ impl Relay {
             threads: 2,
             ended,
             _subscriber: subscriber,
+            _types: types,
         })
     }
 
