@@ -13,7 +13,7 @@
 //! - `caravan/G/topic/H/TOPIC`: the messages of TOPIC for host H, with an [`Envelope`] as
 //!   attachment.
 //! - `caravan/G/type/TYPE`: a query, answered by each host whose processes registered message
-//!   type TYPE with its descriptor (`crate::types`).
+//!   type TYPE with its descriptor.
 //!
 //! Group names, host names, topic names and type names (`caravan::Pose2D`) hold no character
 //! zenoh reserves (`*`, `$`, `#`, `?`), so keys need no escaping.
@@ -69,6 +69,11 @@ pub fn stop(group: &str) -> String {
 
 pub fn record(group: &str, host: &str) -> String {
     format!("caravan/{group}/record/{host}")
+}
+
+/// The query for the descriptor of message type `type_name` (`caravan::Pose2D`).
+pub fn message_type(group: &str, type_name: &str) -> String {
+    format!("caravan/{group}/type/{type_name}")
 }
 
 /// The messages of `topic` sent to `host`: one stream per reading host, so each starts when

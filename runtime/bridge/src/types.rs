@@ -6,6 +6,7 @@
 //! have.
 
 use super::context::Ctx;
+use super::keys;
 use super::z;
 use anyhow::{Result, bail};
 use caravan::schemas::descriptor::Descriptor;
@@ -16,18 +17,13 @@ use zenoh::Wait;
 /// already (a message or a wish to read came from one), so an answer takes a round trip.
 const ASK_TIMEOUT: Duration = Duration::from_secs(5);
 
-/// The key of the descriptor of `type_name` in `group`.
-fn key(group: &str, type_name: &str) -> String {
-    format!("caravan/{group}/type/{type_name}")
-}
-
 /// Answers other hosts' queries for the descriptors registered on this host, until dropped.
 pub(super) fn serve(ctx: &Ctx) -> Result<zenoh::query::Queryable<()>> {
     let config = ctx.cfg.iceoryx.clone();
-    let prefix = key(ctx.group(), "");
+    let prefix = keys::message_type(ctx.group(), "");
     z(ctx
         .session
-        .declare_queryable(key(ctx.group(), "**"))
+        .declare_queryable(keys::message_type(ctx.group(), "**"))
         .callback(move |query| {
             let Some(type_name) = query.key_expr().as_str().strip_prefix(&prefix) else {
                 return;
@@ -49,7 +45,7 @@ pub(super) fn learn(ctx: &Ctx, type_name: &str) -> Result<()> {
     }
     let replies = z(ctx
         .session
-        .get(key(ctx.group(), type_name))
+        .get(keys::message_type(ctx.group(), type_name))
         .timeout(ASK_TIMEOUT)
         .wait())?;
     while let Ok(reply) = replies.recv() {
