@@ -116,6 +116,47 @@ pub fn set_pose(i: usize) -> Topic<Pose3D> {
     robot(i, "set_pose")
 }
 
+/// `robot/<i>/<leaf>` as `(i, leaf)`: the robot a per-robot topic belongs to.
+pub fn robot_of(topic: &str) -> Option<(usize, &str)> {
+    let (index, leaf) = topic.strip_prefix("robot/")?.split_once('/')?;
+    Some((index.parse().ok()?, leaf))
+}
+
+/// The frame of robot `i`'s `link` (`robot_3/base_link`), as the recording's `tf` channel and
+/// the ROS 2 bridge name it; the map frame is `map`.
+pub fn robot_frame(i: usize, link: &str) -> String {
+    format!("robot_{i}/{link}")
+}
+
+/// The frame a robot's pose topic places: `robot/i/pose` and `robot/i/odometry` the estimate
+/// (`robot_i/base_link`), `robot/i/pose_true` and `robot/i/ground_truth` the truth
+/// (`robot_i/base_link_true`); `None` for another topic.
+pub fn pose_frame(topic: &str) -> Option<String> {
+    match robot_of(topic)? {
+        (i, "pose" | "odometry") => Some(robot_frame(i, "base_link")),
+        (i, "pose_true" | "ground_truth") => Some(robot_frame(i, "base_link_true")),
+        _ => None,
+    }
+}
+
+/// The message type of a well-known topic (`robot/3/scan` → `caravan::LaserScan`); `None` for
+/// a topic these helpers do not name. Tools that pair a topic named in a file with a type
+/// (the ROS 2 bridge) check it here before anything starts.
+pub fn type_of(topic: &str) -> Option<&'static str> {
+    let i = robot_of(topic).map_or(0, |(i, _)| i);
+    macro_rules! find {
+        ($($global:ident),* ; $($per_robot:ident),*) => {
+            $(if $global().name() == topic { return Some($global().type_name()); })*
+            $(if $per_robot(i).name() == topic { return Some($per_robot(i).type_name()); })*
+        };
+    }
+    find!(status, map, scene, goal, collisions;
+        scan, imu, pose_true, twist_true, pose, odometry, wheel_setpoint, wheel_state,
+        encoder_ticks, cmd_vel, path, joint_states, joint_command, link_states, contacts,
+        force_torque, ground_truth, wrench, set_pose);
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -125,6 +166,26 @@ mod tests {
         assert_eq!(topic.name(), name);
         assert_eq!(topic.type_name(), type_name::<T>());
         assert_eq!(topic.delivery(), Delivery::Latest { depth: 8 }, "{name}");
+    }
+
+    #[test]
+    fn well_known_topics_name_their_types() {
+        assert_eq!(type_of("robot/12/scan"), Some(type_name::<LaserScan>()));
+        assert_eq!(type_of("map"), Some(type_name::<OccupancyGrid>()));
+        assert_eq!(type_of("robot/0/cmd_vel"), Some(type_name::<Twist>()));
+        assert_eq!(type_of("robot/x/scan"), None);
+        assert_eq!(type_of("robot/0/mine"), None);
+        assert_eq!(robot_of("robot/3/pose_true"), Some((3, "pose_true")));
+        assert_eq!(robot_of("robots/3/pose"), None);
+        assert_eq!(
+            pose_frame("robot/2/pose").as_deref(),
+            Some("robot_2/base_link")
+        );
+        assert_eq!(
+            pose_frame("robot/2/ground_truth").as_deref(),
+            Some("robot_2/base_link_true")
+        );
+        assert_eq!(pose_frame("robot/2/path"), None);
     }
 
     #[test]

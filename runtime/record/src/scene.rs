@@ -11,6 +11,7 @@
 //!
 //! Views depend only on the raw message, so a lockstep recording stays byte-identical.
 
+use caravan_schemas::topics::robot_frame;
 use foxglove::Encode;
 use foxglove::messages::{
     Color, CubePrimitive, CylinderPrimitive, FrameTransform, FrameTransforms, Grid, LaserScan,
@@ -114,13 +115,6 @@ fn transform(stamp: Timestamp, child: String, pose: Pose) -> FrameTransform {
     }
 }
 
-/// `robot/<i>/<leaf>` as (i, leaf).
-fn robot_topic(topic: &str) -> Option<(usize, &str)> {
-    let rest = topic.strip_prefix("robot/")?;
-    let (index, leaf) = rest.split_once('/')?;
-    Some((index.parse().ok()?, leaf))
-}
-
 fn f64s(v: &Value) -> Vec<f64> {
     v.as_array()
         .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
@@ -131,7 +125,7 @@ fn f64s(v: &Value) -> Vec<f64> {
 pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<View> {
     let stamp = timestamp(stamp_ns);
     let own = format!("foxglove/{topic}");
-    let robot = robot_topic(topic);
+    let robot = caravan_schemas::topics::robot_of(topic);
     let in_map = |pose: Pose| PoseInFrame {
         timestamp: Some(stamp),
         frame_id: MAP_FRAME.into(),
@@ -141,12 +135,7 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
         "caravan::Pose2D" => {
             let pose = pose_2d(json);
             let mut out = vec![view(own, &in_map(pose))];
-            let frame = match robot {
-                Some((i, "pose")) => Some(format!("robot_{i}/base_link")),
-                Some((i, "pose_true")) => Some(format!("robot_{i}/base_link_true")),
-                _ => None,
-            };
-            if let Some(child) = frame {
+            if let Some(child) = caravan_schemas::topics::pose_frame(topic) {
                 let tf = FrameTransforms {
                     transforms: vec![transform(stamp, child, pose)],
                 };
@@ -167,7 +156,7 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
         }
         "caravan::LaserScan" => {
             let frame = match robot {
-                Some((i, _)) => format!("robot_{i}/base_link"),
+                Some((i, _)) => caravan_schemas::topics::robot_frame(i, "base_link"),
                 None => MAP_FRAME.into(),
             };
             let scan = LaserScan {
@@ -229,7 +218,7 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
                 .iter()
                 .map(|l| {
                     let name = l["name"].as_str().unwrap_or("link");
-                    transform(stamp, format!("robot_{i}/{name}"), pose_3d(&l["pose"]))
+                    transform(stamp, robot_frame(i, name), pose_3d(&l["pose"]))
                 })
                 .collect();
             vec![view(TF_TOPIC.into(), &FrameTransforms { transforms })]

@@ -64,6 +64,7 @@ pub fn run(mut node: Node, (p, geometry): (Params, Geometry)) -> Result<(), Erro
     match p.mode {
         Mode::Leader => run_leader(&mut node, &p, own, wheels),
         Mode::Follower => run_follower(&mut node, &p, own, wheels),
+        Mode::Drive => run_drive(&mut node, &p, wheels),
     }
 }
 
@@ -142,6 +143,28 @@ fn run_leader(
             })?;
         }
         wheels.drive(cmd)
+    })?;
+    Ok(())
+}
+
+/// Drives the newest fresh command within the leader's limits; a stale one stops the robot.
+fn run_drive(node: &mut Node, p: &Params, wheels: Wheels) -> Result<(), Error> {
+    let topic = match &p.cmd_vel_topic {
+        Some(name) => Topic::new(name),
+        None => topics::cmd_vel(p.robot),
+    };
+    let commands = node.subscriber(&topic)?;
+    let mut last: Option<(f64, (f64, f64))> = None;
+    node.run(Trigger::every_hz(RATE_HZ), |step| {
+        if let Some(msg) = commands.latest()? {
+            let t = msg.header().stamp_ns as f64 * 1e-9;
+            last = Some((t, (msg.linear.x, msg.angular.z)));
+        }
+        let now = step.now().as_secs_f64();
+        let fresh = last
+            .filter(|(t, _)| now - t <= p.cmd_vel_timeout_s)
+            .map(|(_, c)| c);
+        wheels.drive(leader::limit(fresh, &p.leader))
     })?;
     Ok(())
 }

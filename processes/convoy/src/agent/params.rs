@@ -10,6 +10,9 @@ pub enum Mode {
     Leader,
     #[default]
     Follower,
+    /// Only drive the Twist commands of `cmd_vel_topic` (default `robot/<i>/cmd_vel`), as
+    /// ROS's diff_drive_controller does: a teleop, or a ROS 2 node through `caravan-ros2`.
+    Drive,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -23,9 +26,9 @@ pub struct Params {
     /// Where a follower learns its predecessor's pose; default `robot/<i−1>/pose_true`.
     pub predecessor_topic: Option<String>,
     /// Leader: drive the planner's velocity commands (Twist) from this topic instead of
-    /// straight at the goals, e.g. `robot/0/cmd_vel`.
+    /// straight at the goals, e.g. `robot/0/cmd_vel`. Drive: the commands to drive.
     pub cmd_vel_topic: Option<String>,
-    /// Leader: a planner command older than this is stale and the leader stops, s.
+    /// Leader and drive: a command older than this is stale and the robot stops, s.
     pub cmd_vel_timeout_s: f64,
     /// The robot's URDF, relative to the launch file: wheel radius and separation (required).
     pub urdf: String,
