@@ -267,4 +267,20 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn the_docs_table_lists_every_mapping() {
+        let docs = include_str!("../../../docs/ros2.md");
+        let rows: Vec<&str> = docs.lines().filter(|l| l.starts_with("| `")).collect();
+        for t in RosType::ALL {
+            for (way, word) in [(Way::Out, "out"), (Way::In, "in")] {
+                for c in t.caravan_types(way) {
+                    let head = format!("| `{}` | `{c}` |", t.name());
+                    let row = rows.iter().find(|r| r.starts_with(&head));
+                    let listed = row.is_some_and(|r| r.split('|').nth(3).unwrap().contains(word));
+                    assert!(listed, "docs/ros2.md has no row {head} … {word}");
+                }
+            }
+        }
+    }
 }
