@@ -3,7 +3,7 @@
 //! process and library it came from.
 //!
 //! The level comes from `CARAVAN_LOG` (`error`, `warn`, `info`, `debug`, `trace`, or a
-//! `tracing` filter such as `warn,iceoryx2=error`); the default is `warn,zenoh=error`. Lines go to standard
+//! `tracing` filter such as `warn,iceoryx2=error`); the default is `warn,zenoh=error,rustdds=error,ros2_client=error`. Lines go to standard
 //! error, which the launcher keeps in the run directory's logs.
 
 use iceoryx2::prelude::LogLevel;
@@ -47,8 +47,10 @@ fn iceoryx_level(filter: &tracing_subscriber::EnvFilter) -> LogLevel {
 }
 
 /// Warnings and worse; zenoh's only when they are errors (its warnings are about its own
-/// start-up, such as a host not reachable yet, which the launcher reports itself).
-const DEFAULT_FILTER: &str = "warn,zenoh=error";
+/// start-up, such as a host not reachable yet, which the launcher reports itself), and the
+/// ROS 2 bridge's DDS stack's too (RustDDS warns of every datagram over 1,500 bytes, and
+/// ros2-client of an unset `ROS_DISTRO`).
+const DEFAULT_FILTER: &str = "warn,zenoh=error,rustdds=error,ros2_client=error";
 
 /// Installs the logger once per process, naming the process in each line (`name`, e.g. the
 /// node's or `caravan`). A bad `CARAVAN_LOG` falls back to `warn` with a warning.

@@ -143,6 +143,17 @@ fn recorded(bytes: &[u8], topic: &str) -> BTreeMap<u64, Value> {
 
 #[test]
 fn the_convoy_reaches_a_cyclone_dds_subscriber_as_recorded_and_its_cmd_vel_drives_a_robot() {
+    bridge_the_convoy("lockstep", "12s");
+}
+
+#[test]
+fn in_realtime_too_the_convoy_reaches_cyclone_dds_and_its_cmd_vel_drives_a_robot() {
+    bridge_the_convoy("realtime", "10s");
+}
+
+/// Runs convoy-ros2.toml for `duration` with `clock`, a Cyclone DDS probe listening to every
+/// bridged topic and another publishing `/robot_4/cmd_vel`, and checks what crossed.
+fn bridge_the_convoy(clock: &str, duration: &str) {
     let group = TestGroup::new("ros2");
     let dir = std::env::temp_dir().join(format!("caravan-{}", group.name));
     std::fs::create_dir_all(&dir).unwrap();
@@ -182,7 +193,9 @@ fn the_convoy_reaches_a_cyclone_dds_subscriber_as_recorded_and_its_cmd_vel_drive
             .to_string(),
         "--quiet".into(),
         "--duration".into(),
-        "15s".into(),
+        duration.into(),
+        "--clock".into(),
+        clock.into(),
         "--set".into(),
         format!("group.name={}", group.name),
         "--set".into(),
@@ -204,30 +217,44 @@ fn the_convoy_reaches_a_cyclone_dds_subscriber_as_recorded_and_its_cmd_vel_drive
     let received = companion_lines(&dir, 0);
     let probe_err = || std::fs::read_to_string(dir.join("companion-0.err")).unwrap_or_default();
 
-    // Every bridged topic arrived, and every message is the recorded one of its stamp.
+    // Every bridged topic arrived, and every message is the recorded one of its stamp. A
+    // realtime recorder may drop a message on a loaded machine (lockstep's never does), so in
+    // realtime a message the recording lacks is skipped, as long as most are there.
     for (ros, caravan, _) in BRIDGED {
+        let mut matched = 0;
         let rec = recorded(&bytes, caravan);
         let got: Vec<&Value> = received.iter().filter(|m| m["topic"] == *ros).collect();
         assert!(!got.is_empty(), "nothing on {ros}; probe: {}", probe_err());
-        for m in got {
+        for m in &got {
             let stamp = match *ros {
                 // Twist has no header: match it by value among the recorded commands.
                 "/robot_0/cmd_vel" => {
-                    *rec.iter()
-                        .find(|(_, r)| {
-                            r["linear"]["x"] == m["data"]["linear"]["x"]
-                                && r["angular"]["z"] == m["data"]["angular"]["z"]
-                        })
-                        .unwrap_or_else(|| panic!("a cmd_vel that was never recorded: {m}"))
-                        .0
+                    let same = rec.iter().find(|(_, r)| {
+                        r["linear"]["x"] == m["data"]["linear"]["x"]
+                            && r["angular"]["z"] == m["data"]["angular"]["z"]
+                    });
+                    match same {
+                        Some((stamp, _)) => *stamp,
+                        None => u64::MAX,
+                    }
                 }
                 _ => stamp_ns(&m["data"]["header"]),
             };
-            let r = rec
-                .get(&stamp)
-                .unwrap_or_else(|| panic!("{ros}: no recorded message at {stamp} ns"));
+            let Some(r) = rec.get(&stamp) else {
+                assert!(
+                    clock == "realtime",
+                    "{ros}: no recorded message at {stamp} ns"
+                );
+                continue;
+            };
             check(ros, &m["data"], r);
+            matched += 1;
         }
+        assert!(
+            2 * matched >= got.len(),
+            "{ros}: {matched} of {} recorded",
+            got.len()
+        );
     }
 
     // /tf: each transform is the recorded pose of its frame at its stamp.
@@ -248,17 +275,24 @@ fn the_convoy_reaches_a_cyclone_dds_subscriber_as_recorded_and_its_cmd_vel_drive
                 continue;
             }
             assert_eq!(t["header"]["frame_id"], "map");
-            let r = &rec[&stamp_ns(&t["header"])];
+            let Some(r) = rec.get(&stamp_ns(&t["header"])) else {
+                assert!(
+                    clock == "realtime",
+                    "{frame}: no recorded pose at its stamp"
+                );
+                continue;
+            };
             let tr = &t["transform"];
             let pose =
                 serde_json::json!({ "position": tr["translation"], "orientation": tr["rotation"] });
             same_pose(&pose, r, frame);
             seen += 1;
         }
-        assert!(seen > 0, "no transform of {frame} on /tf");
+        assert!(seen > 0, "no recorded transform of {frame} on /tf");
     }
 
-    // /clock advances with simulated time, in the bridge's 10 ms steps.
+    // /clock advances with the group's time (in lockstep in the bridge's 10 ms steps).
+    let lockstep = clock == "lockstep";
     let clock: Vec<u64> = received
         .iter()
         .filter(|m| m["topic"] == "/clock")
@@ -267,11 +301,11 @@ fn the_convoy_reaches_a_cyclone_dds_subscriber_as_recorded_and_its_cmd_vel_drive
     assert!(clock.len() >= 10, "{} /clock samples", clock.len());
     assert!(clock.windows(2).all(|w| w[0] < w[1]), "/clock went back");
     assert!(
-        clock.iter().all(|t| t % 10_000_000 == 0),
+        !lockstep || clock.iter().all(|t| t % 10_000_000 == 0),
         "/clock off the 10 ms steps"
     );
     assert!(
-        *clock.last().unwrap() >= 10_000_000_000,
+        *clock.last().unwrap() >= 8_000_000_000,
         "/clock ended at {:?}",
         clock.last()
     );
