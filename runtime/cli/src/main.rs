@@ -1,5 +1,6 @@
 //! The `caravan` command.
 
+mod export;
 mod info;
 mod inspect;
 mod record;
@@ -45,6 +46,8 @@ enum Command {
     Resim(resim::ResimArgs),
     /// What a recording holds: time span, channels with schema and count, metadata
     Info(info::InfoArgs),
+    /// Write a recording as a rosbag2 bag that ROS 2's tools read (--ros2)
+    Export(export::ExportArgs),
     /// Recompute report.json and report.md of a run directory
     Report {
         /// The run directory (runs/<group>-<time>)
@@ -79,6 +82,7 @@ fn main() -> ExitCode {
         Command::Node(cmd) => inspect::node(cmd).map(|_| ExitCode::SUCCESS),
         Command::Record(args) => record::record(args).map(|_| ExitCode::SUCCESS),
         Command::Info(args) => info::info(&args).map(|_| ExitCode::SUCCESS),
+        Command::Export(args) => export::export(&args).map(ExitCode::from),
         Command::Report { run_dir } => report::write(&run_dir).map(|w| {
             println!("{}", report_summary(&w.report));
             for failure in &w.failures {

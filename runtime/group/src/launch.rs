@@ -37,7 +37,8 @@ pub struct LaunchArgs {
     #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "8765")]
     pub foxglove: Option<u16>,
     /// Play a recording's topics into the group, in the group's clock: each message at its
-    /// recorded time (in lockstep, the simulated time it was published at)
+    /// recorded time (in lockstep, the simulated time it was published at); a rosbag2 bag of
+    /// the types Caravan maps plays too
     #[arg(long, value_name = "FILE.mcap")]
     pub play: Option<PathBuf>,
     /// With --play: only these topics (names or patterns with *)

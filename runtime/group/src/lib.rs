@@ -13,6 +13,7 @@
 //! # }
 //! ```
 
+mod bag;
 pub mod clean;
 pub mod graph;
 pub mod inject;

@@ -31,7 +31,8 @@ const NEW_TOPIC: Delivery = Delivery::Latest { depth: 8 };
 
 #[derive(Args)]
 pub struct PlayArgs {
-    /// The recording (a run's record.mcap, or one made by `caravan record`)
+    /// The recording (a run's record.mcap, or one made by `caravan record`), or a rosbag2 bag
+    /// of the types Caravan maps (a directory with metadata.yaml, or its .mcap)
     pub file: PathBuf,
     #[command(flatten)]
     pub group: GroupArg,
@@ -98,8 +99,13 @@ impl Recording {
     }
 }
 
-/// Reads the Caravan channels of `path` that `patterns` select (all when empty).
+/// Reads the Caravan channels of `path` that `patterns` select (all when empty). A rosbag2
+/// bag (a directory, or an MCAP file of profile `ros2`) is read as the recording of its
+/// mapped topics (see `bag.rs`).
 pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
+    if caravan_ros2::bag::is_bag(path) {
+        return crate::bag::read_bag_recording(path, patterns);
+    }
     let bytes = caravan::input::map_recording(path)
         .with_context(|| format!("cannot read {}", path.display()))?;
     if !bytes.starts_with(mcap::MAGIC) {

@@ -120,7 +120,7 @@ pub struct Config {
 pub const MAX_DOMAIN: u16 = 232;
 
 /// The ROS type a Caravan type crosses as when the entry names none.
-fn default_ros_type(caravan_type: &str, way: Way) -> Option<RosType> {
+pub fn default_ros_type(caravan_type: &str, way: Way) -> Option<RosType> {
     Some(match (caravan_type, way) {
         ("caravan::LaserScan", Way::Out) => RosType::LaserScan,
         ("caravan::Imu", Way::Out) => RosType::Imu,
