@@ -2,6 +2,9 @@
 //! probe (`tests/python/ros2_probe.py`) subscribes to the convoy's topics by their ROS 2 names
 //! and publishes `cmd_vel` into the running group, in a private network of the test's own.
 
+#[path = "ros2/bag.rs"]
+mod bag;
+
 use caravan_tests::recording;
 use caravan_tests::ros2::{companion_lines, domain, in_private_network, probe};
 use caravan_tests::{

@@ -7,6 +7,9 @@
 //! - `source`: at its rate, publishes a count on the lossless topic `topic`;
 //! - `sink`: at its rate, receives every message of the lossless topic `topic` (its status
 //!   counts sequence gaps). Sources and sinks make the reliability soak.
+//! - `clock`: at its rate (100 Hz), publishes the wall clock (CLOCK_REALTIME, s) as `x` on
+//!   `demo/clock`: a receiver on the same machine measures a path's latency as its own clock
+//!   minus `x` (the ROS 2 bridge's, `tests/python/ros2_latency.py`).
 
 use caravan::{Error, Node, Topic, Trigger};
 use caravan_schemas::Pose2D;
@@ -36,7 +39,9 @@ fn topic(name: &str) -> Topic<Pose2D> {
     Topic::new(name)
 }
 
-const ROLES: [&str; 7] = ["ping", "pong", "sum", "noise", "crash", "source", "sink"];
+const ROLES: [&str; 8] = [
+    "ping", "pong", "sum", "noise", "crash", "source", "sink", "clock",
+];
 
 fn main() -> std::process::ExitCode {
     let role = std::env::args().nth(1).unwrap_or_default();
@@ -47,7 +52,7 @@ fn main() -> std::process::ExitCode {
                 Ok(p)
             } else {
                 Err(format!(
-                    "unknown role '{role}'; expected ping, pong, sum, noise, crash, source or sink"
+                    "unknown role '{role}'; expected ping, pong, sum, noise, crash, source, sink or clock"
                 ))
             }
         },
@@ -93,6 +98,19 @@ fn run(role: &str, mut node: Node, p: Params) -> Result<(), Error> {
                 out.publish(&Pose2D {
                     x: rng.random(),
                     y: rng.random(),
+                    theta: 0.0,
+                })
+            })?;
+        }
+        "clock" => {
+            let out = node.publisher(&topic("demo/clock"))?;
+            node.run(Trigger::every_hz(100.0), |_| {
+                let wall = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .unwrap_or_default();
+                out.publish(&Pose2D {
+                    x: wall.as_secs_f64(),
+                    y: 0.0,
                     theta: 0.0,
                 })
             })?;
