@@ -139,7 +139,7 @@ const LAYERS: &[&[&str]] = &[
     &["caravan-schemas-derive"],
     &["caravan-schemas"],
     &["caravan"],
-    &["caravan-report"],
+    &["caravan-report", "caravan-ros2"],
     &["caravan-launch"],
     &["caravan-record"],
     &["caravan-bridge"],

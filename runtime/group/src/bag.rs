@@ -8,7 +8,7 @@
 //! sequence number counts the topic's messages from 1; its source is the player.
 
 use crate::inject::source_id;
-use crate::play::{Recorded, Recording};
+use crate::recording::{Recorded, Recording};
 use anyhow::{Context, Result, anyhow, bail};
 use caravan_launch::model::glob_match;
 use caravan_ros2::bag::read_bag;

@@ -19,6 +19,7 @@ pub mod graph;
 pub mod inject;
 pub mod launch;
 pub mod play;
+mod recording;
 pub mod report;
 pub mod resim;
 pub mod run;

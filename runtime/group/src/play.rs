@@ -10,12 +10,12 @@
 
 use crate::clean::choose_group;
 use crate::inject::{sleep_until, source_id};
+pub use crate::recording::{Recorded, Recording};
 use crate::watch::{GroupArg, GroupEnd, iox};
 use anyhow::{Context, Result, bail};
 use caravan::inject::{DynInject, open_injector};
 use caravan::{Delivery, Header, Trigger};
 use caravan_launch::model::{Exec, LaunchFile, ProcessSpec, Restart, glob_match};
-use caravan_schemas::descriptor::Descriptor;
 use caravan_schemas::lockstep::name_hash;
 use clap::Args;
 use serde_json::Value;
@@ -57,45 +57,6 @@ fn speed_arg(text: &str) -> Result<f64, String> {
         _ => Err(format!(
             "'{text}': expected a speed above 0 and at most 1000"
         )),
-    }
-}
-
-/// One recorded message.
-pub struct Recorded {
-    /// The MCAP log time: the stamp in lockstep recordings, the wall clock in realtime ones.
-    pub log_ns: u64,
-    pub topic: String,
-    /// The recorded header's fields.
-    pub seq: u64,
-    pub stamp_ns: u64,
-    pub source_id: u64,
-    pub json: Value,
-    /// The message as recorded (JSON text), for byte-for-byte comparisons.
-    pub data: Vec<u8>,
-}
-
-/// A recording's Caravan messages (JSON channels of a Caravan message type, whose names are
-/// paths such as `caravan::Pose2D`; `status` and the Foxglove views left out).
-pub struct Recording {
-    /// Type of every selected channel, by topic; a channel without messages is listed too.
-    pub types: BTreeMap<String, String>,
-    /// The selected channels' messages, in log-time order.
-    pub messages: Vec<Recorded>,
-    /// Every Caravan channel's topic, selected or not.
-    pub topics: Vec<String>,
-    /// The descriptors the selected channels' schemas carry, by type name (none in a
-    /// recording made before recordings carried them).
-    pub descriptors: BTreeMap<String, Descriptor>,
-}
-
-impl Recording {
-    /// Makes the recorded types known to the group of `config`, so that injectors can open
-    /// topics of types that no process of the group knows.
-    pub fn adopt_types(&self, config: &iceoryx2::config::Config) -> Result<()> {
-        for d in self.descriptors.values() {
-            caravan::types::adopt(config, d)?;
-        }
-        Ok(())
     }
 }
 
