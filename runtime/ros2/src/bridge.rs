@@ -45,19 +45,7 @@ macro_rules! sources {
     };
 }
 
-sources!(
-    LaserScan,
-    Imu,
-    JointState,
-    Twist,
-    Pose2D,
-    Pose3D,
-    Wrench,
-    OccupancyGrid,
-    Path2D,
-    Odometry,
-    LinkStates
-);
+crate::mapping::outbound_types!(sources);
 
 /// A ROS 2 subscription and the Caravan publisher its messages go to.
 enum Sink {

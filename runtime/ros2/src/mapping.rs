@@ -28,6 +28,27 @@ pub enum RosMessage {
     Clock(msgs::Clock),
 }
 
+/// Calls `$callback!` with the Caravan types that cross out, the variants of [`Caravan`]: the
+/// one list of them.
+macro_rules! outbound_types {
+    ($callback:ident) => {
+        $callback! {
+            LaserScan,
+            Imu,
+            JointState,
+            Twist,
+            Pose2D,
+            Pose3D,
+            Wrench,
+            OccupancyGrid,
+            Path2D,
+            Odometry,
+            LinkStates
+        }
+    };
+}
+pub(crate) use outbound_types;
+
 /// A Caravan message of a type the bridge maps, borrowed.
 #[derive(Clone, Copy)]
 pub enum Caravan<'a> {

@@ -68,19 +68,7 @@ pub fn export(
             })*
         };
     }
-    types!(
-        LaserScan,
-        Imu,
-        JointState,
-        Twist,
-        Pose2D,
-        Pose3D,
-        Wrench,
-        OccupancyGrid,
-        Path2D,
-        Odometry,
-        LinkStates
-    );
+    crate::mapping::outbound_types!(types);
     Ok(Exported {
         own: None,
         tf: None,
