@@ -248,6 +248,9 @@ def run(args):
         ros_topic, ros_type, qos = args.publish
         writer = DataWriter(participant, dds_topic(ros_topic, ros_type), qos=make_qos(*qos))
 
+    # Tests wait for this line before they start the group, so that a slow start of Python
+    # and Cyclone DDS does not miss the run.
+    print("ros2_probe: ready", file=sys.stderr, flush=True)
     start = time.monotonic()
     end = start + args.duration
     period = 1.0 / args.rate

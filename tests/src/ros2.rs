@@ -46,8 +46,9 @@ pub fn probe(args: &[&str]) -> Vec<String> {
 /// Runs `main` in a network namespace of its own with only a loopback interface (multicast
 /// on), made for this call (a user namespace too, so no privileges are needed) and gone when
 /// its processes end; each of `companions` is started first in the same namespace, its
-/// standard output written to `dir/companion-<k>.out` (and its errors to `….err`), and is
-/// stopped (SIGTERM) when `main` ends. Returns `main`'s output.
+/// standard output written to `dir/companion-<k>.out` (and its errors to `….err`), waited
+/// for until it prints `ros2_probe: ready` (at most two minutes), and stopped (SIGTERM) when
+/// `main` ends. Returns `main`'s output.
 pub fn in_private_network(dir: &Path, companions: &[Vec<String>], main: &[String]) -> Output {
     let quote = |words: &[String]| -> String {
         words
@@ -70,7 +71,9 @@ pub fn in_private_network(dir: &Path, companions: &[Vec<String>], main: &[String
             .unwrap()
             .into_owned();
         script.push_str(&format!(
-            "{} >{out}.out 2>{out}.err &\npids=\"$pids $!\"\n",
+            "{} >{out}.out 2>{out}.err &\npids=\"$pids $!\"\n\
+             n=0; until grep -q 'ros2_probe: ready' {out}.err || [ $n -ge 1200 ]; do \
+             sleep 0.1; n=$((n+1)); done\n",
             quote(c)
         ));
     }
