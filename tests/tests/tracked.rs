@@ -339,6 +339,12 @@ fn bad_terrain_specs_and_arguments_exit_2_naming_file_and_key() {
     let (code, err) = terrain(None, &["--seeds", "5..2", "--out-dir", "x"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("holds no seed"), "{err}");
+    let (code, err) = terrain(
+        None,
+        &["--seeds", "0..18446744073709551615", "--out-dir", "x"],
+    );
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("more than the 100000 worlds"), "{err}");
     let (code, _) = terrain(None, &[]);
     assert_eq!(code, Some(2));
     // The passability table of a directory without a sweep summary.
