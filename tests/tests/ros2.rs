@@ -230,7 +230,15 @@ fn bridge_the_convoy(clock: &str, duration: &str) {
         let mut matched = 0;
         let rec = recorded(&bytes, caravan);
         let got: Vec<&Value> = received.iter().filter(|m| m["topic"] == *ros).collect();
-        assert!(!got.is_empty(), "nothing on {ros}; probe: {}", probe_err());
+        // The map, the plan and the planner's commands come now and then; a realtime run on a
+        // loaded machine may publish them before the probe has matched, so there only the
+        // topics published at every step must arrive.
+        let steady = ros.contains("pose") || ros.contains("scan");
+        assert!(
+            !got.is_empty() || !(lockstep || steady),
+            "nothing on {ros}; probe: {}",
+            probe_err()
+        );
         for m in &got {
             let stamp = match *ros {
                 // Twist has no header: match it by value among the recorded commands.
