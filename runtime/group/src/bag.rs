@@ -10,7 +10,6 @@
 use crate::inject::source_id;
 use crate::recording::{Recorded, Recording};
 use anyhow::{Context, Result, anyhow, bail};
-use caravan_launch::model::glob_match;
 use caravan_ros2::bag::read_bag;
 use caravan_ros2::inverse::{caravan_json, caravan_topic, caravan_type_in};
 use std::collections::BTreeMap;
@@ -20,13 +19,8 @@ use std::path::Path;
 pub(crate) fn read_bag_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
     let bag = read_bag(path)?;
     let at = path.display();
-    let chosen = |topic: &str| patterns.is_empty() || patterns.iter().any(|p| glob_match(p, topic));
-    let mut recording = Recording {
-        types: BTreeMap::new(),
-        messages: Vec::new(),
-        topics: Vec::new(),
-        descriptors: BTreeMap::new(),
-    };
+    let chosen = |topic: &str| crate::recording::selected(patterns, topic);
+    let mut recording = Recording::default();
     // ROS topic → (Caravan topic, Caravan type) of the topics played.
     let mut played: BTreeMap<&str, (String, &'static str)> = BTreeMap::new();
     let mut from: BTreeMap<String, &str> = BTreeMap::new();

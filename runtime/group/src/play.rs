@@ -15,7 +15,7 @@ use crate::watch::{GroupArg, GroupEnd, iox};
 use anyhow::{Context, Result, bail};
 use caravan::inject::{DynInject, open_injector};
 use caravan::{Delivery, Header, Trigger};
-use caravan_launch::model::{Exec, LaunchFile, ProcessSpec, Restart, glob_match};
+use caravan_launch::model::{Exec, LaunchFile, ProcessSpec, Restart};
 use caravan_schemas::lockstep::name_hash;
 use clap::Args;
 use serde_json::Value;
@@ -80,13 +80,8 @@ pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
                 .as_ref()
                 .is_some_and(|s| s.encoding == "jsonschema" && s.name.contains("::"))
     };
-    let chosen = |topic: &str| patterns.is_empty() || patterns.iter().any(|p| glob_match(p, topic));
-    let mut recording = Recording {
-        types: BTreeMap::new(),
-        messages: Vec::new(),
-        topics: Vec::new(),
-        descriptors: BTreeMap::new(),
-    };
+    let chosen = |topic: &str| crate::recording::selected(patterns, topic);
+    let mut recording = Recording::default();
     let describe = |recording: &mut Recording, c: &mcap::Channel| -> Result<()> {
         let schema = c.schema.as_ref().expect("checked");
         if recording.descriptors.contains_key(&schema.name) {

@@ -22,6 +22,7 @@ pub struct Recorded {
 
 /// A recording's Caravan messages (JSON channels of a Caravan message type, whose names are
 /// paths such as `caravan::Pose2D`; `status` and the Foxglove views left out).
+#[derive(Default)]
 pub struct Recording {
     /// Type of every selected channel, by topic; a channel without messages is listed too.
     pub types: BTreeMap<String, String>,
@@ -43,4 +44,13 @@ impl Recording {
         }
         Ok(())
     }
+}
+
+/// Whether `patterns` (names or patterns with `*`, as in a launch file's `record`) select
+/// `topic`; no patterns select every topic.
+pub(crate) fn selected(patterns: &[String], topic: &str) -> bool {
+    patterns.is_empty()
+        || patterns
+            .iter()
+            .any(|p| caravan_launch::model::glob_match(p, topic))
 }
