@@ -252,6 +252,8 @@ pub struct Row {
     pub bytes_per_s: f64,
     /// CPU time of both sides per message, ns ([`recorder::Measured::cpu_ns_per_message`]).
     pub cpu_ns_per_message: Option<f64>,
+    /// Why the first attempt failed, when this row is a second attempt.
+    pub retried: Option<String>,
 }
 
 pub fn run(args: &TransportArgs) -> Result<()> {
@@ -319,7 +321,17 @@ pub fn run(args: &TransportArgs) -> Result<()> {
     for &bytes in &sizes {
         for &kind in &kinds {
             progress.set_message(format!("{} {}", kind.name(), payload::label(bytes)));
-            let result = measure(kind, bytes, &setup, &progress);
+            let mut result = measure(kind, bytes, &setup, &progress);
+            // One lost echo on a loaded machine (a peer held off the CPU past a timeout) says
+            // nothing about the transport's latency: measure once more, and say so.
+            let mut retried = None;
+            if let Err(e) = &result {
+                let why = format!("failed: {e:#}");
+                progress.suspend(|| eprintln!("{} {bytes}: {why}; measuring again", kind.name()));
+                progress.inc_length(setup.rounds + setup.warmup);
+                retried = Some(why);
+                result = measure(kind, bytes, &setup, &progress);
+            }
             let (result, mean_ns, bytes_per_s, cpu) = match result {
                 Ok(Some(m)) => (
                     Ok(percentiles(&m.hist)),
@@ -341,6 +353,7 @@ pub fn run(args: &TransportArgs) -> Result<()> {
                 mean_ns,
                 bytes_per_s,
                 cpu_ns_per_message: cpu,
+                retried,
             });
         }
     }

@@ -142,6 +142,16 @@ pub(super) fn csv(machine: &Machine, rows: &[Row], setup: &Setup) -> String {
         out,
         "# cpu per message = CPU time of both sides' processes over the measured round trips / messages (two per round trip)"
     );
+    for r in rows {
+        if let Some(why) = &r.retried {
+            let _ = writeln!(
+                out,
+                "# {} {} B was measured twice; the first attempt {why}",
+                r.kind.name(),
+                r.bytes
+            );
+        }
+    }
     let _ = writeln!(
         out,
         "transport,wake_up,payload_bytes,in_flight,rounds,p50_ns,p90_ns,p99_ns,p999_ns,max_ns,mean_ns,throughput_bytes_per_s,cpu_ns_per_message,status"
