@@ -171,7 +171,7 @@ fn cell_ids(axes: &[Axis], combos: &[Vec<usize>]) -> Vec<String> {
             };
             let mut id = clean(&raw);
             if id.len() > MAX_ID {
-                id = format!("{}-{:08x}", &id[..MAX_ID - 9], fnv(&raw) as u32);
+                id = format!("{}-{:08x}", &id[..MAX_ID - 9], fnv(raw.as_bytes()) as u32);
             }
             let base = id.clone();
             let mut n = 2;
@@ -196,9 +196,10 @@ fn clean(text: &str) -> String {
         .collect()
 }
 
-/// FNV-1a: a stable hash (std's is randomised per process, and ids must survive restarts).
-fn fnv(text: &str) -> u64 {
-    text.bytes().fold(0xcbf29ce484222325, |h, b| {
+/// FNV-1a: a stable hash (std's is randomised per process, and ids and sweep fingerprints
+/// must survive restarts).
+pub fn fnv(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf29ce484222325, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x100000001b3)
     })
 }

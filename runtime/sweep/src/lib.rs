@@ -4,24 +4,33 @@
 
 mod file;
 mod grid;
+mod manifest;
+mod merge;
+mod plan;
 mod runner;
+mod shard;
+mod slurm;
 mod summary;
 
 use anyhow::{Context, Result};
-use caravan_group::launch::{EXIT_BAD_INPUT, LaunchArgs};
-use caravan_launch::LaunchError;
-use clap::Args;
-use grid::{Axis, Cell};
+use caravan_group::launch::EXIT_BAD_INPUT;
+use clap::{Args, Subcommand};
+use grid::Cell;
 use indicatif::{ProgressBar, ProgressStyle};
+use plan::{Plan, group_prefix, plan};
 use runner::{Finished, Task};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use summary::RunEntry;
 
 #[derive(Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct SweepArgs {
+    #[command(subcommand)]
+    pub command: Option<SweepCommand>,
     /// A launch file, or a sweep file (TOML with a top-level [sweep] table)
-    pub target: PathBuf,
+    #[arg(required = true)]
+    pub target: Option<PathBuf>,
     /// An axis: a `--set` key and its values, e.g. `process.pong.params.gain=1,3`; several
     /// make the Cartesian product
     #[arg(long = "grid", value_name = "KEY=V1,V2,…")]
@@ -47,39 +56,37 @@ pub struct SweepArgs {
     /// No progress bar
     #[arg(long)]
     pub quiet: bool,
+    /// Run only shard K of N of the runs (`2/3`), or take it from a job array's environment:
+    /// `env` (Slurm) or `env/N` (Slurm, Kubernetes' Indexed Jobs)
+    #[arg(long, value_name = "K/N|env|env/N")]
+    pub shard: Option<String>,
+    /// Submit the sweep to Slurm as a job array of shards; what follows are sbatch options
+    /// (`--slurm --time=1:00:00 --cpus-per-task=2`), so it comes last
+    #[arg(long, num_args = 0.., allow_hyphen_values = true, value_name = "SBATCH-OPTION")]
+    pub slurm: Option<Vec<String>>,
+    /// With --slurm: how many array tasks (shards); default one per unfinished run, at most 1000
+    #[arg(long, value_name = "N")]
+    pub shards: Option<usize>,
+    /// With --slurm: write the job script and print the sbatch command, without submitting
+    #[arg(long)]
+    pub dry_run: bool,
+}
+
+#[derive(Subcommand)]
+pub enum SweepCommand {
+    /// Join shards' outputs into one summary.json and summary.csv
+    Merge(merge::MergeArgs),
 }
 
 /// Exit code after Ctrl-C (128 + SIGINT, as shells report it).
 pub const EXIT_INTERRUPTED: u8 = 130;
 
-/// Everything the sweep will do, checked before anything runs.
-struct Plan {
-    name: String,
-    launch: PathBuf,
-    seeds: Vec<u64>,
-    /// Overrides of every run: the sweep file's, then the command line's.
-    sets: Vec<String>,
-    axes: Vec<Axis>,
-    cells: Vec<Cell>,
-    jobs: usize,
-    out: PathBuf,
-    duration: Option<String>,
-}
-
-impl Plan {
-    /// The `--set`s of one run of `cell`. The cell's come after the common ones and the
-    /// sweep's group name last, so every concurrent group has its own name.
-    fn sets(&self, cell: &Cell, group: &str) -> Vec<String> {
-        let mut sets = self.sets.clone();
-        sets.extend(cell.sets.iter().cloned());
-        sets.push(format!("group.name={group}"));
-        sets
-    }
-}
-
 /// Runs the sweep; returns the exit code (0 all completed, 1 a run failed, 2 bad input,
 /// 130 interrupted).
 pub fn run(args: &SweepArgs) -> Result<u8> {
+    if let Some(SweepCommand::Merge(m)) = &args.command {
+        return merge::run(m);
+    }
     let plan = match plan(args) {
         Ok(p) => p,
         Err(problems) => {
@@ -89,40 +96,51 @@ pub fn run(args: &SweepArgs) -> Result<u8> {
             return Ok(EXIT_BAD_INPUT);
         }
     };
+    if let Some(options) = &args.slurm {
+        return slurm::submit(&plan, args, options);
+    }
     let prefix = group_prefix(&plan.name);
-    let runs_root = plan.out.join("runs");
     let mut results: Vec<Vec<RunEntry>> = vec![Vec::new(); plan.cells.len()];
     let mut tasks = Vec::new();
-    // Seed-major, so that an interrupted sweep has every cell's first seeds.
-    for &seed in &plan.seeds {
-        for (c, cell) in plan.cells.iter().enumerate() {
-            let dir = runs_root.join(&cell.id).join(format!("seed-{seed}"));
-            if let Some((run_dir, report)) = runner::finished_run(&dir) {
-                results[c].push(entry(&plan.out, seed, &run_dir, None, Some(&report)));
-                continue;
-            }
-            // Left by a killed sweep: start that run afresh.
-            if dir.exists() {
-                std::fs::remove_dir_all(&dir)
-                    .with_context(|| format!("cannot remove {}", dir.display()))?;
-            }
-            let group = format!("{prefix}-{}-{}", std::process::id(), tasks.len());
-            tasks.push(Task {
-                cell: c,
-                seed,
-                args: launch_args(&plan, cell, seed, &dir, &group),
-                dir,
-                group,
-            });
+    let mut total = 0;
+    for (i, c, seed) in plan.runs() {
+        if !plan.shard.has(i) {
+            continue;
         }
+        total += 1;
+        let dir = plan.seed_dir(c, seed);
+        if let Some((run_dir, report)) = runner::finished_run(&dir) {
+            results[c].push(entry(&plan.out, seed, &run_dir, None, Some(&report)));
+            continue;
+        }
+        // Left by a killed sweep: start that run afresh.
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir)
+                .with_context(|| format!("cannot remove {}", dir.display()))?;
+        }
+        let group = format!("{prefix}-{}-{}", std::process::id(), tasks.len());
+        tasks.push(Task {
+            cell: c,
+            seed,
+            args: launch_args(&plan, &plan.cells[c], seed, &dir, &group),
+            dir,
+            group,
+        });
     }
-    let total = plan.cells.len() * plan.seeds.len();
+    // Before any run: a shard that is killed still says what it was meant to run.
+    manifest::Manifest::new(plan.definition(), plan.shard, plan.shard_runs()).write(&plan.out)?;
     let skipped = total - tasks.len();
+    let part = if plan.shard == shard::Shard::ALL {
+        String::new()
+    } else {
+        format!(", shard {} of them: {total}", plan.shard)
+    };
     eprintln!(
-        "caravan: sweep '{}': {} cells × {} seeds = {total} runs of {} into {}",
+        "caravan: sweep '{}': {} cells × {} seeds = {} runs{part} of {} into {}",
         plan.name,
         plan.cells.len(),
         plan.seeds.len(),
+        plan.cells.len() * plan.seeds.len(),
         plan.launch.display(),
         plan.out.display()
     );
@@ -152,7 +170,7 @@ pub fn run(args: &SweepArgs) -> Result<u8> {
             return;
         }
         let id = &plan.cells[f.cell].id;
-        let seed_dir = runs_root.join(id).join(format!("seed-{}", f.seed));
+        let seed_dir = plan.seed_dir(f.cell, f.seed);
         let outcome = outcome_of(f.report.as_ref());
         if outcome != "completed" {
             let log = seed_dir.join("launch.log");
@@ -184,9 +202,19 @@ pub fn run(args: &SweepArgs) -> Result<u8> {
         axes: &plan.axes,
     };
     let doc = summary::summarise(&header, &plan.cells, &results);
-    std::fs::create_dir_all(&plan.out)
-        .with_context(|| format!("cannot create {}", plan.out.display()))?;
-    summary::write(&plan.out, &doc)?;
+    // A shard's summary would be one part of the sweep's: the merge writes the sweep's.
+    let sharded = plan.shard != shard::Shard::ALL;
+    let summary_json = plan.out.join("summary.json");
+    let written = if sharded {
+        format!(
+            "shard {} done; when every shard is, summarise them with `caravan sweep merge {}`",
+            plan.shard,
+            plan.out.display()
+        )
+    } else {
+        summary::write(&plan.out, &doc)?;
+        format!("summary in {} and summary.csv", summary_json.display())
+    };
     print!("{}", summary::table(&doc, &args.metric));
     for f in &failed {
         eprintln!("caravan: {f}");
@@ -194,10 +222,7 @@ pub fn run(args: &SweepArgs) -> Result<u8> {
     let done: usize = results.iter().map(Vec::len).sum();
     let all_completed = results.iter().flatten().all(|r| r.outcome == "completed");
     if interrupted {
-        eprintln!(
-            "caravan: interrupted; {done} of {total} runs finished, summarised in {}",
-            plan.out.join("summary.json").display()
-        );
+        eprintln!("caravan: interrupted; {done} of {total} runs finished; {written}");
         return Ok(EXIT_INTERRUPTED);
     }
     let not_completed = results
@@ -205,9 +230,8 @@ pub fn run(args: &SweepArgs) -> Result<u8> {
         .flatten()
         .filter(|r| r.outcome != "completed");
     eprintln!(
-        "caravan: {} of {done} runs completed; summary in {} and summary.csv",
+        "caravan: {} of {done} runs completed; {written}",
         done - not_completed.count(),
-        plan.out.join("summary.json").display()
     );
     Ok(if all_completed { 0 } else { 1 })
 }
@@ -259,166 +283,4 @@ fn launch_args(plan: &Plan, cell: &Cell, seed: u64, dir: &Path, group: &str) -> 
         a.extend(["--set".into(), s.into()]);
     }
     a
-}
-
-/// The start of the sweep's group names: `<name>-<pid>-<n>` must fit in 40 characters of
-/// [A-Za-z0-9-] and differ from every other sweep's, hence the pid.
-fn group_prefix(name: &str) -> String {
-    let clean: String = name
-        .chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
-        .take(20)
-        .collect();
-    let clean = clean.trim_matches('-');
-    if clean.is_empty() {
-        "sweep".into()
-    } else {
-        clean.into()
-    }
-}
-
-/// Reads the target and the command line into a plan and validates every cell.
-fn plan(args: &SweepArgs) -> Result<Plan, Vec<String>> {
-    let target = &args.target;
-    let text = std::fs::read_to_string(target)
-        .map_err(|e| vec![format!("cannot read {}: {e}", target.display())])?;
-    let mut sweep = if file::is_sweep_file(&text) {
-        file::parse(target, &text)?
-    } else {
-        let stem = target
-            .file_stem()
-            .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
-        file::SweepFile {
-            name: stem,
-            launch: target.clone(),
-            seeds: None,
-            sets: Vec::new(),
-            jobs: None,
-            axes: Vec::new(),
-        }
-    };
-    let mut problems = Vec::new();
-    for g in &args.grid {
-        match grid::parse_grid(g) {
-            Ok(axis) => grid::merge_axis(&mut sweep.axes, axis),
-            Err(e) => problems.push(e),
-        }
-    }
-    let seeds = match &args.seeds {
-        Some(spec) => grid::parse_seeds(spec).unwrap_or_else(|e| {
-            problems.push(format!("--seeds {spec}: {e}"));
-            Vec::new()
-        }),
-        None => sweep.seeds.clone().unwrap_or_else(|| vec![1]),
-    };
-    // The sweep names every group and sets every seed itself; an axis or a set over those
-    // keys would be replaced without a word.
-    let owned = |set: &str| {
-        let key = set.split_once('=').map_or(set, |(k, _)| k).trim();
-        matches!(key, "group.name" | "group.seed")
-    };
-    for axis in &sweep.axes {
-        for set in axis.values.iter().flat_map(|v| &v.sets) {
-            if owned(set) {
-                problems.push(format!(
-                    "axis '{}': '{set}': the sweep sets group.name and group.seed itself (use seeds for seeds)",
-                    axis.label
-                ));
-            }
-        }
-    }
-    for set in sweep.sets.iter().chain(&args.set) {
-        if owned(set) {
-            problems.push(format!(
-                "'{set}': the sweep sets group.name and group.seed itself (use seeds for seeds)"
-            ));
-        }
-    }
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let jobs = args.jobs.or(sweep.jobs).unwrap_or(cores);
-    if jobs == 0 {
-        problems.push("--jobs must be at least 1".into());
-    }
-    if !problems.is_empty() {
-        return Err(problems);
-    }
-    let mut sets = sweep.sets;
-    sets.extend(args.set.iter().cloned());
-    let out = args.out.clone().unwrap_or_else(|| {
-        let dir: String = sweep
-            .name
-            .chars()
-            .map(|c| if c == '/' || c == '\\' { '_' } else { c })
-            .collect();
-        Path::new("sweeps").join(dir)
-    });
-    let plan = Plan {
-        name: sweep.name,
-        launch: sweep.launch,
-        seeds,
-        sets,
-        cells: grid::expand(&sweep.axes),
-        axes: sweep.axes,
-        jobs,
-        out,
-        duration: args.duration.clone(),
-    };
-    let problems = validate(&plan);
-    if problems.is_empty() {
-        Ok(plan)
-    } else {
-        Err(problems)
-    }
-}
-
-/// Loads the launch file with every cell's overrides, as `caravan launch` would, without
-/// starting anything. A problem shared by several cells is reported once, naming them.
-fn validate(plan: &Plan) -> Vec<String> {
-    // The output must be a directory (made, or resumed); a file there is bad input.
-    if plan.out.exists() && !plan.out.is_dir() {
-        return vec![format!(
-            "--out {}: exists and is not a directory",
-            plan.out.display()
-        )];
-    }
-    let mut problems: Vec<(String, Vec<&str>)> = Vec::new();
-    for cell in &plan.cells {
-        let args = LaunchArgs {
-            file: plan.launch.clone(),
-            set: plan.sets(cell, &format!("{}-check", group_prefix(&plan.name))),
-            duration: plan.duration.clone(),
-            clock: None,
-            seed: plan.seeds.first().copied(),
-            runs_dir: PathBuf::new(),
-            quiet: true,
-            foxglove: None,
-            play: None,
-            play_topics: Vec::new(),
-            only: Vec::new(),
-            host: None,
-        };
-        match caravan_group::launch::load(&args) {
-            Ok(_) => {}
-            Err(e @ LaunchError::Read { .. }) => return vec![e.to_string()],
-            Err(LaunchError::Invalid(list)) => {
-                for p in list {
-                    let text = p.to_string();
-                    match problems.iter_mut().find(|(t, _)| *t == text) {
-                        Some((_, cells)) => cells.push(&cell.id),
-                        None => problems.push((text, vec![&cell.id])),
-                    }
-                }
-            }
-        }
-    }
-    let n = plan.cells.len();
-    problems
-        .into_iter()
-        .map(|(text, cells)| match cells.len() {
-            _ if plan.axes.is_empty() => text,
-            k if k == n => format!("{text} (every cell)"),
-            1 => format!("cell {}: {text}", cells[0]),
-            _ => format!("cells {}: {text}", cells.join("; ")),
-        })
-        .collect()
 }
