@@ -1,37 +1,12 @@
 //! `caravan sweep`: a grid of real pingpong groups, resumption, and bad input.
 
-use caravan_tests::{unique_group, workspace_bin, workspace_root};
-use serde_json::Value;
+use caravan_tests::sweep::{TempDir, read_json, sweep};
+use caravan_tests::workspace_root;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-/// A temporary directory removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("caravan-{}", unique_group(tag)));
-        std::fs::create_dir_all(&dir).unwrap();
-        Self(dir)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn sweep(args: &[&str], out: &Path) -> Output {
-    Command::new(workspace_bin("caravan"))
-        .arg("sweep")
-        .args(args)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .output()
-        .unwrap()
-}
+#[path = "sweep/shards.rs"]
+mod shards;
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).to_string()
@@ -52,10 +27,6 @@ fn run_dirs(out: &Path) -> Vec<PathBuf> {
     }
     dirs.sort();
     dirs
-}
-
-fn read_json(path: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 /// No shared memory of any group the sweep ran is left.
