@@ -4,6 +4,7 @@ pub mod hosts;
 pub mod node;
 pub mod recording;
 pub mod ros2;
+pub mod slurm;
 pub mod sweep;
 
 use std::process::{Child, Command, Stdio};
