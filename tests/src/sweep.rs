@@ -1,7 +1,7 @@
 //! Sweeps for the tests: a temporary output folder, `caravan sweep`, and summaries compared
 //! without their wall-clock fields.
 
-use crate::{unique_group, workspace_bin};
+use crate::{unique_group, workspace_bin, workspace_root};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -65,4 +65,26 @@ pub fn comparable(summary: &Value) -> Value {
 pub fn read_json(path: &Path) -> Value {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     serde_json::from_str(&text).unwrap()
+}
+
+/// The arguments of a lockstep pingpong sweep over `gains` and `seeds`, 2 s a run, 2 at once.
+pub fn lockstep_pingpong(gains: &str, seeds: &str) -> Vec<String> {
+    let launch = workspace_root().join("launch/pingpong.toml");
+    [
+        launch.to_str().unwrap(),
+        "--grid",
+        &format!("process.pong.params.gain={gains}"),
+        "--seeds",
+        seeds,
+        "--duration",
+        "2s",
+        "--set",
+        "group.clock=\"lockstep\"",
+        "--jobs",
+        "2",
+        "--quiet",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect()
 }

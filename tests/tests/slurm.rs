@@ -3,6 +3,9 @@
 //! whose script fails is reported FAILED; dropping the cluster ends its daemons and the jobs
 //! still running. The first run installs Slurm (see `.config/nextest.toml`).
 
+#[path = "slurm/sweep.rs"]
+mod sweep;
+
 use caravan_tests::slurm::Cluster;
 use caravan_tests::{alive, wait_until};
 use std::time::Duration;

@@ -1,31 +1,9 @@
 //! Sharded sweeps: `--shard`, `caravan sweep merge`, and the Slurm script's dry run.
 
-use caravan_tests::sweep::{TempDir, comparable, read_json};
-use caravan_tests::{workspace_bin, workspace_root};
+use caravan_tests::sweep::{TempDir, comparable, lockstep_pingpong, read_json};
+use caravan_tests::workspace_bin;
 use std::path::Path;
 use std::process::{Command, Output};
-
-/// A lockstep pingpong sweep over two gains and `seeds`, 2 s each.
-fn lockstep_sweep(gains: &str, seeds: &str) -> Vec<String> {
-    let launch = workspace_root().join("launch/pingpong.toml");
-    [
-        launch.to_str().unwrap(),
-        "--grid",
-        &format!("process.pong.params.gain={gains}"),
-        "--seeds",
-        seeds,
-        "--duration",
-        "2s",
-        "--set",
-        "group.clock=\"lockstep\"",
-        "--jobs",
-        "2",
-        "--quiet",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect()
-}
 
 fn caravan_sweep(args: &[String], extra: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(workspace_bin("caravan"));
@@ -71,7 +49,7 @@ fn runs_in(out: &Path) -> usize {
 #[test]
 fn a_sweep_split_three_ways_and_merged_equals_one_local_run() {
     let tmp = TempDir::new("sweep-shards");
-    let args = lockstep_sweep("1,3", "1..=3");
+    let args = lockstep_pingpong("1,3", "1..=3");
     let local = tmp.0.join("local");
     let run = caravan_sweep(&args, &["--out", local.to_str().unwrap()], &[]);
     assert_eq!(run.status.code(), Some(0), "{}", stderr(&run));
@@ -177,14 +155,14 @@ fn a_sweep_split_three_ways_and_merged_equals_one_local_run() {
 fn shards_of_another_sweep_are_refused() {
     let tmp = TempDir::new("sweep-other");
     let (a, b) = (tmp.0.join("a"), tmp.0.join("b"));
-    let args = lockstep_sweep("1,3", "1");
+    let args = lockstep_pingpong("1,3", "1");
     let run = caravan_sweep(
         &args,
         &["--out", a.to_str().unwrap(), "--shard", "1/2"],
         &[],
     );
     assert_eq!(run.status.code(), Some(0), "{}", stderr(&run));
-    let other = lockstep_sweep("1,5", "1");
+    let other = lockstep_pingpong("1,5", "1");
     let run = caravan_sweep(
         &other,
         &["--out", b.to_str().unwrap(), "--shard", "2/2"],
@@ -215,9 +193,11 @@ fn shards_of_another_sweep_are_refused() {
 fn bad_shards_start_nothing() {
     let tmp = TempDir::new("sweep-badshard");
     let out = tmp.0.join("out");
-    let args = lockstep_sweep("1,3", "1..=3");
+    let args = lockstep_pingpong("1,3", "1..=3");
     let o = out.to_str().unwrap();
-    let cases: [(&[&str], &[(&str, &str)], &str); 5] = [
+    // Extra arguments, environment, and what the message must say.
+    type Case<'a> = (&'a [&'a str], &'a [(&'a str, &'a str)], &'a str);
+    let cases: [Case; 5] = [
         (&["--shard", "4/3"], &[], "shard 4 of 3 does not exist"),
         (&["--shard", "1/0"], &[], "1 to 1000"),
         (
