@@ -108,11 +108,16 @@ pub fn run(args: &MergeArgs) -> Result<u8> {
     failed.iter().for_each(|f| eprintln!("caravan: {f}"));
     let done: usize = results.iter().map(Vec::len).sum();
     eprintln!(
-        "caravan: merged {done} runs of sweep '{}' from {} shard manifests in {} directories; {} \
+        "caravan: merged {done} runs of sweep '{}' from {} shard manifests in {} {}; {} \
          completed; summary in {} and summary.csv",
         sweep.name,
         manifests.len(),
         dirs.len(),
+        if dirs.len() == 1 {
+            "directory"
+        } else {
+            "directories"
+        },
         done - failed.len(),
         args.out.join("summary.json").display()
     );
