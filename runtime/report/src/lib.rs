@@ -65,6 +65,7 @@ pub mod plot;
 pub mod plugin;
 mod recording;
 mod section;
+pub mod seeds;
 pub mod stats;
 pub mod wilson;
 

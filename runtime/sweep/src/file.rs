@@ -2,7 +2,7 @@
 //! common overrides and axes (plain ones over one key, named ones whose values are bundles of
 //! overrides). Every problem is reported as `file:line: what` before anything runs.
 
-use super::grid::{self, Axis, AxisValue};
+use super::grid::{Axis, AxisValue};
 use caravan_launch::overrides::parse_value;
 use caravan_launch::suggest;
 use std::path::{Path, PathBuf};
@@ -338,7 +338,7 @@ impl Parser<'_> {
 /// `seeds = "1..=3"` or `seeds = [1, 2, 3]`.
 fn seeds(item: &Item) -> Result<Vec<u64>, String> {
     if let Some(spec) = item.as_str() {
-        return grid::parse_seeds(spec);
+        return caravan_report::seeds::parse(spec);
     }
     let list = item
         .as_array()
@@ -351,7 +351,7 @@ fn seeds(item: &Item) -> Result<Vec<u64>, String> {
                 .ok_or("seeds are whole numbers ≥ 0")
         })
         .collect::<Result<Vec<u64>, _>>()?;
-    grid::check_seeds(&seeds)?;
+    caravan_report::seeds::check(&seeds)?;
     Ok(seeds)
 }
 

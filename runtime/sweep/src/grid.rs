@@ -204,94 +204,9 @@ pub fn fnv(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The most seeds a sweep takes: each is at least one group run, so more is a typo, and a
-/// range is never expanded past it.
-pub const MAX_SEEDS: u64 = 100_000;
-
-/// Parses a seed spec: comma-separated seeds or Rust ranges, e.g. `1,2,3`, `1..=3`, `1..4`,
-/// `1..=3,10`.
-pub fn parse_seeds(spec: &str) -> Result<Vec<u64>, String> {
-    let num = |s: &str| {
-        s.trim()
-            .parse::<u64>()
-            .map_err(|_| format!("'{}' is not a seed (a whole number ≥ 0)", s.trim()))
-    };
-    let mut seeds: Vec<u64> = Vec::new();
-    let room = |seeds: &Vec<u64>, a: u64, last: u64| {
-        let wanted = (last - a)
-            .saturating_add(1)
-            .saturating_add(seeds.len() as u64);
-        if wanted > MAX_SEEDS {
-            Err(format!(
-                "'{spec}' gives {wanted} seeds, more than the {MAX_SEEDS} a sweep takes"
-            ))
-        } else {
-            Ok(())
-        }
-    };
-    for part in spec.split(',') {
-        if let Some((a, b)) = part.split_once("..=") {
-            let (a, b) = (num(a)?, num(b)?);
-            if a > b {
-                return Err(format!("range {a}..={b} is empty"));
-            }
-            room(&seeds, a, b)?;
-            seeds.extend(a..=b);
-        } else if let Some((a, b)) = part.split_once("..") {
-            let (a, b) = (num(a)?, num(b)?);
-            if a >= b {
-                return Err(format!("range {a}..{b} is empty"));
-            }
-            room(&seeds, a, b - 1)?;
-            seeds.extend(a..b);
-        } else {
-            room(&seeds, 0, 0)?;
-            seeds.push(num(part)?);
-        }
-    }
-    check_seeds(&seeds)?;
-    Ok(seeds)
-}
-
-/// Seeds must be distinct: each names its own run directory.
-pub fn check_seeds(seeds: &[u64]) -> Result<(), String> {
-    if seeds.is_empty() {
-        return Err("no seeds".into());
-    }
-    if seeds.len() as u64 > MAX_SEEDS {
-        return Err(format!(
-            "{} seeds, more than the {MAX_SEEDS} a sweep takes",
-            seeds.len()
-        ));
-    }
-    let mut seen = BTreeSet::new();
-    match seeds.iter().find(|s| !seen.insert(**s)) {
-        Some(dup) => Err(format!("seed {dup} given twice")),
-        None => Ok(()),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn seed_specs() {
-        assert_eq!(parse_seeds("1,2,3").unwrap(), [1, 2, 3]);
-        assert_eq!(parse_seeds("1..=3").unwrap(), [1, 2, 3]);
-        assert_eq!(parse_seeds("1..4").unwrap(), [1, 2, 3]);
-        assert_eq!(parse_seeds(" 7 ").unwrap(), [7]);
-        assert_eq!(parse_seeds("1..=2,10").unwrap(), [1, 2, 10]);
-        let huge = parse_seeds("0..9223372036854775807").unwrap_err();
-        assert!(huge.contains("more than the 100000"), "{huge}");
-        assert!(parse_seeds("0..=18446744073709551615").is_err());
-        assert_eq!(parse_seeds("0..100000").unwrap().len(), 100_000);
-        assert!(parse_seeds("3..3").unwrap_err().contains("empty"));
-        assert!(parse_seeds("1,1").unwrap_err().contains("twice"));
-        assert!(parse_seeds("x").unwrap_err().contains("'x'"));
-        assert!(parse_seeds("").is_err());
-        assert!(parse_seeds("-1").is_err());
-    }
 
     #[test]
     fn grid_arguments() {

@@ -134,7 +134,7 @@ pub fn plan(args: &SweepArgs) -> Result<Plan, Vec<String>> {
         }
     }
     let seeds = match &args.seeds {
-        Some(spec) => grid::parse_seeds(spec).unwrap_or_else(|e| {
+        Some(spec) => caravan_report::seeds::parse(spec).unwrap_or_else(|e| {
             problems.push(format!("--seeds {spec}: {e}"));
             Vec::new()
         }),

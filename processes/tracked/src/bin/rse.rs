@@ -41,31 +41,8 @@ struct Args {
 #[derive(Clone)]
 struct Seeds(Vec<u64>);
 
-/// The most worlds one call writes: a range is never expanded past it (a typo'd bound would
-/// otherwise ask for more memory than there is).
-const MAX_WORLDS: u64 = 100_000;
-
 fn parse_seeds(s: &str) -> Result<Seeds, String> {
-    let num = |t: &str| t.trim().parse::<u64>().map_err(|e| format!("'{t}': {e}"));
-    let range = |a: u64, last: Option<u64>| match last {
-        Some(last) if last >= a && last - a >= MAX_WORLDS => Err(format!(
-            "'{s}' gives {} seeds, more than the {MAX_WORLDS} worlds one call writes",
-            (last - a).saturating_add(1)
-        )),
-        Some(last) => Ok((a..=last).collect()),
-        None => Ok(Vec::new()),
-    };
-    let out: Vec<u64> = if let Some((a, b)) = s.split_once("..=") {
-        range(num(a)?, Some(num(b)?))?
-    } else if let Some((a, b)) = s.split_once("..") {
-        range(num(a)?, num(b)?.checked_sub(1))?
-    } else {
-        s.split(',').map(num).collect::<Result<_, _>>()?
-    };
-    if out.is_empty() {
-        return Err(format!("'{s}' holds no seed"));
-    }
-    Ok(Seeds(out))
+    caravan_report::seeds::parse(s).map(Seeds)
 }
 
 /// Writes the world of `seed` to `out`, and its picture to `svg`.
