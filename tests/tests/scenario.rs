@@ -104,6 +104,58 @@ fn a_failing_plugin_fails_the_launch_but_keeps_the_report() {
     );
 }
 
+/// A plugin that never ends (as plotters did on an axis of 1e308) is killed at its entry's
+/// `timeout`, and the run keeps its report, with the plugin named among the failed sections.
+#[test]
+fn a_plugin_that_never_ends_is_killed_at_its_time_limit() {
+    let body = format!(
+        "{}\n[[report]]\nexec = \"./stuck.sh\"\ntimeout = \"1s\"\n",
+        ping_pong()
+    );
+    let s = Scenario::new("tiny-stuck", &body);
+    let script = s.dir.join("stuck.sh");
+    let pid_file = s.dir.join("stuck.pid");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\n[ \"$1\" = --check ] && exit 0\necho $$ > '{}'\nexec sleep 600\n",
+            pid_file.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let out = s.run(&FIVE_SECONDS);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let report = s.report();
+    assert_eq!(report["run"]["outcome"], "completed");
+    let failed = &report["failed_sections"][0];
+    assert_eq!(failed["exec"], "./stuck.sh");
+    assert!(
+        (failed["message"].as_str().unwrap())
+            .contains("did not finish within its time limit of 1 s"),
+        "{failed}"
+    );
+    let pid: i32 = std::fs::read_to_string(&pid_file)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    caravan_tests::wait_until("the stuck plugin is gone", || !caravan_tests::alive(pid));
+}
+
+#[test]
+fn a_report_time_limit_must_be_positive_and_bounded() {
+    for (value, expected) in [("0s", "above 0"), ("25h", "at most 24 h"), ("soon", "soon")] {
+        let body = format!(
+            "{}\n[[report]]\nexec = \"caravan-count-report\"\ntimeout = \"{value}\"\n",
+            ping_pong()
+        );
+        let s = Scenario::new("tiny-timeout", &body);
+        let out = s.run(&FIVE_SECONDS);
+        caravan_tests::assert_refused(&s, &out, &["timeout", expected]);
+    }
+}
+
 #[test]
 fn a_sweep_checks_report_plugin_params_before_starting() {
     workspace_bin("caravan-count-report");

@@ -366,6 +366,7 @@ fn report_entries(lf: &LaunchFile) -> Vec<ReportEntry> {
             },
             params: r.params.clone(),
             launch_dir: r.launch_dir.display().to_string(),
+            timeout_s: r.timeout.as_secs_f64(),
         })
         .collect()
 }

@@ -237,8 +237,19 @@ pub struct ReportSpec {
     pub exec: Exec,
     /// Free-form parameters; always a JSON object.
     pub params: serde_json::Value,
+    /// How long the plugin may run on a run directory before it is killed and reported as
+    /// failed (`timeout`, default [`ReportSpec::DEFAULT_TIMEOUT`]).
+    pub timeout: Duration,
     /// The directory of the launch file that defined the entry, absolute.
     pub launch_dir: PathBuf,
+}
+
+impl ReportSpec {
+    /// Ten minutes: generous for a program that reads one run's recording and writes a
+    /// section; a plugin past it is stuck (as one plotting an axis of 1e308 was), not busy.
+    pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(600);
+    /// A day: more is a typo.
+    pub const MAX_TIMEOUT: Duration = Duration::from_secs(86_400);
 }
 
 impl ProcessSpec {

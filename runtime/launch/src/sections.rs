@@ -65,7 +65,7 @@ const PROCESS_KEYS: &[&str] = &[
     "env",
     "check",
 ];
-const REPORT_KEYS: &[&str] = &["exec", "params"];
+const REPORT_KEYS: &[&str] = &["exec", "params", "timeout"];
 
 impl Checker<'_> {
     pub fn group(&mut self, root: &Scope) -> GroupSpec {
@@ -431,9 +431,20 @@ impl Checker<'_> {
             let s = self.open(table, root.at("report"), i, label, REPORT_KEYS);
             let (source, _) = self.origins.entry(&s.path);
             let exec = self.exec(&s, &source.dir);
+            let timeout = self.get(&s, "timeout", |item| {
+                let d = duration(item)?;
+                if d.is_zero() || d > ReportSpec::MAX_TIMEOUT {
+                    return Err(format!(
+                        "expected a time limit above 0 and at most {} h",
+                        ReportSpec::MAX_TIMEOUT.as_secs() / 3600
+                    ));
+                }
+                Ok(d)
+            });
             reports.push(ReportSpec {
                 exec: exec.unwrap_or(Exec::Command(Vec::new())),
                 params: self.params(&s),
+                timeout: timeout.unwrap_or(ReportSpec::DEFAULT_TIMEOUT),
                 launch_dir: source.abs_dir.clone(),
             });
         }

@@ -57,6 +57,14 @@ pub struct ReportEntry {
     /// The directory of the launch file that named the plugin (relative paths in `params`
     /// are relative to it).
     pub launch_dir: String,
+    /// The plugin's time limit per run directory, s (its entry's `timeout`; ten minutes in
+    /// the facts of runs made before the key existed).
+    #[serde(default = "default_timeout_s")]
+    pub timeout_s: f64,
+}
+
+fn default_timeout_s() -> f64 {
+    600.0
 }
 
 /// How a node's resource use evolved during the run, from its running statuses (1 Hz).

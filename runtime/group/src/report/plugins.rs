@@ -3,8 +3,12 @@
 //! protocol a plugin follows.
 
 use caravan_report::{ReportEntry, Section};
+use std::io::Read;
+use std::os::unix::process::CommandExt;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
+use std::sync::mpsc::RecvTimeoutError;
+use std::time::{Duration, Instant};
 
 /// A section a plugin wrote, with its JSON text as written.
 pub struct Written {
@@ -69,19 +73,76 @@ pub fn run_all(run_dir: &Path, entries: &[ReportEntry]) -> Outcome {
     outcome
 }
 
+/// How often the launcher says that a plugin is still running.
+const PROGRESS_EVERY: Duration = Duration::from_secs(15);
+
+/// Runs the plugin with `args` and waits for it, at most its `timeout_s`: past that the
+/// plugin (and whatever it started: it runs in a process group of its own) is killed, and it
+/// has failed. A plugin running long is said every [`PROGRESS_EVERY`], so a launcher waiting
+/// for one is never silent.
 fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
     let Some((first, rest)) = entry.exec.split_first() else {
         return Err("the command is empty".into());
     };
     let program = crate::run::exec::program(first, Path::new(&entry.launch_dir));
-    Command::new(&program)
+    let mut child = Command::new(&program)
         .args(rest)
         .args(args)
         .env(caravan::env_vars::PARAMS, entry.params.to_string())
         .env(caravan::env_vars::LAUNCH_DIR, &entry.launch_dir)
         .stdin(Stdio::null())
-        .output()
-        .map_err(|e| format!("cannot run {}: {e}", program.display()))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .process_group(0)
+        .spawn()
+        .map_err(|e| format!("cannot run {}: {e}", program.display()))?;
+    // Both pipes are drained as the plugin writes, so a chatty plugin never blocks on one.
+    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            if let Some(mut pipe) = pipe {
+                let _ = pipe.read_to_end(&mut bytes);
+            }
+            bytes
+        })
+    };
+    let stdout = drain(child.stdout.take().map(|p| Box::new(p) as _));
+    let stderr = drain(child.stderr.take().map(|p| Box::new(p) as _));
+    let pid = child.id() as i32;
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || tx.send(child.wait()));
+    let limit = Duration::from_secs_f64(entry.timeout_s);
+    let start = Instant::now();
+    let status = loop {
+        let left = limit.saturating_sub(start.elapsed());
+        match rx.recv_timeout(left.min(PROGRESS_EVERY)) {
+            Ok(status) => break status.map_err(|e| format!("cannot wait for the plugin: {e}"))?,
+            Err(RecvTimeoutError::Timeout) if start.elapsed() >= limit => {
+                // SAFETY: signalling the process group this function started.
+                unsafe { libc::kill(-pid, libc::SIGKILL) };
+                let _ = rx.recv();
+                return Err(format!(
+                    "did not finish within its time limit of {} s (its entry's `timeout`), and \
+                     was killed",
+                    limit.as_secs_f64()
+                ));
+            }
+            Err(RecvTimeoutError::Timeout) => eprintln!(
+                "caravan: report plugin {} still running after {:.0} s (time limit {} s)",
+                entry.exec.join(" "),
+                start.elapsed().as_secs_f64(),
+                limit.as_secs_f64()
+            ),
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err("lost the plugin's process".into());
+            }
+        }
+    };
+    Ok(Output {
+        status,
+        stdout: stdout.join().unwrap_or_default(),
+        stderr: stderr.join().unwrap_or_default(),
+    })
 }
 
 /// The plugin's error: its stderr (a plugin prints one paragraph), else its exit status.
