@@ -196,3 +196,48 @@ fast = ["process.ping.rate=20Hz", "process.pong.params.gain=4"]
     assert!(stderr(&bad).contains(&expected), "{}", stderr(&bad));
     assert!(!bad_out.exists());
 }
+
+/// A grid past the cell cap is refused at once; a big one says that it is checking its cells
+/// (each is loaded as `caravan launch` would), so the sweep is never silent for long.
+#[test]
+fn a_huge_grid_is_refused_and_a_big_one_says_it_checks_its_cells() {
+    let tmp = TempDir::new("sweep-huge");
+    let out = tmp.0.join("out");
+    let launch = workspace_root().join("launch/pingpong.toml");
+    let ten = (1..=10)
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
+    let mut args = vec![launch.to_str().unwrap().to_string()];
+    for axis in ["a", "b", "c", "d", "e", "f"] {
+        args.extend(["--grid".into(), format!("process.pong.params.{axis}={ten}")]);
+    }
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let huge = sweep(&refs, &out);
+    assert_eq!(huge.status.code(), Some(2), "{}", stderr(&huge));
+    assert!(
+        stderr(&huge).contains("10 × 10 × 10 × 10 × 10 × 10 cells, more than the 100000"),
+        "{}",
+        stderr(&huge)
+    );
+    assert!(!out.exists());
+
+    // 200 cells, every one with an unknown process: checked, with a progress line, refused.
+    let many = (1..=200)
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
+    let grid = format!("process.pong.params.gain={many}");
+    let run = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
+        .args(["sweep", launch.to_str().unwrap(), "--grid", &grid])
+        .args(["--set", "process.nope.rate=1Hz", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(err.contains("checking 200 cells"), "{err}");
+    assert!(err.contains("no process 'nope'"), "{err}");
+    assert!(err.contains("(every cell)"), "{err}");
+    assert!(!out.exists());
+}

@@ -8,11 +8,15 @@ use super::manifest::{Definition, ManifestAxis, RunRef};
 use super::shard::{self, Shard};
 use caravan_group::launch::LaunchArgs;
 use caravan_launch::LaunchError;
+use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
 /// The most cells a sweep takes: each is at least one group run, and every cell is validated
 /// before anything starts (a few milliseconds each), so more is a mistake.
 pub const MAX_CELLS: usize = 100_000;
+
+/// From this many cells on, checking them shows a progress line (about a second's work).
+const PROGRESS_FROM: usize = 200;
 
 /// Everything the sweep will do, checked before anything runs.
 pub struct Plan {
@@ -218,7 +222,7 @@ pub fn plan(args: &SweepArgs) -> Result<Plan, Vec<String>> {
         duration: args.duration.clone(),
         shard,
     };
-    let problems = validate(&plan);
+    let problems = validate(&plan, args.quiet);
     if problems.is_empty() {
         Ok(plan)
     } else {
@@ -229,7 +233,7 @@ pub fn plan(args: &SweepArgs) -> Result<Plan, Vec<String>> {
 /// Loads the launch file with every cell's overrides, as `caravan launch` would, without
 /// starting anything. A problem shared by several cells is reported once, naming them. A shard
 /// checks only the cells it runs (the submitting `--slurm` checked them all).
-fn validate(plan: &Plan) -> Vec<String> {
+fn validate(plan: &Plan, quiet: bool) -> Vec<String> {
     // The output must be a directory (made, or resumed); a file there is bad input.
     if plan.out.exists() && !plan.out.is_dir() {
         return vec![format!(
@@ -242,7 +246,21 @@ fn validate(plan: &Plan) -> Vec<String> {
     for (i, c, _) in plan.runs() {
         mine[c] |= plan.shard.has(i);
     }
+    // Each cell takes milliseconds: a big grid says what it is doing, and how far it is.
+    let count = mine.iter().filter(|m| **m).count();
+    let bar = if quiet || count < PROGRESS_FROM {
+        ProgressBar::hidden()
+    } else {
+        eprintln!(
+            "caravan: checking {count} cells as `caravan launch` would, before anything starts"
+        );
+        ProgressBar::new(count as u64).with_style(
+            ProgressStyle::with_template("{bar:30} {pos}/{len} cells checked, ETA {eta}")
+                .expect("valid template"),
+        )
+    };
     for (cell, _) in plan.cells.iter().zip(&mine).filter(|(_, m)| **m) {
+        bar.inc(1);
         let args = LaunchArgs {
             file: plan.launch.clone(),
             set: plan.sets(cell, &format!("{}-check", group_prefix(&plan.name))),
@@ -271,6 +289,7 @@ fn validate(plan: &Plan) -> Vec<String> {
             }
         }
     }
+    bar.finish_and_clear();
     let n = plan.cells.len();
     problems
         .into_iter()
