@@ -134,6 +134,21 @@ fn inspection_commands_see_a_running_group() {
         info["metadata"]["run"]["wall_clock_start_ns"].is_string(),
         "{info}"
     );
+    // 64 bytes of 0xFF inside the first chunk: the summary still reads, but `caravan info`
+    // checks every chunk and refuses the file, naming it.
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+    let index = &summary.chunk_indexes[0];
+    assert!(index.compressed_size > 200, "{index:?}");
+    let chunk = index.chunk_start_offset as usize;
+    let mut damaged = bytes.clone();
+    damaged[chunk + 80..chunk + 144].fill(0xFF);
+    let bad = mcap.with_extension("damaged.mcap");
+    std::fs::write(&bad, &damaged).unwrap();
+    let out = caravan(&["info", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("damaged.mcap"), "{}", stderr(&out));
+    let out = caravan(&["info", "no/such/file.mcap"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     // SAFETY: signalling our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     assert!(child.wait_with_output().unwrap().status.success());

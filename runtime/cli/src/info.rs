@@ -1,6 +1,10 @@
 //! `caravan info FILE.mcap`: what a recording holds, from its summary (as `ros2 bag info` and
 //! `mcap info` print): time span, messages, channels with schema and count, the run's metadata
 //! and attachments. A file without a summary (cut short by a crash) is read through instead.
+//!
+//! Either way every message is read once, with each chunk's CRC checked, and the count must
+//! match the summary's: a damaged file is refused (exit 2), as `play` and `resim` refuse it,
+//! rather than described from a summary that no longer holds.
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -55,7 +59,7 @@ pub fn describe(bytes: &[u8]) -> Result<Value> {
             }
         }
         _ => {
-            for m in mcap::MessageStream::new(bytes)? {
+            for m in messages(bytes)? {
                 let m = m.context("the file ends in the middle of a record")?;
                 let c = &m.channel;
                 let schema = c
@@ -76,6 +80,16 @@ pub fn describe(bytes: &[u8]) -> Result<Value> {
         start = 0;
     }
     let total: u64 = rows.values().map(|r| r.3).sum();
+    if indexed {
+        let mut read = 0u64;
+        for m in messages(bytes)? {
+            m.context("a chunk is damaged")?;
+            read += 1;
+        }
+        if read != total {
+            bail!("the summary counts {total} messages but the file holds {read}");
+        }
+    }
     let mut channels: Vec<&ChannelRow> = rows.values().collect();
     channels.sort();
     Ok(json!({
@@ -92,16 +106,32 @@ pub fn describe(bytes: &[u8]) -> Result<Value> {
     }))
 }
 
-pub fn info(args: &InfoArgs) -> Result<()> {
-    let bytes = caravan::input::map_recording(&args.file)
-        .with_context(|| format!("cannot read {}", args.file.display()))?;
+/// Every message, each chunk's CRC checked as it is decompressed.
+fn messages(bytes: &[u8]) -> Result<mcap::MessageStream<'_>> {
+    Ok(mcap::MessageStream::new_with_options(
+        bytes,
+        mcap::read::Options::ValidateChunkCrcs.into(),
+    )?)
+}
+
+/// Prints what the recording holds; returns the exit code (2: the file cannot be read, is
+/// not MCAP, or is damaged).
+pub fn info(args: &InfoArgs) -> Result<u8> {
+    let file = args.file.display();
+    let bytes = match caravan::input::map_recording(&args.file) {
+        Ok(b) => b,
+        Err(e) => return Ok(refuse(format!("cannot read {file}: {e:#}"))),
+    };
     if !bytes.starts_with(mcap::MAGIC) {
-        bail!("{} is not an MCAP file", args.file.display());
+        return Ok(refuse(format!("{file} is not an MCAP file")));
     }
-    let facts = describe(&bytes).with_context(|| args.file.display().to_string())?;
+    let facts = match describe(&bytes) {
+        Ok(f) => f,
+        Err(e) => return Ok(refuse(format!("{file}: {e:#}"))),
+    };
     if args.json {
         println!("{facts:#}");
-        return Ok(());
+        return Ok(0);
     }
     println!("file:        {}", args.file.display());
     println!(
@@ -148,7 +178,13 @@ pub fn info(args: &InfoArgs) -> Result<()> {
             c["encoding"].as_str().unwrap_or(""),
         );
     }
-    Ok(())
+    println!("verified:    every chunk's CRC, and the message count");
+    Ok(0)
+}
+
+fn refuse(message: String) -> u8 {
+    eprintln!("caravan: {message}");
+    caravan_group::launch::EXIT_BAD_INPUT
 }
 
 #[cfg(test)]
@@ -182,5 +218,37 @@ mod tests {
         assert_eq!(facts["channels"][0]["topic"], "robot/0/pose");
         assert_eq!(facts["indexed"], true);
         assert!(super::describe(&bytes[..bytes.len() / 2]).is_err());
+    }
+
+    /// Bytes overwritten inside a chunk: the summary still reads, the chunk's CRC does not.
+    #[test]
+    fn a_damaged_chunk_is_an_error_though_the_summary_reads() {
+        let mut file = std::io::Cursor::new(Vec::new());
+        let options = mcap::WriteOptions::new().compression(None);
+        let mut w = options.create(&mut file).unwrap();
+        let schema = w
+            .add_schema("caravan::Pose2D", "jsonschema", b"{}")
+            .unwrap();
+        let ch = (w.add_channel(schema, "robot/0/pose", "json", &Default::default())).unwrap();
+        let payload = br#"{"x": 1.0, "y": 2.0, "theta": 0.5}"#;
+        for seq in 0..10 {
+            let header = mcap::records::MessageHeader {
+                channel_id: ch,
+                sequence: seq,
+                log_time: u64::from(seq) * 1_000_000,
+                publish_time: 0,
+            };
+            w.write_to_known_channel(&header, payload).unwrap();
+        }
+        w.finish().unwrap();
+        drop(w);
+        let mut bytes = file.into_inner();
+        assert!(super::describe(&bytes).is_ok());
+        let at = (bytes.windows(payload.len()))
+            .position(|w| w == payload)
+            .unwrap();
+        bytes[at + 3] = b'9';
+        let err = format!("{:#}", super::describe(&bytes).unwrap_err());
+        assert!(err.contains("a chunk is damaged"), "{err}");
     }
 }

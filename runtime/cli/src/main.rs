@@ -81,7 +81,7 @@ fn main() -> ExitCode {
         Command::Topic(cmd) => inspect::topic(cmd).map(|_| ExitCode::SUCCESS),
         Command::Node(cmd) => inspect::node(cmd).map(|_| ExitCode::SUCCESS),
         Command::Record(args) => record::record(args).map(|_| ExitCode::SUCCESS),
-        Command::Info(args) => info::info(&args).map(|_| ExitCode::SUCCESS),
+        Command::Info(args) => info::info(&args).map(ExitCode::from),
         Command::Export(args) => export::export(&args).map(ExitCode::from),
         Command::Report { run_dir } => report::write(&run_dir).map(|w| {
             println!("{}", report_summary(&w.report));
