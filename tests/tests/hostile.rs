@@ -258,3 +258,59 @@ fn a_sweep_over_the_keys_it_sets_itself_is_refused() {
         );
     }
 }
+
+/// Round 3: every command sends bad input to exit 2 and run-time failures to 1 (the table in
+/// docs/launch.md). Before, the inspection commands, `info` and `play` exited 1 for all.
+#[test]
+fn inspection_commands_info_play_and_runs_dir_give_exit_2_for_bad_input() {
+    let none = "no-such-group-for-exit-codes";
+    for (args, expected) in [
+        (
+            vec!["topic", "pub", "demo/ping", "{}", "--group", none],
+            "no group",
+        ),
+        (
+            vec!["topic", "echo", "demo/ping", "--group", none],
+            "no group",
+        ),
+        (
+            vec!["topic", "hz", "demo/ping", "--group", none],
+            "no group",
+        ),
+        (vec!["topic", "list", "--group", none], "no group"),
+        (vec!["node", "list", "--group", none], "no group"),
+        (vec!["node", "info", "pong", "--group", none], "no group"),
+        (vec!["play", "/dev/null", "--group", none], "/dev/null"),
+        (vec!["info", "/dev/null"], "/dev/null"),
+        (
+            vec!["info", "/no/such/recording.mcap"],
+            "/no/such/recording.mcap",
+        ),
+    ] {
+        let out = caravan(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains(expected),
+            "{args:?}: {}",
+            stderr(&out)
+        );
+        assert!(
+            !stderr(&out).contains("panicked"),
+            "{args:?}: {}",
+            stderr(&out)
+        );
+    }
+    // --runs-dir naming a regular file: refused before anything starts.
+    let s = Scenario::new("runs-file", PINGPONG);
+    let file = s.dir.join("not-a-dir");
+    std::fs::write(&file, "").unwrap();
+    let out = caravan(&[
+        "launch",
+        s.file.to_str().unwrap(),
+        "--runs-dir",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("not-a-dir"), "{}", stderr(&out));
+    assert!(s.shm_entries().is_empty());
+}

@@ -241,14 +241,14 @@ fn topic_info_node_info_and_top_describe_a_running_group() {
 
     // Unknown names are errors that say what exists.
     let out = caravan(&["node", "info", "pnog", "--group", g]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(
         stderr(&out).contains("did you mean 'pong'?"),
         "{}",
         stderr(&out)
     );
     let out = caravan(&["topic", "info", "demo/pnig", "--group", g]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(
         stderr(&out).contains("no topic 'demo/pnig'"),
         "{}",
@@ -362,7 +362,7 @@ fn play_and_topic_pub_publish_into_a_running_group() {
         full.extend(args);
         full.extend(["--group", g]);
         let out = caravan(&full);
-        assert_eq!(out.status.code(), Some(1), "{full:?}");
+        assert_eq!(out.status.code(), Some(2), "{full:?}");
         assert!(
             stderr(&out).contains(expected),
             "{full:?}: {}",
@@ -370,7 +370,7 @@ fn play_and_topic_pub_publish_into_a_running_group() {
         );
     }
     let out = caravan(&["play", "/dev/null", "--group", g]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     let out = caravan(&[
         "play",
         mcap.to_str().unwrap(),

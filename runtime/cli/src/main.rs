@@ -83,6 +83,13 @@ fn main() -> ExitCode {
         Command::Record(args) => record::record(args).map(|_| ExitCode::SUCCESS),
         Command::Info(args) => info::info(&args).map(ExitCode::from),
         Command::Export(args) => export::export(&args).map(ExitCode::from),
+        Command::Report { run_dir } if !run_dir.join("run.json").is_file() => {
+            eprintln!(
+                "caravan: {} is not a run directory (it has no run.json)",
+                run_dir.display()
+            );
+            Ok(ExitCode::from(launch::EXIT_BAD_INPUT))
+        }
         Command::Report { run_dir } => report::write(&run_dir).map(|w| {
             println!("{}", report_summary(&w.report));
             for failure in &w.failures {
@@ -111,9 +118,10 @@ fn main() -> ExitCode {
             Ok(ExitCode::SUCCESS)
         }
     };
+    // Bad input exits 2, a run-time failure 1 (docs/launch.md, "Exit codes").
     result.unwrap_or_else(|e| {
         eprintln!("caravan: {e:#}");
-        ExitCode::FAILURE
+        ExitCode::from(caravan_group::bad_input::exit_code(&e))
     })
 }
 

@@ -1,5 +1,6 @@
 //! Finding running groups and removing what dead ones left behind (`caravan clean`).
 
+use crate::bad_input::bad;
 use anyhow::{Result, anyhow};
 use iceoryx2::node::{NodeState, NodeView};
 use iceoryx2::prelude::*;
@@ -120,16 +121,16 @@ pub fn choose_group(named: Option<&str>) -> Result<String> {
             [] => "no Caravan group is running".to_string(),
             list => format!("running: {}", list.join(", ")),
         };
-        return Err(anyhow!("no group '{g}' is running ({which})"));
+        return Err(bad(format!("no group '{g}' is running ({which})")));
     }
     match running.as_slice() {
         [one] => Ok(one.clone()),
-        [] => Err(anyhow!("no Caravan group is running")),
-        many => Err(anyhow!(
+        [] => Err(bad("no Caravan group is running")),
+        many => Err(bad(format!(
             "{} groups are running ({}); choose one with --group",
             many.len(),
             many.join(", ")
-        )),
+        ))),
     }
 }
 

@@ -1,9 +1,10 @@
 //! `caravan topic info` and `caravan node info`: who publishes and who subscribes what, read
 //! from the group's shared-memory services (as `ros2 topic info -v` and `ros2 node info`).
 
+use crate::bad_input::bad;
 use crate::clean::{LiveNode, live_nodes};
 use crate::watch::{follow, iox};
-use anyhow::{Result, anyhow};
+use anyhow::Result;
 use caravan::tap::{TopicInfo, TopicPorts, list_topics, topic_ports};
 use serde_json::{Value, json};
 use std::time::Duration;
@@ -43,7 +44,7 @@ impl Graph {
                 .filter(|n| !n.is_empty())
                 .collect();
             let hint = caravan_launch::suggest::hint(name, &names);
-            anyhow!("group '{group}' has no live node '{name}'{hint}")
+            bad(format!("group '{group}' has no live node '{name}'{hint}"))
         })
     }
 
@@ -84,7 +85,7 @@ pub fn topic_info(group: &str, topic: &str, as_json: bool) -> Result<()> {
         .topics
         .iter()
         .find(|(t, _)| t.name == topic)
-        .ok_or_else(|| anyhow!("group '{group}' has no topic '{topic}'"))?;
+        .ok_or_else(|| bad(format!("group '{group}' has no topic '{topic}'")))?;
     let publishers: Vec<Value> = ports.publishers.iter().map(|i| graph.name_of(i)).collect();
     let subscribers: Vec<Value> = ports.subscribers.iter().map(|i| graph.name_of(i)).collect();
     let delivery = if ports.lossless { "lossless" } else { "latest" };

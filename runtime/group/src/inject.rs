@@ -1,9 +1,10 @@
 //! Publishing into a running group from outside it: `caravan topic pub` (one message, at a
 //! rate, as `ros2 topic pub`). `caravan play` shares its pieces.
 
+use crate::bad_input::bad;
 use crate::clean::choose_group;
 use crate::watch::{GroupArg, GroupEnd, iox};
-use anyhow::{Result, anyhow, bail};
+use anyhow::Result;
 use caravan::inject::open_injector;
 use caravan::tap::list_topics;
 use caravan::{Delivery, Header};
@@ -57,28 +58,29 @@ fn topic_type(group: &str, topic: &str, given: Option<&str>) -> Result<String> {
         .find(|t| t.name == topic)
         .map(|t| t.type_name);
     match (found, given) {
-        (Some(found), Some(given)) if found != given => {
-            bail!("topic '{topic}' carries {found} in group '{group}', not {given}")
-        }
+        (Some(found), Some(given)) if found != given => Err(bad(format!(
+            "topic '{topic}' carries {found} in group '{group}', not {given}"
+        ))),
         (Some(found), _) => Ok(found),
         (None, Some(given)) => Ok(given.to_string()),
-        (None, None) => {
-            bail!("group '{group}' has no topic '{topic}'; give its type with --type to create it")
-        }
+        (None, None) => Err(bad(format!(
+            "group '{group}' has no topic '{topic}'; give its type with --type to create it"
+        ))),
     }
 }
 
 pub fn publish(args: &PubArgs) -> Result<()> {
     let group = choose_group(args.group.group.as_deref())?;
-    let json: Value =
-        serde_json::from_str(&args.message).map_err(|e| anyhow!("the message is not JSON: {e}"))?;
+    let json: Value = serde_json::from_str(&args.message)
+        .map_err(|e| bad(format!("the message is not JSON: {e}")))?;
     let type_name = topic_type(&group, &args.topic, args.type_name.as_deref())?;
     // Checked before joining the group, so a bad message leaves nothing behind.
-    let descriptor = caravan::types::lookup(&caravan::group::config(&group)?, &type_name)?;
+    let descriptor = caravan::types::lookup(&caravan::group::config(&group)?, &type_name)
+        .map_err(|e| bad(format!("{e:#}")))?;
     descriptor
         .default_bytes()
         .and_then(|mut bytes| descriptor.write(&json, &mut bytes))
-        .map_err(|e| anyhow!("{type_name}: {e}"))?;
+        .map_err(|e| bad(format!("{type_name}: {e}")))?;
     let (_config, node) = iox(&group)?;
     let injector = open_injector(
         &node,

@@ -148,6 +148,14 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
             return Ok(EXIT_BAD_INPUT);
         }
     };
+    // Runs go into a directory: a file there is bad input, found before anything starts.
+    if args.runs_dir.exists() && !args.runs_dir.is_dir() {
+        eprintln!(
+            "caravan: --runs-dir {}: exists and is not a directory",
+            args.runs_dir.display()
+        );
+        return Ok(EXIT_BAD_INPUT);
+    }
     let options = RunOptions {
         runs_dir: args.runs_dir.clone(),
         quiet: args.quiet,

@@ -13,6 +13,7 @@
 //! # }
 //! ```
 
+pub mod bad_input;
 mod bag;
 pub mod clean;
 pub mod graph;

@@ -8,6 +8,7 @@
 //!   was recorded, with its recorded header, so a node fed the recording sees what it saw
 //!   then. `caravan resim` is built on this.
 
+use crate::bad_input::{as_bad, bad};
 use crate::clean::choose_group;
 use crate::inject::{sleep_until, source_id};
 pub use crate::recording::{Recorded, Recording};
@@ -169,9 +170,9 @@ pub fn play(args: &PlayArgs) -> Result<()> {
     if args.in_group {
         return play_in_group(args);
     }
-    let recording = read_recording(&args.file, &args.topics)?;
+    let recording = read_recording(&args.file, &args.topics).map_err(as_bad)?;
     if recording.messages.is_empty() {
-        bail!(nothing_to_play(&args.file, &args.topics));
+        return Err(bad(nothing_to_play(&args.file, &args.topics)));
     }
     let group = choose_group(args.group.group.as_deref())?;
     let (config, node) = iox(&group)?;
@@ -284,7 +285,7 @@ impl InGroup {
 /// The player as a node of the group: a step at each recorded stamp publishes the messages
 /// stamped then, with their recorded headers.
 fn play_in_group(args: &PlayArgs) -> Result<()> {
-    let recording = read_recording(&args.file, &args.topics)?;
+    let recording = read_recording(&args.file, &args.topics).map_err(as_bad)?;
     let mut node = caravan::Node::from_env()?;
     recording.adopt_types(&caravan::group::config(node.group())?)?;
     let Recording {

@@ -1,6 +1,7 @@
 //! Watching a running group from outside it: joining its shared memory, following a topic's
 //! messages, noticing that the group has ended.
 
+use crate::bad_input::bad;
 use crate::clean::live_nodes;
 use anyhow::{Result, anyhow};
 use caravan::tap::{list_topics, open_listener, open_tap};
@@ -76,7 +77,7 @@ pub fn follow(
     let info = list_topics(&config, true)?
         .into_iter()
         .find(|t| t.name == topic)
-        .ok_or_else(|| anyhow!("group '{group}' has no topic '{topic}'"))?;
+        .ok_or_else(|| bad(format!("group '{group}' has no topic '{topic}'")))?;
     let tap = open_tap(&node, topic, &info.type_name)?;
     let listener = open_listener(&node, topic)?;
     let waitset = WaitSetBuilder::new()
