@@ -5,6 +5,9 @@
 
 use std::fmt;
 
+/// Exit code for bad input: nothing was started.
+pub const EXIT_BAD_INPUT: u8 = 2;
+
 /// The error's message, marked as bad input.
 #[derive(Debug)]
 pub struct BadInput(pub String);
@@ -30,7 +33,7 @@ pub fn as_bad(e: anyhow::Error) -> anyhow::Error {
 /// The exit code for a command's error: 2 when any cause is bad input, else 1.
 pub fn exit_code(e: &anyhow::Error) -> u8 {
     if e.chain().any(|cause| cause.is::<BadInput>()) {
-        crate::launch::EXIT_BAD_INPUT
+        EXIT_BAD_INPUT
     } else {
         1
     }

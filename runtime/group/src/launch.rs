@@ -91,8 +91,7 @@ pub struct Launched {
     pub dir: Option<PathBuf>,
 }
 
-/// Exit code for bad input: nothing was started.
-pub const EXIT_BAD_INPUT: u8 = 2;
+pub use crate::bad_input::EXIT_BAD_INPUT;
 
 /// Loads and validates the launch file with the command line's overrides; see [`load_file`].
 pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
