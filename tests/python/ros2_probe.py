@@ -20,8 +20,9 @@ Every sample received is one JSON line on stdout (flushed at once):
 floats appear as the strings "NaN", "Infinity", "-Infinity" (strict JSON has no literal for
 them; --json accepts the same strings, or the bare literals Python's json reads). The published
 message is built from --json (fields left out are zero) and written every 1/HZ s (default 10
-Hz) from the start. Exits 0 when the duration ends or, with --count, as soon as that many
-samples were received in total (a summary goes to stderr); exits 2 on bad arguments.
+Hz) from the start. Exits 0 when the duration ends, on SIGTERM (after taking what its readers
+still hold) or, with --count, as soon as that many samples were received in total (a summary
+goes to stderr); exits 2 on bad arguments.
 
 Discovery is confined to the loopback interface. The Cyclone DDS configuration (set as
 CYCLONEDDS_URI for this process before cyclonedds is imported; ROS2_PROBE_CYCLONEDDS_URI
@@ -60,6 +61,7 @@ import argparse
 import json
 import math
 import os
+import signal
 import sys
 import time
 
@@ -109,6 +111,17 @@ from cyclonedds.util import duration  # noqa: E402
 from ros2_msgs import TYPES, from_dict, to_dict  # noqa: E402
 
 MIN_WAIT = 0.005  # seconds: the shortest pause of the main loop
+# seconds: the longest, so that a SIGTERM (the test's "the group has ended") is seen soon
+MAX_WAIT = 0.25
+
+# Set by SIGTERM: take what the readers still hold, then end. A probe behind on a loaded
+# machine would otherwise lose the samples Cyclone DDS had already received for it.
+stopping = False
+
+
+def stop(_signum, _frame):
+    global stopping
+    stopping = True
 
 
 class UsageError(Exception):
@@ -280,10 +293,10 @@ def run(args):
                     if args.count is not None and received >= args.count:
                         return received, published
         now = time.monotonic()
-        if now >= end:
+        if now >= end or stopping:
             return received, published
         wake = end if writer is None else min(end, next_publish)
-        pause = max(wake - now, MIN_WAIT)
+        pause = min(max(wake - now, MIN_WAIT), MAX_WAIT)
         if readers:
             waitset.wait(duration(seconds=pause))
             # A sample that arrives while we are still in the previous batch keeps the waitset
@@ -300,6 +313,7 @@ def main(argv):
     except UsageError as e:
         print(f"ros2_probe: {e}", file=sys.stderr)
         return 2
+    signal.signal(signal.SIGTERM, stop)
     try:
         received, published = run(args)
     except KeyboardInterrupt:

@@ -123,7 +123,7 @@ fn info_on_a_file_that_is_not_a_recording_names_it_and_fails() {
     ] {
         let out = caravan_tests::caravan(&["info", path.to_str().unwrap()]);
         let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert_eq!(out.status.code(), Some(2), "{err}");
         assert!(
             err.contains(expected) && err.contains(path.to_str().unwrap()),
             "{err}"
