@@ -1,16 +1,18 @@
 //! Axes, their Cartesian product (cells), cell ids and seed specs.
 
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 
 /// One value of an axis: how it is named, and the `--set`s it applies.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AxisValue {
     pub label: String,
     pub sets: Vec<String>,
 }
 
 /// An axis: over one `--set` key (`key` is `Some`), or named, with bundles of sets as values.
-#[derive(Debug, Clone, PartialEq)]
+/// Shards' manifests hold them as JSON.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Axis {
     /// The key (plain axis) or the name (named axis): the axis' column in the summary.
     pub label: String,

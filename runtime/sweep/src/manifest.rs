@@ -6,7 +6,7 @@
 //! The manifest is written when the shard starts, before any run, so a shard that was killed
 //! still says what it was meant to run; what it finished is in its run directories.
 
-use super::grid::{Axis, AxisValue, fnv};
+use super::grid::{Axis, fnv};
 use super::shard::Shard;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
@@ -28,44 +28,7 @@ pub struct Definition {
     /// The overrides of every run.
     pub sets: Vec<String>,
     pub duration: Option<String>,
-    pub axes: Vec<ManifestAxis>,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ManifestAxis {
-    pub label: String,
-    pub key: Option<String>,
-    /// Each value: its label and the sets it applies.
-    pub values: Vec<(String, Vec<String>)>,
-}
-
-impl ManifestAxis {
-    pub fn from_axis(a: &Axis) -> Self {
-        Self {
-            label: a.label.clone(),
-            key: a.key.clone(),
-            values: a
-                .values
-                .iter()
-                .map(|v| (v.label.clone(), v.sets.clone()))
-                .collect(),
-        }
-    }
-
-    pub fn to_axis(&self) -> Axis {
-        Axis {
-            label: self.label.clone(),
-            key: self.key.clone(),
-            values: self
-                .values
-                .iter()
-                .map(|(label, sets)| AxisValue {
-                    label: label.clone(),
-                    sets: sets.clone(),
-                })
-                .collect(),
-        }
-    }
+    pub axes: Vec<Axis>,
 }
 
 impl Definition {
@@ -171,10 +134,10 @@ mod tests {
             seeds: vec![1, 2],
             sets: vec!["group.clock=\"lockstep\"".into()],
             duration: Some("2s".into()),
-            axes: vec![ManifestAxis::from_axis(&Axis::plain(
+            axes: vec![Axis::plain(
                 "process.pong.params.gain",
                 vec!["1".into(), "3".into()],
-            ))],
+            )],
         }
     }
 
@@ -189,7 +152,7 @@ mod tests {
         other.launch_hash = format!("{:016x}", fnv(b"[group] "));
         assert_ne!(base.fingerprint(), other.fingerprint());
         let mut other = definition();
-        other.axes[0].values[1].0 = "4".into();
+        other.axes[0].values[1].label = "4".into();
         assert_ne!(base.fingerprint(), other.fingerprint());
     }
 
@@ -207,9 +170,8 @@ mod tests {
         assert_eq!(read.len(), 1);
         assert!(read[0].0.ends_with("shards/2-of-3.json"));
         assert_eq!(read[0].1, m);
-        let axis = read[0].1.sweep.axes[0].to_axis();
         assert_eq!(
-            axis,
+            read[0].1.sweep.axes[0],
             Axis::plain("process.pong.params.gain", vec!["1".into(), "3".into()])
         );
         std::fs::write(dir.join("shards/x.json"), "{}").unwrap();

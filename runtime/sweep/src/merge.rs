@@ -49,8 +49,8 @@ pub fn run(args: &MergeArgs) -> Result<u8> {
         Err(problems) => return bad(problems),
     };
     let sweep = &manifests[0].1.sweep;
-    let axes: Vec<grid::Axis> = sweep.axes.iter().map(|a| a.to_axis()).collect();
-    let cells = grid::expand(&axes);
+    let axes = &sweep.axes;
+    let cells = grid::expand(axes);
 
     let mut results: Vec<Vec<summary::RunEntry>> = vec![Vec::new(); cells.len()];
     let mut missing = Vec::new();
@@ -98,7 +98,7 @@ pub fn run(args: &MergeArgs) -> Result<u8> {
         name: &sweep.name,
         launch: &sweep.launch,
         seeds: &sweep.seeds,
-        axes: &axes,
+        axes,
     };
     let doc = summary::summarise(&header, &cells, &results);
     std::fs::create_dir_all(&args.out)
@@ -205,7 +205,7 @@ fn differences(a: &manifest::Definition, b: &manifest::Definition) -> Vec<String
     let axes = |d: &manifest::Definition| {
         let each: Vec<String> = (d.axes.iter())
             .map(|a| {
-                let values: Vec<&str> = a.values.iter().map(|(v, _)| v.as_str()).collect();
+                let values: Vec<&str> = a.values.iter().map(|v| v.label.as_str()).collect();
                 format!("{}={}", a.label, values.join(","))
             })
             .collect();

@@ -4,7 +4,7 @@
 use super::SweepArgs;
 use super::file;
 use super::grid::{self, Axis, Cell};
-use super::manifest::{Definition, ManifestAxis, RunRef};
+use super::manifest::{Definition, RunRef};
 use super::shard::{self, Shard};
 use caravan_group::launch::LaunchArgs;
 use caravan_launch::LaunchError;
@@ -76,7 +76,7 @@ impl Plan {
             seeds: self.seeds.clone(),
             sets: self.sets.clone(),
             duration: self.duration.clone(),
-            axes: self.axes.iter().map(ManifestAxis::from_axis).collect(),
+            axes: self.axes.clone(),
         }
     }
 
