@@ -7,7 +7,10 @@
 //! error, which the launcher keeps in the run directory's logs.
 
 use iceoryx2::prelude::LogLevel;
-use std::sync::Once;
+use std::sync::{Once, OnceLock};
+use tracing_subscriber::Layer;
+use tracing_subscriber::layer::SubscriberExt;
+use tracing_subscriber::util::SubscriberInitExt;
 
 /// The environment variable that sets the level.
 pub const LEVEL_VAR: &str = "CARAVAN_LOG";
@@ -69,18 +72,64 @@ pub fn init(name: &str) {
         iceoryx2::prelude::set_log_level(iceoryx_level(&filter));
         iceoryx2::prelude::set_logger(&ICEORYX_TO_TRACING);
         let name = name.to_string();
-        let _ = tracing_subscriber::fmt()
-            .with_env_filter(filter)
+        let print = tracing_subscriber::fmt::layer()
             .with_writer(std::io::stderr)
             .without_time()
             .with_ansi(false)
             .fmt_fields(tracing_subscriber::fmt::format::DefaultFields::new())
             .event_format(Format { name })
+            .with_filter(filter);
+        let tap = Tap.with_filter(tracing_subscriber::EnvFilter::new(TAP_FILTER));
+        let _ = tracing_subscriber::registry()
+            .with(print)
+            .with(tap)
             .try_init();
         if let Some(e) = bad {
             tracing::warn!("{LEVEL_VAR}='{text}' is not a log filter ({e}); logging at warn");
         }
     });
+}
+
+/// What [`tap`] hears, whatever the level printed: zenoh's reasons for a failed connection,
+/// which it logs below the printed level (a refused certificate on the listening side, a
+/// failed dial on the dialling side).
+pub const TAP_FILTER: &str =
+    "off,zenoh_link_commons::quic=warn,zenoh::net::runtime::orchestrator=debug";
+
+/// A function given each event [`TAP_FILTER`] lets through: its target and its message.
+pub type Listener = Box<dyn Fn(&str, &str) + Send + Sync>;
+
+static TAPPED: OnceLock<Listener> = OnceLock::new();
+
+/// Hands the events of [`TAP_FILTER`] to `listener` from now on (once per process; a second
+/// call is ignored). The launcher of a host uses it to name the peer of a failed TLS
+/// handshake, which zenoh only logs.
+pub fn tap(listener: Listener) {
+    let _ = TAPPED.set(listener);
+}
+
+/// The layer behind [`tap`].
+struct Tap;
+
+impl<S: tracing::Subscriber> Layer<S> for Tap {
+    fn on_event(&self, event: &tracing::Event<'_>, _: tracing_subscriber::layer::Context<'_, S>) {
+        if let Some(listener) = TAPPED.get() {
+            let mut message = Message(String::new());
+            event.record(&mut message);
+            listener(event.metadata().target(), &message.0);
+        }
+    }
+}
+
+/// An event's `message` field as text.
+struct Message(String);
+
+impl tracing::field::Visit for Message {
+    fn record_debug(&mut self, field: &tracing::field::Field, value: &dyn std::fmt::Debug) {
+        if field.name() == "message" {
+            self.0 = format!("{value:?}");
+        }
+    }
 }
 
 /// `caravan[physics] WARN iceoryx2: message`: short, and says who spoke.

@@ -46,9 +46,42 @@ fn ip(args: &[&str]) -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// Removes the namespaces of earlier test processes that are gone (killed by a time limit
+/// before their `Drop` ran), with whatever still runs in them, as `caravan clean` does for
+/// groups. A namespace is `cv<PID>-…`; one whose test process lives is left alone.
+pub fn remove_stale_namespaces() {
+    let Ok(out) = Command::new("ip").args(["netns", "list"]).output() else {
+        return;
+    };
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let name = line.split_whitespace().next().unwrap_or_default();
+        let Some(pid) = name
+            .strip_prefix("cv")
+            .and_then(|rest| rest.split_once('-'))
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if std::path::Path::new(&format!("/proc/{pid}")).exists() {
+            continue;
+        }
+        let pids = Command::new("ip").args(["netns", "pids", name]).output();
+        for p in pids
+            .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+            .unwrap_or_default()
+            .split_whitespace()
+            .filter_map(|p| p.parse::<i32>().ok())
+        {
+            unsafe { libc::kill(p, libc::SIGKILL) };
+        }
+        ip(&["netns", "del", name]);
+    }
+}
+
 impl Hosts {
     /// Hosts named `names`; `tag` keeps this test's namespaces apart from others'.
     pub fn new(tag: &str, names: &[&str]) -> Self {
+        remove_stale_namespaces();
         let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
         let base = format!("cv{}-{tag}", std::process::id());
         let switch = format!("{base}-sw");
@@ -197,8 +230,13 @@ impl Launcher {
 
     /// As `start`, with its temporary, run and pid files under `dir`.
     pub fn start_in(hosts: &Hosts, host: &str, s: &crate::Scenario, dir: &std::path::Path) -> Self {
+        Self::start_file(hosts, host, &s.file, dir, &[])
+    }
+
+    /// `caravan launch FILE --host HOST EXTRA…` on `host`, its files under `dir`.
+    pub fn start_file(hosts: &Hosts, host: &str, file: &Path, dir: &Path, extra: &[&str]) -> Self {
         std::fs::create_dir_all(dir).unwrap();
-        let mut child = hosts.launch(host, &s.file, dir, &[]);
+        let mut child = hosts.launch(host, file, dir, extra);
         let err = Arc::new(Mutex::new(String::new()));
         let mut pipe = child.stderr.take().unwrap();
         let sink = err.clone();
@@ -232,7 +270,12 @@ impl Launcher {
 }
 
 pub fn pid_of(s: &crate::Scenario, host: &str) -> i32 {
-    std::fs::read_to_string(s.dir.join(format!("pid-{host}.txt")))
+    pid_in(&s.dir, host)
+}
+
+/// The pid of `host`'s launcher started with its files under `dir`.
+pub fn pid_in(dir: &Path, host: &str) -> i32 {
+    std::fs::read_to_string(dir.join(format!("pid-{host}.txt")))
         .unwrap()
         .trim()
         .parse()

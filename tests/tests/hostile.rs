@@ -314,3 +314,6 @@ fn inspection_commands_info_play_and_runs_dir_give_exit_2_for_bad_input() {
     assert!(stderr(&out).contains("not-a-dir"), "{}", stderr(&out));
     assert!(s.shm_entries().is_empty());
 }
+
+#[path = "hostile/round3.rs"]
+mod round3;

@@ -275,11 +275,18 @@ fn hosts_join_over_tls_only_with_the_groups_certificates() {
         Launcher::start(&hosts, "a", &s),
         Launcher::start(&hosts, "b", &s),
     );
+    // Each side names the other: a refused b's certificate, b's handshake with a failed.
     let (code, err) = a.finish();
     assert_eq!(code, Some(1), "{err}");
     assert!(err.contains("'b' did not join"), "{err}");
-    let (code, _) = b.finish();
-    assert_eq!(code, Some(1));
+    assert!(
+        err.contains("refused the certificate of a peer (host 'b', the only one not joined)"),
+        "{err}"
+    );
+    assert!(err.contains("not signed by the group's authority"), "{err}");
+    let (code, err) = b.finish();
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("TLS handshake with host 'a'"), "{err}");
 }
 
 #[test]
@@ -467,16 +474,24 @@ fn a_host_the_file_lacks_or_cannot_run_is_refused() {
         "endpoints must be quic/ADDRESS:PORT",
     ];
     assert_refused(&s, &out, &expected);
+    // A host's own tls files must be there; another host's need not (its key stays home).
     let s = Scenario::new(
         "hosts-tls-file",
-        &two_hosts("realtime", "").replace("[hosts.b]", &tls("nokey.pem")),
+        &two_hosts("realtime", "join_timeout = \"1s\"")
+            .replace("[hosts.a]", &tls(host_key).replace("hosts.b", "hosts.a"))
+            .replace("[hosts.b]", &tls("nokey.pem"))
+            .replace("tcp/", "quic/"),
     );
-    let out = s.run(&["--host", "a"]);
+    let out = s.run(&["--host", "b"]);
     assert_refused(
         &s,
         &out,
         &["launch.toml:", "key 'key'", "'nokey.pem' is not a file"],
     );
+    let out = s.run(&["--host", "a"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("'b' did not join"), "{err}");
     let s = Scenario::new(
         "hosts-lockstep-optional",
         &two_hosts("lockstep", "").replace("[hosts.b]", "[hosts.b]\nrequired = false"),
@@ -566,3 +581,10 @@ fn a_topic_read_and_published_as_different_types_on_two_hosts_fails_the_group() 
         ],
     );
 }
+
+#[path = "hosts/cleanup.rs"]
+mod cleanup;
+#[path = "hosts/keys.rs"]
+mod keys;
+#[path = "hosts/pause.rs"]
+mod pause;

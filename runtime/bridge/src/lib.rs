@@ -15,6 +15,7 @@
 
 pub mod causal;
 mod context;
+pub mod handshake;
 mod inbound;
 pub mod keys;
 mod outbound;
@@ -62,6 +63,15 @@ pub fn check_host(lf: &LaunchFile, host: &str) -> Result<()> {
         let hint = caravan_launch::suggest::hint(host, &names);
         bail!("--host {host}: {file} declares no host '{host}' under [hosts]{hint}");
     }
+    // Only this host's own files: the others' keys stay on their machines.
+    if let Some(tls) = &lf.hosts[host].tls
+        && !tls.missing.is_empty()
+    {
+        bail!(
+            "--host {host}: this machine lacks host '{host}''s tls files (each host needs its own ca, certificate and key, and no other host's):\n  {}",
+            tls.missing.join("\n  ")
+        );
+    }
     if lf.group.clock == caravan::ClockMode::Lockstep {
         clock_host(lf)?;
         // The scheduler would wait for its processes, and cannot learn of their exits.
@@ -102,7 +112,9 @@ pub fn clock_host(lf: &LaunchFile) -> Result<String> {
     }
 }
 
-pub fn session_config(spec: &HostSpec) -> Result<zenoh::Config> {
+/// The zenoh session of a host described by `spec`, in a group whose hosts are taken for gone
+/// after `lease` of silence (`group.host_lease`).
+pub fn session_config(spec: &HostSpec, lease: Duration) -> Result<zenoh::Config> {
     let list = |v: &[String]| serde_json::to_string(v).expect("strings serialise");
     let mut c = zenoh::Config::default();
     let mut set = |key: &str, value: &str| z(c.insert_json5(key, value));
@@ -143,8 +155,9 @@ pub fn session_config(spec: &HostSpec) -> Result<zenoh::Config> {
     set("connect/endpoints", &list(&spec.connect))?;
     // Bytes cross the network even between "hosts" on one machine.
     set("transport/shared_memory/enabled", "false")?;
-    // A host gone without closing its connections (power, cable) is noticed within 1 s.
-    set("transport/link/tx/lease", "1000")?;
+    // A host gone without closing its connections (power, cable) is noticed within a lease;
+    // one that exits or is killed closes them and is noticed at once.
+    set("transport/link/tx/lease", &lease.as_millis().to_string())?;
     set("transport/link/tx/keep_alive", "4")?;
     Ok(c)
 }
@@ -157,6 +170,8 @@ struct Shared {
     events: Mutex<Outbox>,
     /// Why this launcher must not run: another launcher of its host came first.
     conflict: Mutex<Option<String>>,
+    /// TLS handshakes that failed, each once, in the order seen.
+    handshakes: Mutex<Vec<handshake::Failure>>,
 }
 
 /// Where the bridge's events go: the launcher's main loop, in the launcher's own event type.
@@ -219,7 +234,7 @@ impl Bridge {
     pub fn open(lf: &LaunchFile, host: &str) -> Result<Self> {
         let group = lf.group.name.clone();
         let spec = &lf.hosts[host];
-        let session = z(zenoh::open(session_config(spec)?).wait())
+        let session = z(zenoh::open(session_config(spec, lf.group.host_lease)?).wait())
             .map_err(|e| anyhow!("host '{host}': cannot open its zenoh session: {e}"))?;
         let shared = Arc::new(Shared {
             presence: Mutex::new(Presence::new(
@@ -231,7 +246,23 @@ impl Bridge {
             changed: Condvar::new(),
             events: Mutex::new(Outbox::default()),
             conflict: Mutex::new(None),
+            handshakes: Mutex::new(Vec::new()),
         });
+        if spec.tls.is_some() {
+            let (shared, hosts) = (shared.clone(), lf.hosts.clone());
+            caravan::log::tap(Box::new(move |target, message| {
+                if let Some(failure) = handshake::parse(&hosts, target, message) {
+                    let mut seen = shared.handshakes.lock().unwrap();
+                    if !seen.contains(&failure) {
+                        seen.push(failure);
+                        drop(seen);
+                        // Under the lock the join wait holds: it cannot miss this.
+                        let _presence = shared.presence.lock().unwrap();
+                        shared.changed.notify_all();
+                    }
+                }
+            }));
+        }
         shared.presence.lock().unwrap().joined(host);
         let me_id = keys::LauncherId {
             start_ns: caravan::wall_clock_ns(),
@@ -326,7 +357,14 @@ impl Bridge {
         let deadline = Instant::now() + timeout;
         let mut presence = self.shared.presence.lock().unwrap();
         let mut said = false;
+        let mut told = 0;
         loop {
+            let missing = presence.missing();
+            let failures = self.shared.handshakes.lock().unwrap().clone();
+            for failure in &failures[told..] {
+                say(&failure.describe(&missing));
+            }
+            told = failures.len();
             if let Some(why) = self.shared.conflict.lock().unwrap().clone() {
                 bail!("{why}");
             }
@@ -337,14 +375,21 @@ impl Bridge {
                     quoted(&lost)
                 );
             }
-            let missing = presence.missing();
             if missing.is_empty() {
                 return Ok(());
             }
             let now = Instant::now();
             if now >= deadline {
+                let why = match failures.as_slice() {
+                    [] => "start `caravan launch FILE --host NAME` on each, and check their [hosts] listen / connect endpoints".to_string(),
+                    seen => seen
+                        .iter()
+                        .map(|f| f.describe(&missing))
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                };
                 bail!(
-                    "host(s) {} did not join within {timeout:?} (group.join_timeout): start `caravan launch FILE --host NAME` on each, and check their [hosts] listen / connect endpoints",
+                    "host(s) {} did not join within {timeout:?} (group.join_timeout): {why}",
                     quoted(&missing)
                 );
             }

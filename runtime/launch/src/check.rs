@@ -71,12 +71,23 @@ impl<'a> Checker<'a> {
         if self.silenced.iter().any(|s| path.starts_with(s)) {
             return;
         }
+        let problem = self.locate(path, message);
+        self.problems.push(problem);
+    }
+
+    /// A problem at `key` of `s` that is not reported now but kept for later (a file that
+    /// only one host must have), placed as [`Checker::problem`] would place it.
+    pub fn deferred_problem(&self, s: &Scope, key: &str, message: impl fmt::Display) -> Problem {
+        self.locate(&s.at(key), format!("{}, key '{key}': {message}", s.label))
+    }
+
+    fn locate(&self, path: &[Seg], message: String) -> Problem {
         let blamed = self
             .applied
             .iter()
             .rev()
             .find(|a| path.starts_with(&a.path));
-        let problem = match blamed {
+        match blamed {
             Some(a) => Problem {
                 location: format!("--set {}", a.text),
                 line: None,
@@ -89,11 +100,29 @@ impl<'a> Checker<'a> {
                     location: place.location,
                     line: place.line,
                     rank: place.rank,
-                    message,
+                    message: message + &self.arguments_behind(path),
                 }
             }
+        }
+    }
+
+    /// ` (from $(arg NAME), set by --set args.NAME=…)` for each argument set on the command
+    /// line that the value at `path` was written with: the line names the reference, the
+    /// `--set` the value.
+    fn arguments_behind(&self, path: &[Seg]) -> String {
+        let Some(written) = self.origins.written(path) else {
+            return String::new();
         };
-        self.problems.push(problem);
+        let mut notes = String::new();
+        for a in self.applied {
+            if let [Seg::Key(args), Seg::Key(name)] = a.path.as_slice()
+                && args == "args"
+                && written.contains(&format!("$(arg {name})"))
+            {
+                notes += &format!(" (from $(arg {name}), set by --set {})", a.text);
+            }
+        }
+        notes
     }
 
     pub fn key_problem(&mut self, s: &Scope, key: &str, message: impl fmt::Display) {

@@ -1,6 +1,6 @@
 //! Converters: an item of the document to a typed value, or a message saying what was expected.
 
-use super::model::Restart;
+use super::model::{GroupSpec, Restart};
 use super::overrides::Seg;
 use super::suggest;
 use std::collections::BTreeMap;
@@ -102,6 +102,16 @@ pub fn positive_duration(item: &Item) -> Result<Duration, String> {
     let d = duration(item)?;
     if d.is_zero() {
         return Err("must be greater than zero".into());
+    }
+    Ok(d)
+}
+
+/// `group.host_lease`: [`GroupSpec::MIN_HOST_LEASE`] to [`GroupSpec::MAX_HOST_LEASE`].
+pub fn host_lease(item: &Item) -> Result<Duration, String> {
+    let d = duration(item)?;
+    let (min, max) = (GroupSpec::MIN_HOST_LEASE, GroupSpec::MAX_HOST_LEASE);
+    if d < min || d > max {
+        return Err(format!("must be {min:?} to {max:?}, found {d:?}"));
     }
     Ok(d)
 }

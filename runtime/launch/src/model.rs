@@ -51,6 +51,12 @@ pub struct GroupSpec {
     /// Lockstep: wall time every process has, from its start, to join the schedule; the group
     /// fails when one has not (a program that never joins would stall it forever).
     pub join_timeout: Duration,
+    /// Across machines: how long a host's connections may stay silent before the other
+    /// hosts take it for gone (zenoh's lease; keep-alives go out four times per lease). A
+    /// host that exits or is killed closes its connections and is noticed at once; this
+    /// bounds only silence (a cable, power, a machine paused or starved of CPU).
+    /// [`GroupSpec::MIN_HOST_LEASE`] to [`GroupSpec::MAX_HOST_LEASE`].
+    pub host_lease: Duration,
     /// How long each node, and the lockstep scheduler, spins for its next message, grant or
     /// report before it sleeps ([`caravan::spin`]); a process's own `spin` overrides it. Zero,
     /// the default, sleeps at once.
@@ -62,6 +68,13 @@ impl GroupSpec {
     pub const DEFAULT_GRACE: Duration = Duration::from_secs(3);
     pub const DEFAULT_STEP_TIMEOUT: Duration = Duration::from_secs(30);
     pub const DEFAULT_JOIN_TIMEOUT: Duration = Duration::from_secs(60);
+    /// zenoh's own default. A loaded two-core machine can stall a launcher for over a second
+    /// (the 1 s lease Caravan used before failed 4 of ~30 three-host starts under load).
+    pub const DEFAULT_HOST_LEASE: Duration = Duration::from_secs(10);
+    /// Below this a scheduler hiccup passes for a lost host.
+    pub const MIN_HOST_LEASE: Duration = Duration::from_millis(500);
+    /// A lost host should not hold the group for longer than this.
+    pub const MAX_HOST_LEASE: Duration = Duration::from_secs(600);
 }
 
 /// One entry of `[hosts]`.
@@ -111,6 +124,10 @@ pub struct TlsSpec {
     pub certificate: PathBuf,
     /// Its private key.
     pub key: PathBuf,
+    /// Which of the three files do not exist here, each as a problem naming file, line and
+    /// key. Only the host itself needs them: `--host` refuses to start its own host with any
+    /// missing, and ignores the other hosts' (their keys stay on their machines).
+    pub missing: Vec<String>,
 }
 
 /// One `[[links]]` entry: the network between two sets of hosts.

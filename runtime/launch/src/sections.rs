@@ -27,6 +27,7 @@ const GROUP_KEYS: &[&str] = &[
     "grace",
     "step_timeout",
     "join_timeout",
+    "host_lease",
     "spin",
 ];
 const HOST_KEYS: &[&str] = &[
@@ -80,6 +81,7 @@ impl Checker<'_> {
             grace: GroupSpec::DEFAULT_GRACE,
             step_timeout: GroupSpec::DEFAULT_STEP_TIMEOUT,
             join_timeout: GroupSpec::DEFAULT_JOIN_TIMEOUT,
+            host_lease: GroupSpec::DEFAULT_HOST_LEASE,
             spin: Duration::ZERO,
         };
         let Some(s) = self.table(root, "group", "group".into(), Some(GROUP_KEYS)) else {
@@ -113,6 +115,9 @@ impl Checker<'_> {
         group.join_timeout = self
             .get(&s, "join_timeout", positive_duration)
             .unwrap_or(GroupSpec::DEFAULT_JOIN_TIMEOUT);
+        group.host_lease = self
+            .get(&s, "host_lease", host_lease)
+            .unwrap_or(GroupSpec::DEFAULT_HOST_LEASE);
         group.spin = self.get(&s, "spin", spin).unwrap_or_default();
         group
     }
@@ -189,26 +194,28 @@ impl Checker<'_> {
         hosts
     }
 
-    /// A host's `tls` table; each file must exist.
+    /// A host's `tls` table. Its files need exist only on the host itself (a private key
+    /// never leaves its machine): those missing are kept in [`TlsSpec::missing`] for
+    /// `--host` to report.
     fn tls(&mut self, h: &Scope, name: &str) -> Option<TlsSpec> {
         let t = self.table(h, "tls", format!("host '{name}' tls"), Some(TLS_KEYS))?;
         let dir = self.origins.entry(&t.path).0.abs_dir.clone();
+        let mut missing = Vec::new();
         let mut file = |key: &str| {
             let given = self.required(&t, key, string)?;
             let path = dir.join(&given);
-            if path.is_file() {
-                Some(path)
-            } else {
+            if !path.is_file() {
                 let msg = format!("'{given}' is not a file ({})", path.display());
-                self.key_problem(&t, key, msg);
-                None
+                missing.push(self.deferred_problem(&t, key, msg).to_string());
             }
+            Some(path)
         };
         let (ca, certificate, key) = (file("ca"), file("certificate"), file("key"));
         Some(TlsSpec {
             ca: ca?,
             certificate: certificate?,
             key: key?,
+            missing,
         })
     }
 

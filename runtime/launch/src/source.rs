@@ -196,6 +196,22 @@ impl Origins {
         }
     }
 
+    /// The string written in a file at `path`, before arguments were substituted (`None`
+    /// when `path` holds no string there, or a `set` wrote it).
+    pub fn written(&self, path: &[Seg]) -> Option<String> {
+        let Origin::File { source, path, .. } = self.origin_of(path) else {
+            return None;
+        };
+        let mut item = source.original.as_item();
+        for seg in &path {
+            item = match seg {
+                Seg::Key(k) => item.get(k.as_str())?,
+                Seg::Index(i) => item.get(*i)?,
+            };
+        }
+        item.as_str().map(str::to_string)
+    }
+
     pub fn place(&self, path: &[Seg]) -> Place {
         match self.origin_of(path) {
             Origin::File { source, path, .. } => {

@@ -12,17 +12,16 @@
 //! The relays run in a process of their own because a relay never serves readers in its own
 //! process (it takes them for its launcher's recorder and scheduler).
 //!
-//! Their sessions take the launcher's settings but for the lease: the launcher's 1 s notices a
-//! silent host quickly, and a relays' process held off the CPU for longer than that on a
-//! loaded machine (CI) closed the link and lost the message in flight, on which the measuring
-//! side then waited for good. The bench measures the path, not the launcher's fault detection.
+//! Their sessions take the launcher's settings, with its default lease (`group.host_lease`,
+//! 10 s): a relays' process held off the CPU for longer than a short lease on a loaded
+//! machine (CI) closed the link and lost the message in flight.
 
 use super::{Pair, await_ready, ready, stop_child, temp_path};
 use anyhow::{Context, Result};
 use caravan::schemas::lockstep::name_hash;
 use caravan_bridge::relay::{Relay, RelayConfig};
 use caravan_bridge::{session_config, z};
-use caravan_launch::model::HostSpec;
+use caravan_launch::model::{GroupSpec, HostSpec};
 use clap::Args;
 use std::io::Read;
 use std::path::PathBuf;
@@ -40,9 +39,6 @@ pub struct RelaysArgs {
     #[arg(long)]
     endpoint: String,
 }
-
-/// The relays' zenoh lease, ms: zenoh's default, not the launcher's 1 s (see the module doc).
-const LEASE_MS: u64 = 10_000;
 
 /// The iceoryx2 namespace of `host` in bench group `group`.
 fn namespace(group: &str, host: &str) -> String {
@@ -88,8 +84,7 @@ pub fn relays(args: &RelaysArgs) -> Result<()> {
     };
     let mut running = Vec::new();
     for ((host, node), spec) in HOSTS.into_iter().zip([listen, connect]) {
-        let mut config = session_config(&spec)?;
-        z(config.insert_json5("transport/link/tx/lease", &LEASE_MS.to_string()))?;
+        let config = session_config(&spec, GroupSpec::DEFAULT_HOST_LEASE)?;
         let session = z(zenoh::open(config).wait())
             .with_context(|| format!("host '{host}': cannot open its zenoh session"))?;
         let iceoryx = super::iceoryx2_raw::config(&namespace(&args.group, host))?;

@@ -47,7 +47,7 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
                 std::thread::spawn(move || {
                     let _ = tx.send(child.wait_with_output());
                 });
-                running.push((index, name, plan.program, pid, rx));
+                running.push((index, name, plan.program, plan.spec.params.clone(), pid, rx));
             }
             Err(e) => problems.push(problem(
                 index,
@@ -59,7 +59,7 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
         }
     }
     let deadline = Instant::now() + CHECK_TIMEOUT;
-    for (index, name, program, pid, rx) in running {
+    for (index, name, program, params, pid, rx) in running {
         // A check longer than a few seconds is said once, so a slow one is not taken for a hang.
         let said = Instant::now() + Duration::from_secs(10);
         let mut received =
@@ -90,7 +90,7 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
             }
             Err(RecvTimeoutError::Disconnected) => continue,
         };
-        if let Some(p) = judge(index, &name, &program, output) {
+        if let Some(p) = judge(index, &name, &program, &params, output) {
             problems.push(p);
         }
     }
@@ -121,6 +121,7 @@ fn judge(
     index: usize,
     name: &str,
     program: &Path,
+    params: &serde_json::Value,
     output: std::io::Result<Output>,
 ) -> Option<ProcessProblem> {
     let output = match output {
@@ -130,12 +131,17 @@ fn judge(
     };
     let stderr = String::from_utf8_lossy(&output.stderr);
     let text = tidy(stderr.trim(), name, program);
+    let named = named_key(text);
+    let found = named.is_none().then(|| key_of_quoted_value(text, params)).flatten();
     let message = match (output.status.code(), text.is_empty()) {
-        (_, false) => format!("process '{name}': {text}"),
+        (_, false) => match &found {
+            Some(key) => format!("process '{name}', key '{key}': {text}"),
+            None => format!("process '{name}': {text}"),
+        },
         (Some(code), true) => format!("process '{name}': its check exited {code}"),
         (None, true) => format!("process '{name}': its check was killed by a signal"),
     };
-    let key = named_key(text);
+    let key = named.or(found);
     Some(ProcessProblem {
         index,
         key,
@@ -164,6 +170,61 @@ fn named_key(text: &str) -> Option<String> {
     Some(text[start..start + len].to_string()).filter(|k| !k.is_empty())
 }
 
+/// The params key a message that names none is about, found by the value it quotes (serde
+/// names no key inside an internally tagged enum: `invalid type: string "steep", expected
+/// f64`). Only a value that exactly one key holds names it.
+fn key_of_quoted_value(text: &str, params: &serde_json::Value) -> Option<String> {
+    let quoted = quoted_value(text)?;
+    let mut found = Vec::new();
+    leaves(params, String::new(), &mut |path, value| {
+        let same = match value {
+            serde_json::Value::String(s) => quoted == format!("\"{s}\""),
+            other => quoted == other.to_string(),
+        };
+        if same {
+            found.push(path);
+        }
+    });
+    match found.as_slice() {
+        [one] => Some(one.clone()),
+        _ => None,
+    }
+}
+
+/// serde's rendering of the bad value: `string "x"` (quotes kept), or `` integer `3` `` and
+/// `` floating point `1.5` `` (the number).
+fn quoted_value(text: &str) -> Option<String> {
+    let after = |marker: &str| text.find(marker).map(|i| &text[i + marker.len()..]);
+    if let Some(rest) = after("string \"") {
+        let end = rest.find('"')?;
+        return Some(format!("\"{}\"", &rest[..end]));
+    }
+    let rest = after("integer `").or_else(|| after("floating point `"))?;
+    Some(rest[..rest.find('`')?].to_string())
+}
+
+/// Calls `f` with the dotted path (`a.b[2].c`) and value of every leaf of `v`.
+fn leaves(v: &serde_json::Value, path: String, f: &mut dyn FnMut(String, &serde_json::Value)) {
+    match v {
+        serde_json::Value::Object(map) => {
+            for (k, child) in map {
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                leaves(child, p, f);
+            }
+        }
+        serde_json::Value::Array(list) => {
+            for (i, child) in list.iter().enumerate() {
+                leaves(child, format!("{path}[{i}]"), f);
+            }
+        }
+        leaf => f(path, leaf),
+    }
+}
+
 fn problem(index: usize, message: String) -> ProcessProblem {
     ProcessProblem {
         index,
@@ -183,6 +244,21 @@ mod tests {
             Some("poses[0].x")
         );
         assert_eq!(named_key("cannot read world.toml"), None);
+    }
+
+    #[test]
+    fn preflight_finds_the_key_of_a_quoted_value() {
+        let params = serde_json::json!({
+            "scenario": "tilt", "angle_deg": "steep", "poses": [{"x": 1.5}], "n": 3, "m": 3
+        });
+        let key = |text| key_of_quoted_value(text, &params);
+        let text = r#"invalid type: string "steep", expected f64"#;
+        assert_eq!(key(text).as_deref(), Some("angle_deg"));
+        let text = "invalid type: floating point `1.5`, expected u32";
+        assert_eq!(key(text).as_deref(), Some("poses[0].x"));
+        // Two keys hold 3: neither is named.
+        assert_eq!(key("invalid type: integer `3`, expected a string"), None);
+        assert_eq!(key("cannot read world.toml"), None);
     }
 
     #[test]

@@ -68,10 +68,13 @@ fn launch_template_bad_ranges_are_named() {
             "FILE:10: process 'sensor-{i}', key 'for': 'i in 1...4' is not a template range; write for = \"i in 0..4\" (4 excluded) or \"i in 1..=4\""
         ]
     );
+    // The line shows the reference; the message names the --set that gave its value.
     let lines = errors(TEMPLATED, &["args.n=1"]);
     assert_eq!(
         lines,
-        ["FILE:10: process 'sensor-{i}', key 'for': the range '1..1' is empty"]
+        [
+            "FILE:10: process 'sensor-{i}', key 'for': the range '1..1' is empty (from $(arg n), set by --set args.n=1)"
+        ]
     );
     let lines = errors(
         &TEMPLATED.replace("for = \"i in 1..$(arg n)\"", "for = 3"),
