@@ -221,9 +221,14 @@ impl Drop for Hosts {
 pub struct Launcher {
     child: Child,
     err: Arc<Mutex<String>>,
+    /// Where the wrapper wrote the launcher's pid.
+    pid_file: PathBuf,
 }
 
 impl Launcher {
+    /// How long [`Launcher::finish`] waits: less than the runner's time limit for these tests.
+    pub const PATIENCE: std::time::Duration = std::time::Duration::from_secs(150);
+
     pub fn start(hosts: &Hosts, host: &str, s: &crate::Scenario) -> Self {
         Self::start_in(hosts, host, s, &s.dir)
     }
@@ -251,16 +256,44 @@ impl Launcher {
                     .push_str(&String::from_utf8_lossy(&buf[..n]));
             }
         });
-        Self { child, err }
+        let pid_file = dir.join(format!("pid-{host}.txt"));
+        Self {
+            child,
+            err,
+            pid_file,
+        }
     }
 
     pub fn stderr(&self) -> String {
         self.err.lock().unwrap().clone()
     }
 
-    /// Waits for the launcher (and its host's listing of /dev/shm) to end.
+    /// Waits for the launcher (and its host's listing of /dev/shm) to end. A launcher still
+    /// running after [`Launcher::PATIENCE`] is killed and the test fails with its output, so
+    /// a hang is reported with what the launcher said, not by the runner's time limit (which
+    /// would leave the launcher running).
     pub fn finish(mut self) -> (Option<i32>, String) {
-        let status = self.child.wait().unwrap();
+        let started = std::time::Instant::now();
+        let status = loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                break status;
+            }
+            if started.elapsed() > Self::PATIENCE {
+                // The launcher (its pid is in the host's folder), then the wrapper.
+                let pid = std::fs::read_to_string(&self.pid_file).unwrap_or_default();
+                if let Ok(pid) = pid.trim().parse::<i32>() {
+                    unsafe { libc::kill(pid, libc::SIGKILL) };
+                }
+                let _ = self.child.kill();
+                let _ = self.child.wait();
+                panic!(
+                    "a launcher did not end within {:?} (killed); it said:\n{}",
+                    Self::PATIENCE,
+                    self.stderr()
+                );
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        };
         // The reader thread ends with the pipe; give it the last lines.
         crate::wait_until("the launcher's output is read", || {
             Arc::strong_count(&self.err) == 1

@@ -41,6 +41,12 @@ pub fn unique_group(tag: &str) -> String {
 ///
 /// Cargo builds only the test package's own binaries for its tests, so the first call builds
 /// every workspace binary (a no-op when they are fresh) so tests never run stale launchers.
+///
+/// Under nextest every test is a process of its own; one build per run is enough (sources do
+/// not change during a run). The first test of a run (`NEXTEST_RUN_ID`) to get here builds,
+/// under a file lock, and leaves a marker; the others only wait for the lock. Before, every
+/// test ran `cargo build` and queued on cargo's lock: a 2 s host test waited up to 170 s
+/// while anything else built, and ran into its time limit.
 pub fn workspace_bin(name: &str) -> std::path::PathBuf {
     static BUILD: std::sync::Once = std::sync::Once::new();
     let exe = std::env::current_exe().expect("test executable path");
@@ -48,7 +54,36 @@ pub fn workspace_bin(name: &str) -> std::path::PathBuf {
         .parent()
         .and_then(|deps| deps.parent())
         .expect("target layout");
-    BUILD.call_once(|| {
+    BUILD.call_once(|| build_once_per_run(profile_dir));
+    let path = profile_dir.join(name);
+    assert!(
+        path.exists(),
+        "{} is not built; run the tests with `cargo nextest run --workspace`",
+        path.display()
+    );
+    path
+}
+
+/// Builds the workspace's binaries, once per nextest run (see [`workspace_bin`]).
+fn build_once_per_run(profile_dir: &std::path::Path) {
+    use std::os::fd::AsRawFd;
+    let Ok(run) = std::env::var("NEXTEST_RUN_ID") else {
+        return build_binaries(profile_dir);
+    };
+    let lock = std::fs::File::create(profile_dir.join(".caravan-bins.lock"))
+        .expect("create the binaries' build lock");
+    // SAFETY: flock(2) on a file this function holds open; released when it is dropped.
+    unsafe { libc::flock(lock.as_raw_fd(), libc::LOCK_EX) };
+    let marker = profile_dir.join(".caravan-bins.run");
+    if std::fs::read_to_string(&marker).is_ok_and(|built| built == run) {
+        return;
+    }
+    build_binaries(profile_dir);
+    std::fs::write(&marker, &run).expect("write the binaries' build marker");
+}
+
+fn build_binaries(profile_dir: &std::path::Path) {
+    {
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
         let mut cmd = Command::new(cargo);
         cmd.args(["build", "--quiet", "--workspace", "--bins"]);
@@ -57,14 +92,7 @@ pub fn workspace_bin(name: &str) -> std::path::PathBuf {
         }
         let status = cmd.status().expect("cannot run cargo build");
         assert!(status.success(), "building the workspace binaries failed");
-    });
-    let path = profile_dir.join(name);
-    assert!(
-        path.exists(),
-        "{} is not built; run the tests with `cargo nextest run --workspace`",
-        path.display()
-    );
-    path
+    }
 }
 
 /// Command for the test node binary, set up as a node of `group`.

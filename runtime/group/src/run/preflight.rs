@@ -132,7 +132,10 @@ fn judge(
     let stderr = String::from_utf8_lossy(&output.stderr);
     let text = tidy(stderr.trim(), name, program);
     let named = named_key(text);
-    let found = named.is_none().then(|| key_of_quoted_value(text, params)).flatten();
+    let found = named
+        .is_none()
+        .then(|| key_of_quoted_value(text, params))
+        .flatten();
     let message = match (output.status.code(), text.is_empty()) {
         (_, false) => match &found {
             Some(key) => format!("process '{name}', key '{key}': {text}"),
@@ -179,7 +182,8 @@ fn key_of_quoted_value(text: &str, params: &serde_json::Value) -> Option<String>
     leaves(params, String::new(), &mut |path, value| {
         let same = match value {
             serde_json::Value::String(s) => quoted == format!("\"{s}\""),
-            other => quoted == other.to_string(),
+            // A number as serde prints it (`1.5`, `3`).
+            other => quoted == serde_json::to_string(other).unwrap_or_default(),
         };
         if same {
             found.push(path);
