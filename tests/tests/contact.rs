@@ -60,3 +60,41 @@ fn bad_contact_input_is_named_and_fails_the_launch() {
         assert!(err.contains(key), "{set}: {err}");
     }
 }
+
+/// Params out of their physical range (processes/contact/src/range.rs), refused before start.
+#[path = "ranges/refused.rs"]
+mod refused;
+use refused::assert_refused_before_start;
+
+#[test]
+fn a_contact_sigma_of_1e308_is_refused_before_start() {
+    assert_refused_before_start(
+        "contact/push.toml",
+        "args.sigma=1e308",
+        "estimator.torque_sigma",
+    );
+}
+
+#[test]
+fn a_contact_report_sigma_of_1e308_is_refused_before_start() {
+    // The report plugin alone: the perception keeps the shipped σ.
+    assert_refused_before_start("contact/push.toml", "report.0.params.sigma=1e308", "sigma");
+}
+
+#[test]
+fn an_arm_link_radius_of_1e308_is_refused_before_start() {
+    assert_refused_before_start(
+        "contact/push.toml",
+        "process.contact-id.params.arm.link_radius=1e308",
+        "arm.link_radius",
+    );
+}
+
+#[test]
+fn a_push_force_of_1e308_n_is_refused_before_start() {
+    assert_refused_before_start(
+        "contact/push.toml",
+        "process.driver.params.push.force_n=[1e308, 1e308]",
+        "push.force_n",
+    );
+}

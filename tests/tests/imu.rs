@@ -154,3 +154,38 @@ fn the_allan_deviation_of_a_still_group_recovers_the_error_model() {
     }
     assert_eq!(imu["within_10_percent"], true);
 }
+
+/// Params out of their physical range (processes/imu/src/range.rs), refused before start.
+#[path = "ranges/refused.rs"]
+mod refused;
+use refused::assert_refused_before_start;
+
+#[test]
+fn an_imu_hold_of_1e308_s_is_refused_before_start() {
+    assert_refused_before_start("imu/tilt.toml", "args.hold_s=1e308", "hold_s");
+}
+
+#[test]
+fn an_imu_tilt_rate_of_1e_300_deg_s_is_refused_before_start() {
+    assert_refused_before_start("imu/tilt.toml", "args.rate_deg_s=1e-300", "rate_deg_s");
+}
+
+#[test]
+fn an_imu_rotation_radius_of_1e308_m_is_refused_before_start() {
+    assert_refused_before_start("imu/rotation.toml", "args.radius_m=1e308", "radius_m");
+}
+
+#[test]
+fn an_imu_lift_force_of_1e308_n_is_refused_before_start() {
+    assert_refused_before_start(
+        "imu/lift.toml",
+        "process.driver.params.force_n=1e308",
+        "force_n",
+    );
+}
+
+#[test]
+fn an_imu_report_hold_of_1e308_s_is_refused_before_start() {
+    // The report plugin alone: the driver keeps the shipped hold.
+    assert_refused_before_start("imu/tilt.toml", "report.0.params.hold_s=1e308", "hold_s");
+}

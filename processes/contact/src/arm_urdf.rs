@@ -9,7 +9,7 @@
 //! uses is the stadium of [`PlanarArm::radius`], a parameter beside the URDF.
 
 use crate::planar_arm::PlanarArm;
-use caravan_world::description::{JointKind, RobotDescription};
+use caravan_world::description::{JointKind, Limits, RobotDescription};
 use nalgebra::Point2;
 use std::fmt::Write;
 
@@ -21,12 +21,16 @@ pub const EFFORT_N_M: f64 = 400.0;
 /// The generated joints' speed limit, rad/s.
 pub const VELOCITY_RAD_S: f64 = 2.0;
 
-/// The arm's geometry with the URDF names of its links and joints, index for index.
+/// The arm's geometry with the URDF names of its links and joints and the joints' limits,
+/// index for index.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ArmModel {
     pub arm: PlanarArm,
     pub links: Vec<String>,
     pub joints: Vec<String>,
+    /// Each joint's `<limit>`: its angle range (rad) and its effort (N·m; ∞ where the URDF
+    /// gives none).
+    pub limits: Vec<Limits>,
 }
 
 /// The URDF of `arm`: links `link1`…`linkN` (boxes of mass [`MASS_PER_M`]·L, 2r wide),
@@ -91,6 +95,7 @@ pub fn from_description(d: &RobotDescription, radius: f64) -> Result<ArmModel, S
     let mut lengths = Vec::new();
     let mut links = Vec::new();
     let mut joints = Vec::new();
+    let mut limits = Vec::new();
     for (k, &j) in chain.iter().enumerate() {
         let joint = &d.joints[j];
         if !matches!(joint.kind, JointKind::Revolute | JointKind::Continuous) {
@@ -137,6 +142,7 @@ pub fn from_description(d: &RobotDescription, radius: f64) -> Result<ArmModel, S
         }
         links.push(d.links[joint.child].name.clone());
         joints.push(joint.name.clone());
+        limits.push(joint.limits);
     }
     let Some(&last) = chain.last() else {
         return Err(format!(
@@ -163,7 +169,12 @@ pub fn from_description(d: &RobotDescription, radius: f64) -> Result<ArmModel, S
     }
     lengths.push(o.x);
     let arm = PlanarArm::new(base, lengths, radius).map_err(|e| format!("{}: {e}", d.file))?;
-    Ok(ArmModel { arm, links, joints })
+    Ok(ArmModel {
+        arm,
+        links,
+        joints,
+        limits,
+    })
 }
 
 #[cfg(test)]
@@ -183,6 +194,8 @@ mod tests {
         assert_eq!(model.arm, arm);
         assert_eq!(model.links, ["link1", "link2", "link3", "link4", "link5"]);
         assert_eq!(model.joints[4], "joint5");
+        assert_eq!(model.limits[4].effort, EFFORT_N_M);
+        assert!((model.limits[0].upper - std::f64::consts::PI).abs() < 1e-8);
     }
 
     #[test]

@@ -16,6 +16,7 @@
 //! - [`table`]: the Monte-Carlo trials summarised beside the reference's table;
 //! - [`plot`]: the live run's plot;
 //! - [`push`]: random poses and pushes, for the Monte-Carlo and the scripted person;
+//! - [`range`]: the physical range of every param, checked before the group starts;
 
 pub mod arm_urdf;
 pub mod contour;
@@ -29,6 +30,7 @@ pub mod optimiser;
 pub mod planar_arm;
 pub mod plot;
 pub mod push;
+pub mod range;
 pub mod report;
 pub mod scenario;
 pub mod table;

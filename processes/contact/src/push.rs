@@ -106,6 +106,27 @@ impl PushSpec {
     }
 }
 
+/// The largest push on `links` (0-based) that every joint of the arm in `pose` holds, N, with
+/// the joint that limits it and its lever (m): joint i holds `efforts[i]` (N·m), and a push
+/// acts on it at most as far as the farthest point of a pushed link beyond it. A harder push
+/// saturates the joint's actuator, the arm gives way, and the static identification has no
+/// pose to hold the push in. `f64::INFINITY` (and joint 0) where no effort is finite.
+pub fn holding_force_n(pose: &ArmPose, efforts: &[f64], links: &[usize]) -> (f64, usize, f64) {
+    let mut best = (f64::INFINITY, 0, 0.0);
+    for (i, (joint, effort)) in pose.joints.iter().zip(efforts).enumerate() {
+        let lever = links
+            .iter()
+            .filter(|&&l| l >= i)
+            .flat_map(|&l| pose.contours[l].vertices.iter())
+            .map(|v| (v - joint).norm())
+            .fold(0.0, f64::max);
+        if lever > 0.0 && effort / lever < best.0 {
+            best = (effort / lever, i, lever);
+        }
+    }
+    best
+}
+
 /// Joint angles drawn uniformly within `limits` (rad, one (lower, upper) per joint).
 pub fn sample_angles(limits: &[(f64, f64)], g: &mut Gaussian) -> Vec<f64> {
     limits
@@ -149,5 +170,19 @@ mod tests {
         }
         assert_eq!(seen[0] + seen[1] + seen[4], 0);
         assert!(seen[2] > 150 && seen[3] > 150, "{seen:?}");
+    }
+
+    #[test]
+    fn the_holding_force_is_the_weakest_joints_effort_over_its_longest_lever() {
+        let arm = PlanarArm::new(Point2::origin(), vec![1.0, 1.0, 1.0], 0.1).unwrap();
+        let pose = arm.pose(&[0.0; 3]);
+        // A push on link 2 (index 1) reaches 2.1 m from joint 0 (its tip plus the radius,
+        // the contour's farthest vertex) and 1.1 m from joint 1; joint 2 carries none.
+        let (f, joint, lever) = holding_force_n(&pose, &[400.0, 100.0, 1.0], &[1]);
+        assert_eq!(joint, 1);
+        assert!((lever - 1.1).abs() < 5e-3, "{lever}");
+        assert!((f - 100.0 / lever).abs() < 1e-9, "{f}");
+        let (f, joint, _) = holding_force_n(&pose, &[f64::INFINITY; 3], &[1]);
+        assert_eq!((f, joint), (f64::INFINITY, 0));
     }
 }

@@ -10,6 +10,7 @@ use crate::arm_urdf::ArmModel;
 use crate::live::{AppliedPush, EstimateAt, LinkPoses, score};
 use crate::messages::ContactEstimate;
 use crate::monte_carlo::{Config, run_level};
+use crate::range::{MAX_MU, MAX_REPORT_TRIALS, MAX_TIME_S, MAX_TORQUE_NOISE_N_M, between};
 use crate::scenario::ArmParams;
 use crate::table::{Mean, row};
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
@@ -25,17 +26,17 @@ pub const PLOT_FILE: &str = "contact.svg";
 #[serde(deny_unknown_fields)]
 pub struct Params {
     pub arm: ArmParams,
-    /// The perception's torque noise σ, N·m ≥ 0 (`estimator.torque_sigma`).
+    /// The perception's torque noise σ, N·m, 0 to 20 (`estimator.torque_sigma`).
     pub sigma: f64,
-    /// Estimates this long after a push begins or ends are left out, s ≥ 0: the position
-    /// loops take about 0.75 s to bring the arm to rest again (before, the torques carry
-    /// the arm's inertia, not only the push).
+    /// Estimates this long after a push begins or ends are left out, s, 0 to 86 400: the
+    /// position loops take about 0.75 s to bring the arm to rest again (before, the torques
+    /// carry the arm's inertia, not only the push).
     #[serde(default = "settle")]
     pub settle_s: f64,
-    /// Friction coefficient of the pushes, ≥ 0.
+    /// Friction coefficient of the pushes, 0 to 5.
     #[serde(default = "mu")]
     pub mu: f64,
-    /// Monte-Carlo trials at the run's pose, ≥ 1.
+    /// Monte-Carlo trials at the run's pose, 1 to 100 000.
     #[serde(default = "trials")]
     pub monte_carlo_trials: usize,
 }
@@ -75,13 +76,16 @@ impl ReportPlugin for ContactReport {
     type Params = Params;
 
     fn new(p: Params, inputs: &Inputs) -> Result<Self, String> {
-        let model = p.arm.load(&inputs.path(&p.arm.urdf))?;
-        let ok = |x: f64| x.is_finite() && x >= 0.0;
-        if !(ok(p.sigma) && ok(p.settle_s) && ok(p.mu) && p.monte_carlo_trials >= 1) {
-            return Err(
-                "keys 'sigma', 'settle_s', 'mu' must be ≥ 0 and 'monte_carlo_trials' ≥ 1".into(),
-            );
+        between("sigma", p.sigma, 0.0, MAX_TORQUE_NOISE_N_M, "N·m")?;
+        between("settle_s", p.settle_s, 0.0, MAX_TIME_S, "s")?;
+        between("mu", p.mu, 0.0, MAX_MU, "")?;
+        if !(1..=MAX_REPORT_TRIALS).contains(&p.monte_carlo_trials) {
+            return Err(format!(
+                "key 'monte_carlo_trials': must be between 1 and {MAX_REPORT_TRIALS}, got {}",
+                p.monte_carlo_trials
+            ));
         }
+        let model = p.arm.load(&inputs.path(&p.arm.urdf))?;
         Ok(Self { p, model })
     }
 
@@ -250,4 +254,46 @@ fn markdown(
         live.between_pushes
     );
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    /// The report's params with `over` over the shipped ones; the arm's URDF is not read
+    /// before the numbers are checked.
+    fn new(over: Value) -> Result<(), String> {
+        let mut p = json!({ "arm": { "urdf": "none.urdf" }, "sigma": 0.1, "settle_s": 0.75 });
+        p.as_object_mut()
+            .unwrap()
+            .extend(over.as_object().unwrap().clone());
+        let p: Params = serde_json::from_value(p).unwrap();
+        let inputs = Inputs {
+            launch_dir: ".".into(),
+        };
+        ContactReport::new(p, &inputs).map(|_| ())
+    }
+
+    #[test]
+    fn report_params_out_of_range_are_named_before_the_urdf_is_read() {
+        assert!(new(json!({})).unwrap_err().contains("none.urdf"));
+        for (bad, key) in [
+            (json!({ "sigma": 1e308 }), "sigma"),
+            (json!({ "settle_s": 1e308 }), "settle_s"),
+            (json!({ "mu": f64::MAX }), "mu"),
+            (
+                json!({ "monte_carlo_trials": 4_000_000_000u64 }),
+                "monte_carlo_trials",
+            ),
+            (json!({ "monte_carlo_trials": 0 }), "monte_carlo_trials"),
+            (
+                json!({ "arm": { "urdf": "none.urdf", "link_radius": 1e308 } }),
+                "arm.link_radius",
+            ),
+        ] {
+            let e = new(bad.clone()).unwrap_err();
+            assert!(e.starts_with(&format!("key '{key}'")), "{bad}: {e}");
+        }
+    }
 }

@@ -7,6 +7,7 @@
 //!
 //! - [`allan_run`]: the Allan-deviation check of the IMU's error model;
 //! - [`scenario`]: the scenarios, their commands over time and their analytic readings;
+//! - [`range`]: the physical range of every param of the scenarios, checked before start;
 //! - [`phase_errors`]: max and RMS error per axis of the readings of each phase;
 //! - [`spin_up`]: the spin-up times, analytic and measured, and the reference's table;
 //! - [`plot`]: the readings against time, as the reference's figures;
@@ -15,6 +16,7 @@
 pub mod allan_run;
 pub mod phase_errors;
 pub mod plot;
+pub mod range;
 pub mod report;
 pub mod scenario;
 pub mod spin_up;

@@ -51,7 +51,11 @@ impl ReportPlugin for ImuReport {
                 .map_err(|e| format!("key 'urdf': robot description {e}"))
         };
         let (mass_kg, bar) = match &scenario {
-            Scenario::Lift { urdf, .. } => (load(urdf)?.mass(), None),
+            Scenario::Lift { urdf, .. } => {
+                let mass_kg = load(urdf)?.mass();
+                scenario.validate_forces(mass_kg)?;
+                (mass_kg, None)
+            }
             Scenario::SpinUp { urdf, joint, .. } => {
                 (0.0, Some(Bar::from_description(&load(urdf)?, joint)?))
             }

@@ -40,16 +40,16 @@ pub const REST_FROM_S: f64 = 0.5;
 #[serde(tag = "scenario", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Scenario {
     Tilt {
-        /// Tilt rate, °/s, > 0.
+        /// Tilt rate, °/s, 0.01 to 2000 (the ranges and why: [`crate::range`]).
         #[serde(default = "tilt_rate")]
         rate_deg_s: f64,
         /// Final tilt, degrees, in (0, 90].
         #[serde(default = "tilt_angle")]
         angle_deg: f64,
-        /// Start of the ramp, s, ≥ 0.
+        /// Start of the ramp, s, 0 to 86 400.
         #[serde(default = "tilt_start")]
         start_s: f64,
-        /// Hold after the ramp, s, > 0.
+        /// Hold after the ramp, s, 0.1 to 86 400.
         #[serde(default = "tilt_hold")]
         hold_s: f64,
     },
@@ -57,10 +57,10 @@ pub enum Scenario {
         /// The cube's description, for its mass (relative to the launch file).
         #[serde(default = "lift_urdf")]
         urdf: String,
-        /// Upward force, N, > 0.
+        /// Upward force, N, > 0 and at most 16 g on the cube's mass.
         #[serde(default = "lift_force")]
         force_n: f64,
-        /// Push interval, s: 0 < from < to.
+        /// Push interval, s: 0 < from < to ≤ 86 400.
         #[serde(default = "lift_from")]
         push_from_s: f64,
         #[serde(default = "lift_to")]
@@ -68,18 +68,20 @@ pub enum Scenario {
         /// A braking phase after the push (none by default, as in the reference's lift).
         #[serde(default)]
         brake: Option<Brake>,
-        /// Free fall scored until this time, s (before the cube lands), > `push_to_s`.
+        /// Free fall scored until this time, s (before the cube lands), after the push and
+        /// the brake, ≤ 86 400.
         #[serde(default = "lift_fall_end")]
         fall_end_s: f64,
     },
     Rotation {
-        /// Turn rate, rad/s, ≠ 0.
+        /// Turn rate, rad/s, 1e-4 to 34.9 (2000 °/s) either way.
         #[serde(default = "rotation_rate")]
         rate_rad_s: f64,
-        /// IMU distance from the axis, m, ≥ 0 (the sensor's `imu_offset` x).
+        /// IMU distance from the axis, m, 0 to 100 (the sensor's `imu_offset` x), with
+        /// ω²r at most 16 g.
         #[serde(default = "rotation_radius")]
         radius_m: f64,
-        /// Scored from this time to `end_s`, s.
+        /// Scored from this time to `end_s`, s: 0 ≤ from < end ≤ 86 400.
         #[serde(default = "rotation_from")]
         from_s: f64,
         #[serde(default = "rotation_end")]
@@ -87,7 +89,7 @@ pub enum Scenario {
     },
     Allan {
         /// The sensor's error model, as its `imu_errors` param (the configured values the
-        /// report recovers).
+        /// report recovers); each term at most its triad's full scale (16 g, 2000 °/s).
         imu_errors: caravan_sensor::imu_errors::ImuErrors,
     },
     SpinUp {
@@ -99,10 +101,10 @@ pub enum Scenario {
         /// The bar's joint.
         #[serde(default = "spin_up_joint")]
         joint: String,
-        /// When the motor is switched on, s, ≥ 0.
+        /// When the motor is switched on, s, 0 to 86 400.
         #[serde(default = "spin_up_start")]
         start_s: f64,
-        /// End of the run, s, > `start_s`.
+        /// End of the run, s, > `start_s`, ≤ 86 400.
         #[serde(default = "spin_up_end")]
         end_s: f64,
     },
@@ -112,9 +114,9 @@ pub enum Scenario {
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Brake {
-    /// Upward force, N, > 0.
+    /// Upward force, N, > 0 and at most 16 g on the cube's mass.
     pub force_n: f64,
-    /// How long, s, > 0.
+    /// How long, s, 0.1 to 86 400 (scored from 0.05 s after it begins).
     pub duration_s: f64,
 }
 
@@ -207,99 +209,6 @@ pub struct Phase {
 }
 
 impl Scenario {
-    /// Checks the values serde cannot; the error names the key.
-    pub fn validate(&self) -> Result<(), String> {
-        let positive = |v: f64, key: &str| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("key '{key}': must be a positive number, got {v}"))
-            }
-        };
-        match *self {
-            Scenario::Tilt {
-                rate_deg_s,
-                angle_deg,
-                start_s,
-                hold_s,
-            } => {
-                positive(rate_deg_s, "rate_deg_s")?;
-                positive(hold_s, "hold_s")?;
-                if !(angle_deg > 0.0 && angle_deg <= 90.0) {
-                    return Err(format!(
-                        "key 'angle_deg': must be in (0, 90], got {angle_deg}"
-                    ));
-                }
-                if !(start_s.is_finite() && start_s >= 0.0) {
-                    return Err(format!("key 'start_s': must be ≥ 0, got {start_s}"));
-                }
-            }
-            Scenario::Lift {
-                force_n,
-                push_from_s,
-                push_to_s,
-                fall_end_s,
-                brake,
-                ..
-            } => {
-                positive(force_n, "force_n")?;
-                positive(push_from_s, "push_from_s")?;
-                if let Some(b) = brake {
-                    positive(b.force_n, "brake.force_n")?;
-                    positive(b.duration_s, "brake.duration_s")?;
-                }
-                let fall_from = self.fall_from_s();
-                if !(push_to_s > push_from_s && fall_end_s > fall_from) {
-                    return Err(format!(
-                        "keys 'push_from_s' < 'push_to_s' < 'fall_end_s' (after the brake) \
-                         must hold, got {push_from_s}, {push_to_s}, {fall_end_s} (fall from \
-                         {fall_from})"
-                    ));
-                }
-            }
-            Scenario::Rotation {
-                rate_rad_s,
-                radius_m,
-                from_s,
-                end_s,
-            } => {
-                if !(rate_rad_s.is_finite() && rate_rad_s != 0.0) {
-                    return Err(format!(
-                        "key 'rate_rad_s': must be non-zero, got {rate_rad_s}"
-                    ));
-                }
-                if !(radius_m.is_finite() && radius_m >= 0.0) {
-                    return Err(format!("key 'radius_m': must be ≥ 0, got {radius_m}"));
-                }
-                if !(from_s >= 0.0 && end_s > from_s) {
-                    return Err(format!(
-                        "keys 'from_s' < 'end_s' must hold, got {from_s}, {end_s}"
-                    ));
-                }
-            }
-            Scenario::Allan { ref imu_errors } => {
-                imu_errors
-                    .validate()
-                    .map_err(|e| format!("key 'imu_errors': {e}"))?;
-                if imu_errors.accel.noise_density <= 0.0 || imu_errors.gyro.noise_density <= 0.0 {
-                    return Err(
-                        "key 'imu_errors': the Allan check needs a noise_density > 0 \
-                                on both triads"
-                            .into(),
-                    );
-                }
-            }
-            Scenario::SpinUp { start_s, end_s, .. } => {
-                if !(start_s >= 0.0 && end_s > start_s) {
-                    return Err(format!(
-                        "keys 'start_s' < 'end_s' must hold, got {start_s}, {end_s}"
-                    ));
-                }
-            }
-        }
-        Ok(())
-    }
-
     /// The scenario's name.
     pub fn name(&self) -> &'static str {
         match self {
@@ -341,7 +250,7 @@ impl Scenario {
     }
 
     /// When a lift's free fall begins, s.
-    fn fall_from_s(&self) -> f64 {
+    pub(crate) fn fall_from_s(&self) -> f64 {
         self.pushes().last().map_or(0.0, |&(from, _, d)| from + d)
     }
 

@@ -6,6 +6,7 @@ use caravan::{Node, NodeIdentity, Trigger};
 use caravan_contact::arm_urdf::ArmModel;
 use caravan_contact::depth::{Disc, Scanner};
 use caravan_contact::joints;
+use caravan_contact::range::{HAND_RADIUS_M, between};
 use caravan_contact::scenario::{ArmParams, DEPTH_TOPIC, DepthParams, HAND_TOPIC};
 use caravan_schemas::{LaserScan, Pose2D, Topic, topics};
 use caravan_sensor::noise::Gaussian;
@@ -23,7 +24,7 @@ struct Params {
     arm: ArmParams,
     #[serde(default)]
     depth: DepthParams,
-    /// The hand's radius, m > 0 (the driver's `push.hand_radius_m`).
+    /// The hand's radius, m, 0.001 to 1 (the driver's `push.hand_radius_m`).
     hand_radius_m: f64,
 }
 
@@ -37,15 +38,8 @@ struct Ready {
 fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     let model = p.arm.load(&identity.resolve_path(&p.arm.urdf))?;
     let scanner = p.depth.scanner()?;
-    if scanner.beams > caravan_schemas::SCAN_MAX_BEAMS {
-        return Err(format!(
-            "key 'depth.beams': at most {} fit a scan",
-            caravan_schemas::SCAN_MAX_BEAMS
-        ));
-    }
-    if !(p.hand_radius_m.is_finite() && p.hand_radius_m > 0.0) {
-        return Err("key 'hand_radius_m': must be positive".into());
-    }
+    let [lo, hi] = HAND_RADIUS_M;
+    between("hand_radius_m", p.hand_radius_m, lo, hi, "m")?;
     Ok(Ready {
         model,
         scanner,

@@ -17,6 +17,9 @@ fn main() -> ExitCode {
     caravan::node_main("caravan-contact-driver", setup, run)
 }
 
+/// The driver's rate when the launch file gives none.
+const DEFAULT_RATE_HZ: f64 = 100.0;
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Params {
@@ -37,7 +40,14 @@ struct Ready {
 fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     let model = p.arm.load(&identity.resolve_path(&p.arm.urdf))?;
     let q = pose_rad(&model, &p.pose_deg)?;
-    let spec = p.push.spec(&model)?;
+    // Its step, as `Node::trigger` takes it: the launch file's `rate`, or the default.
+    let step_s = match &identity.rate_override {
+        Some(rate) => caravan::parse_rate(rate)
+            .map_err(|e| format!("its `rate`: {e}"))?
+            .as_secs_f64(),
+        None => 1.0 / DEFAULT_RATE_HZ,
+    };
+    let spec = p.push.spec(&model, &q, step_s)?;
     // Every push must find a point: refuse a pose whose pushed links are out of reach.
     if spec
         .sample(&model.arm.pose(&q), &mut Gaussian::new(0, 0))
@@ -61,7 +71,7 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
     let pose = r.model.arm.pose(&r.q);
     let mut g = Gaussian::new(r.seed, 0);
     let mut current: Option<(u64, usize)> = None;
-    let trigger = node.trigger(Trigger::every_hz(100.0))?;
+    let trigger = node.trigger(Trigger::every_hz(DEFAULT_RATE_HZ))?;
     node.run(trigger, |step| {
         if step.index() == 0 {
             let mut cmd = caravan_schemas::placement_new::<JointCommand>();

@@ -4,11 +4,17 @@
 //!   caravan-contact-table                       # 10 000 trials per σ, 200 optimised
 //!   caravan-contact-table --trials 500 --out docs/contact
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use caravan_contact::monte_carlo::{Config, run_level};
+use caravan_contact::range::{MAX_TORQUE_NOISE_N_M, shown};
 use caravan_contact::table::{markdown, row};
 use clap::Parser;
 use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Trials per noise level, at most 10⁶: a hundred times the table's 10 000, minutes per level
+/// in a release build; 4·10⁹ would run for weeks.
+const MAX_TRIALS: usize = 1_000_000;
 
 #[derive(Parser)]
 #[command(about = "The contact-identification reference's Table 1 by Monte-Carlo")]
@@ -29,14 +35,41 @@ struct Args {
     out: Option<PathBuf>,
 }
 
-fn main() -> Result<()> {
+/// The arguments' ranges (the noise levels as the live scenario's `estimator.torque_sigma`);
+/// the error names the argument.
+fn check(args: &Args) -> Result<(), String> {
+    if !(1..=MAX_TRIALS).contains(&args.trials) {
+        return Err(format!(
+            "--trials must be between 1 and {MAX_TRIALS}, got {}",
+            args.trials
+        ));
+    }
+    let ok = |s: f64| s.is_finite() && (0.0..=MAX_TORQUE_NOISE_N_M).contains(&s);
+    if let Some(s) = args.sigmas.iter().find(|s| !ok(**s)) {
+        return Err(format!(
+            "--sigmas: a noise level must be between 0 and {MAX_TORQUE_NOISE_N_M} N·m, got {}",
+            shown(*s)
+        ));
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
     let args = Args::parse();
-    if args.trials == 0 {
-        bail!("--trials must be at least 1");
+    if let Err(e) = check(&args) {
+        eprintln!("caravan-contact-table: {e}");
+        return ExitCode::from(2);
     }
-    if let Some(s) = args.sigmas.iter().find(|s| !(s.is_finite() && **s >= 0.0)) {
-        bail!("--sigmas: a noise level must be ≥ 0 N·m, got {s}");
+    match write(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("caravan-contact-table: {e:#}");
+            ExitCode::FAILURE
+        }
     }
+}
+
+fn write(args: Args) -> Result<()> {
     let config = Config {
         trials: args.trials,
         optimiser_trials: args.optimiser_trials.min(args.trials),
@@ -66,4 +99,24 @@ fn main() -> Result<()> {
         )?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trials_and_noise_levels_outside_their_ranges_are_refused_naming_the_argument() {
+        let parse = |extra: &[&str]| {
+            let mut all = vec!["caravan-contact-table"];
+            all.extend(extra);
+            check(&Args::parse_from(all))
+        };
+        parse(&[]).unwrap();
+        let e = parse(&["--sigmas", "0.1,1e308"]).unwrap_err();
+        assert!(e.starts_with("--sigmas") && e.contains("1e308"), "{e}");
+        let e = parse(&["--trials", "4000000000"]).unwrap_err();
+        assert!(e.starts_with("--trials"), "{e}");
+        assert!(parse(&["--trials", "0"]).is_err());
+    }
 }

@@ -24,12 +24,19 @@ struct Ready {
 
 fn setup(scenario: Scenario, identity: &NodeIdentity) -> Result<Ready, String> {
     scenario.validate()?;
+    let load = |urdf: &str| {
+        load_description(&identity.resolve_path(urdf))
+            .map_err(|e| format!("key 'urdf': robot description {e}"))
+    };
     let spin = match &scenario {
         Scenario::SpinUp { urdf, joint, .. } => {
-            let d = load_description(&identity.resolve_path(urdf))
-                .map_err(|e| format!("key 'urdf': robot description {e}"))?;
-            let bar = Bar::from_description(&d, joint)?;
+            let bar = Bar::from_description(&load(urdf)?, joint)?;
             Some((joint.clone(), bar.rate_rad_s))
+        }
+        // The pushes are bounded by the cube's mass (16 g at most).
+        Scenario::Lift { urdf, .. } => {
+            scenario.validate_forces(load(urdf)?.mass())?;
+            None
         }
         _ => None,
     };
