@@ -5,6 +5,9 @@
 use caravan_tests::{launch_with_set, run_scenario, workspace_bin};
 use serde_json::Value;
 
+#[path = "tracked/params.rs"]
+mod params;
+
 /// Runs `launch/tracked/<file>` with `extra` arguments; returns the `tracked` section.
 fn run(file: &str, extra: &[&str]) -> Value {
     run_scenario("tracked", file, extra).report["tracked"].clone()
@@ -312,7 +315,7 @@ fn bad_terrain_specs_and_arguments_exit_2_naming_file_and_key() {
             format!(
                 "{head}[[primitive]]\ntype = \"peak\"\ncenter = [1.0, 1.0]\nheight = 0.25\nradius = 1.0\n"
             ),
-            "primitive[0].height: 0.25 is not a step",
+            "key 'primitive[0].height': 0.25 is not a step",
         ),
         (
             format!("{head}[[primitive]]\ntype = \"wall\"\n"),
@@ -332,7 +335,8 @@ fn bad_terrain_specs_and_arguments_exit_2_naming_file_and_key() {
         );
     }
     // A good spec, an unwritable output: exit 2 naming the output.
-    let (code, err) = terrain(Some(head), &out);
+    let good = format!("{head}[[primitive]]\ntype = \"random\"\nmin = 0.05\nmax = 0.1\n");
+    let (code, err) = terrain(Some(&good), &out);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("/nonexistent-dir/w.toml"), "{err}");
     // Bad arguments.

@@ -14,14 +14,16 @@ pub struct KeepLineParams {
     /// Steer back to the line (default true); off, the turn rate asked for is always 0.
     #[serde(default = "yes")]
     pub enabled: bool,
-    /// Turn rate per radian of heading error, 1/s, > 0 (default 2).
+    /// Turn rate per radian of heading error, 1/s, in [`ranges::GAIN_PER_S`] (default 2).
     #[serde(default = "gain")]
     pub gain_per_s: f64,
-    /// How far ahead on the line the operator aims, m, > 0 (default 0.5): shorter steers
+    /// How far ahead on the line the operator aims, m, in [`ranges::LOOKAHEAD_M`] (default
+    /// 0.5): shorter steers
     /// back harder.
     #[serde(default = "lookahead")]
     pub lookahead_m: f64,
-    /// The largest turn rate asked for, rad/s, > 0 (default 0.5, the drive's limit).
+    /// The largest turn rate asked for, rad/s, in [`ranges::MAX_TURN_RAD_S`] (default 0.5,
+    /// the drive's limit).
     #[serde(default = "max_turn")]
     pub max_turn_rad_s: f64,
     /// The line to keep, `[x m, y m, heading rad]` on the floor; default the robot's own
@@ -61,17 +63,30 @@ impl Default for KeepLineParams {
     }
 }
 
+/// The physical range of each of [`KeepLineParams`]' numbers, and why.
+pub mod ranges {
+    use crate::params::Range;
+
+    /// Turn rate per radian of heading error: at the driver's 50 Hz, gain × tick ≤ 1. A
+    /// larger gain turns the heading past the line within one tick and the steering chatters.
+    pub const GAIN_PER_S: Range = Range::positive(50.0, "1/s");
+    /// The aim point: 1 cm at least (closer, a centimetre off the line aims the robot across
+    /// it at 45°), at most 10 km, the largest world.
+    pub const LOOKAHEAD_M: Range =
+        Range::closed(0.01, caravan_world::limits::MAX_WORLD_EXTENT_M, "m");
+    /// The largest turn rate asked for: the drive's largest `max_w_rad_s` bound.
+    pub const MAX_TURN_RAD_S: Range =
+        Range::positive(crate::diff_drive::ranges::MAX_W_RAD_S.max, "rad/s");
+}
+
 impl KeepLineParams {
-    /// Every number positive and finite, or an error naming the key (under `keep_line`).
+    /// Every number within its range ([`ranges`]), or an error naming the key (under
+    /// `keep_line`).
     pub fn validate(&self) -> Result<(), String> {
-        crate::params::all_positive(
-            "keep_line.",
-            &[
-                ("gain_per_s", self.gain_per_s),
-                ("lookahead_m", self.lookahead_m),
-                ("max_turn_rad_s", self.max_turn_rad_s),
-            ],
-        )?;
+        use caravan_world::limits::{MAX_ANGLE_RAD, MAX_WORLD_EXTENT_M, coordinate};
+        ranges::GAIN_PER_S.check("keep_line.gain_per_s", self.gain_per_s)?;
+        ranges::LOOKAHEAD_M.check("keep_line.lookahead_m", self.lookahead_m)?;
+        ranges::MAX_TURN_RAD_S.check("keep_line.max_turn_rad_s", self.max_turn_rad_s)?;
         if let Some(t) = self
             .straight_above_tilt_deg
             .filter(|t| !(*t > 0.0 && *t < 90.0))
@@ -80,10 +95,12 @@ impl KeepLineParams {
                 "key 'keep_line.straight_above_tilt_deg': must be above 0 and below 90 degrees, got {t}"
             ));
         }
-        if let Some(line) = self.line.filter(|l| !l.iter().all(|v| v.is_finite())) {
-            return Err(format!(
-                "key 'keep_line.line': must be [x m, y m, heading rad], finite, got {line:?}"
-            ));
+        // A point on a world's floor (at most 10 km out) and a heading of at most a thousand
+        // turns, where the trigonometry still holds the angle.
+        if let Some([x, y, heading]) = self.line {
+            coordinate("key 'keep_line.line[0]': x", x, MAX_WORLD_EXTENT_M)?;
+            coordinate("key 'keep_line.line[1]': y", y, MAX_WORLD_EXTENT_M)?;
+            coordinate("key 'keep_line.line[2]': heading", heading, MAX_ANGLE_RAD)?;
         }
         Ok(())
     }
@@ -235,6 +252,26 @@ mod tests {
             assert!(err.contains("keep_line.straight_above_tilt_deg"), "{err}");
         }
         assert!(KeepLineParams::default().validate().is_ok());
+    }
+
+    #[test]
+    fn numbers_past_their_physical_range_name_their_key() {
+        let bad = |f: &dyn Fn(&mut KeepLineParams)| {
+            let mut p = KeepLineParams::default();
+            f(&mut p);
+            p.validate().unwrap_err()
+        };
+        assert_eq!(
+            bad(&|p| p.gain_per_s = 1e300),
+            "key 'keep_line.gain_per_s': must be above 0 and at most 50 1/s, got 1e300"
+        );
+        assert!(bad(&|p| p.lookahead_m = 0.001).contains("'keep_line.lookahead_m'"));
+        assert!(bad(&|p| p.lookahead_m = 2e4).contains("'keep_line.lookahead_m'"));
+        assert!(bad(&|p| p.max_turn_rad_s = 11.0).contains("'keep_line.max_turn_rad_s'"));
+        let e = bad(&|p| p.line = Some([1e5, 1.5, 0.0]));
+        assert!(e.starts_with("key 'keep_line.line[0]': x must be"), "{e}");
+        let e = bad(&|p| p.line = Some([0.0, 1.5, 1e9]));
+        assert!(e.starts_with("key 'keep_line.line[2]': heading"), "{e}");
     }
 
     #[test]

@@ -14,6 +14,7 @@
 //! - [`running_gear`]: the wheels of the four running-gear variants;
 //! - [`urdf`]: a variant's robot description;
 //! - [`rse`]: the Random Step Environment generator (blocks, primitives, softness);
+//! - [`rse_check`]: a terrain spec's keys checked against their ranges, named with their line;
 //! - [`rse_world`]: a terrain as a world file of boxes, and its picture.
 
 pub mod braking;
@@ -27,6 +28,7 @@ pub mod passability;
 pub mod report;
 pub mod resting;
 pub mod rse;
+pub mod rse_check;
 pub mod rse_world;
 pub mod running_gear;
 pub mod urdf;

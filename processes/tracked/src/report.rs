@@ -19,7 +19,8 @@ pub const CMD_VEL_TOPIC: &str = "robot/0/cmd_vel";
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// The goal line: the run passes when the base's x reaches it, m.
+    /// The goal line: the run passes when the base's x reaches it, m, in
+    /// [`crate::params::GOAL_X_M`], and with `world` on its floor, in (0, its length].
     pub goal_x_m: f64,
     /// The world file (relative to the launch file), for the picture of the terrain with
     /// the track driven and the floor plan a run can leave (outcome `off_world`); none: no
@@ -54,6 +55,20 @@ struct Terrain {
     size: [f64; 2],
 }
 
+/// A goal line on the world's floor, x in (0, `length_m`]: past its end the base leaves the
+/// world (outcome `off_world`) before it could pass, so the run could never pass.
+pub fn goal_on_floor(goal_x_m: f64, world: &str, length_m: f64) -> Result<(), String> {
+    if goal_x_m > 0.0 && goal_x_m <= length_m {
+        return Ok(());
+    }
+    Err(format!(
+        "key 'goal_x_m': must lie on the floor of world {world}, above 0 and at most its \
+         length {} m, got {}; a run could never reach it",
+        crate::params::show_exact(length_m),
+        crate::params::show_exact(goal_x_m)
+    ))
+}
+
 pub struct TrackedReport {
     params: Params,
     /// When `world` is given.
@@ -64,16 +79,12 @@ impl ReportPlugin for TrackedReport {
     type Params = Params;
 
     fn new(params: Params, inputs: &Inputs) -> Result<Self, String> {
-        if !params.goal_x_m.is_finite() {
-            return Err(format!(
-                "key 'goal_x_m': must be a number, got {}",
-                params.goal_x_m
-            ));
-        }
+        crate::params::GOAL_X_M.check("goal_x_m", params.goal_x_m)?;
         let terrain = match &params.world {
             Some(w) => {
                 let world = caravan_world::world::load_world(&inputs.path(w))
                     .map_err(|e| format!("key 'world': {e}"))?;
+                goal_on_floor(params.goal_x_m, w, world.size[0])?;
                 Some(Terrain {
                     grid: crate::rse_world::grid_of(&world),
                     size: world.size,
@@ -203,5 +214,42 @@ impl ReportPlugin for TrackedReport {
             json,
             markdown,
         }])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_goal_line_off_the_worlds_floor_is_refused() {
+        assert!(goal_on_floor(5.5, "worlds/random-1.toml", 7.0).is_ok());
+        assert!(goal_on_floor(7.0, "w.toml", 7.0).is_ok());
+        for bad in [0.0, -1.0, 7.5, 1e300, f64::NAN] {
+            let e = goal_on_floor(bad, "w.toml", 7.0).unwrap_err();
+            assert!(
+                e.starts_with("key 'goal_x_m': must lie on the floor of world w.toml"),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_goal_past_any_world_is_refused_without_one() {
+        let inputs = Inputs {
+            launch_dir: ".".into(),
+        };
+        let params = |goal_x_m: f64| Params {
+            goal_x_m,
+            world: None,
+        };
+        assert!(TrackedReport::new(params(5.0), &inputs).is_ok());
+        for bad in [2e4, f64::INFINITY, f64::NAN] {
+            let e = TrackedReport::new(params(bad), &inputs).err().unwrap();
+            assert!(
+                e.starts_with("key 'goal_x_m': must be between -10000 and 10000 m"),
+                "{e}"
+            );
+        }
     }
 }

@@ -24,7 +24,7 @@ pub const GROUND_M: f64 = 0.1;
 #[serde(deny_unknown_fields)]
 pub struct Spec {
     pub terrain: Layout,
-    /// Obstacle primitives, combined by max.
+    /// Obstacle primitives, combined by max; at least one.
     #[serde(default, rename = "primitive")]
     pub primitives: Vec<Primitive>,
 }
@@ -44,10 +44,10 @@ pub struct Layout {
     /// Ground after the field, m; a multiple of [`CELL_M`] in [0, 20]. Default 2.
     #[serde(default = "two")]
     pub run_out: f64,
-    /// Friction coefficient of every block, ≥ 0 (written to the world file). Default 1.
+    /// Friction coefficient of every block, in [0, 100] (written to the world file). Default 1.
     #[serde(default = "one")]
     pub friction: f64,
-    /// Flank length of a primitive with softness 100, m, > 0. Default 1.
+    /// Flank length of a primitive with softness 100, m, in (0, 20]. Default 1.
     #[serde(default = "one")]
     pub flank: f64,
 }
@@ -60,18 +60,20 @@ fn one() -> f64 {
 }
 
 /// One obstacle primitive. Positions are in field coordinates: m from the field's corner
-/// (first block along x, first along y).
+/// (first block along x, first along y). The ranges of the keys, and why, are in
+/// [`crate::rse_check`].
 #[derive(Debug, Clone, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Primitive {
     /// Every block an independent uniform choice among the steps in [`min`, `max`] (m,
     /// both ladder steps).
     Random { min: f64, max: f64 },
-    /// Every block drawn from a normal distribution (`mean`, `std`, m), kept within
-    /// [0, 0.4] and rounded to the nearest step.
+    /// Every block drawn from a normal distribution (`mean`, `std`, m, both in [0, 0.4]),
+    /// kept within [0, 0.4] and rounded to the nearest step.
     Gaussian { mean: f64, std: f64 },
     /// A wall across the field (along y) whose core spans x ∈ [`at` − `width`/2,
-    /// `at` + `width`/2] (m), `height` m high (a step), with flanks set by `softness`.
+    /// `at` + `width`/2] (m; `at` on the field, `width` in [0.1, 20]), `height` m high (a
+    /// step above ground), with flanks set by `softness` (0–100).
     HorizontalBarrier {
         at: f64,
         width: f64,
@@ -90,15 +92,16 @@ pub enum Primitive {
         #[serde(default)]
         softness: f64,
     },
-    /// A cone of `height` m at `center` (m), falling linearly to ground at `radius` m.
+    /// A cone of `height` m (a step above ground) at `center` (m, on the field), falling
+    /// linearly to ground at `radius` m (in [0.1, 20]).
     Peak {
         center: [f64; 2],
         height: f64,
         radius: f64,
     },
     /// `count` (1–100) Gaussian hills of `height` m (a step above ground) and spread `sigma`
-    /// m (> 0), each centred at a uniformly random point at least 2 σ inside the field's
-    /// edges (its middle, along a side shorter than 4 σ): a hill proposes
+    /// m (at least a block, below a quarter of the field's shorter side), each centred at a
+    /// uniformly random point at least 2 σ inside the field's edges: a hill proposes
     /// ground + (`height` − ground)·exp(−r²/2σ²) rounded to the nearest step, where that is
     /// above ground. So a hill is a round staircase: its top step within 0.76 σ of the
     /// centre when it is two steps high (the reference's "random Gaussian" obstacle).
@@ -155,156 +158,7 @@ pub fn nearest_step(h: f64) -> f64 {
         .unwrap_or(0.0)
 }
 
-/// Parses and checks a spec file's text; errors name the key (and toml's line).
-pub fn parse_spec(text: &str) -> Result<Spec, String> {
-    let spec: Spec =
-        toml::from_str(text).map_err(|e| e.to_string().trim_end().replace('\n', " "))?;
-    validate(&spec)?;
-    Ok(spec)
-}
-
-/// Blocks in `len` m, if it is a multiple of [`CELL_M`].
-fn cells(key: &str, len: f64, min: f64, max: f64) -> Result<usize, String> {
-    let n = (len / CELL_M).round();
-    if !(len.is_finite() && (min..=max).contains(&len) && (len / CELL_M - n).abs() < 1e-6) {
-        return Err(format!(
-            "{key}: {len} must be a multiple of {CELL_M} m in [{min}, {max}]"
-        ));
-    }
-    Ok(n as usize)
-}
-
-fn ladder(key: &str, h: f64) -> Result<(), String> {
-    if STEPS_M.iter().any(|s| (s - h).abs() < 1e-9) {
-        Ok(())
-    } else {
-        Err(format!(
-            "{key}: {h} is not a step of the ladder (0, 0.05, 0.1, 0.2, 0.3, 0.4 m)"
-        ))
-    }
-}
-
-fn positive(key: &str, v: f64) -> Result<(), String> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(format!("{key}: must be a positive number of m, got {v}"))
-    }
-}
-
-fn finite(key: &str, v: f64) -> Result<(), String> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(format!("{key}: must be a number, got {v}"))
-    }
-}
-
-/// A barrier's keys: where (`at`), how thick (`width`), how high, how soft.
-fn wall_keys(
-    key: &dyn Fn(&str) -> String,
-    at: f64,
-    width: f64,
-    height: f64,
-    softness: f64,
-) -> Result<(), String> {
-    finite(&key("at"), at)?;
-    positive(&key("width"), width)?;
-    ladder(&key("height"), height)?;
-    if !(0.0..=100.0).contains(&softness) {
-        return Err(format!(
-            "{}: softness {softness} is outside [0, 100]",
-            key("softness")
-        ));
-    }
-    Ok(())
-}
-
-/// Checks every key of a spec.
-pub fn validate(spec: &Spec) -> Result<(), String> {
-    let t = &spec.terrain;
-    cells("terrain.field[0]", t.field[0], CELL_M, 20.0)?;
-    cells("terrain.field[1]", t.field[1], CELL_M, 20.0)?;
-    cells("terrain.approach", t.approach, 0.0, 20.0)?;
-    cells("terrain.run_out", t.run_out, 0.0, 20.0)?;
-    if !(t.friction.is_finite() && t.friction >= 0.0) {
-        return Err(format!(
-            "terrain.friction: must be zero or positive, got {}",
-            t.friction
-        ));
-    }
-    positive("terrain.flank", t.flank)?;
-    for (i, p) in spec.primitives.iter().enumerate() {
-        let key = |k: &str| format!("primitive[{i}].{k}");
-        match *p {
-            Primitive::Random { min, max } => {
-                ladder(&key("min"), min)?;
-                ladder(&key("max"), max)?;
-                if min > max {
-                    return Err(format!("{}: {min} is above max {max}", key("min")));
-                }
-            }
-            Primitive::Gaussian { mean, std } => {
-                finite(&key("mean"), mean)?;
-                if !(std.is_finite() && std >= 0.0) {
-                    return Err(format!(
-                        "{}: must be zero or positive, got {std}",
-                        key("std")
-                    ));
-                }
-            }
-            Primitive::HorizontalBarrier {
-                at,
-                width,
-                height,
-                softness,
-            } => wall_keys(&key, at, width, height, softness)?,
-            Primitive::DiagonalBarrier {
-                at,
-                width,
-                height,
-                angle_deg,
-                softness,
-            } => {
-                wall_keys(&key, at, width, height, softness)?;
-                if !(angle_deg.is_finite() && angle_deg.abs() < 90.0) {
-                    return Err(format!(
-                        "{}: {angle_deg} must be within (−90, 90) degrees",
-                        key("angle_deg")
-                    ));
-                }
-            }
-            Primitive::Peak {
-                center,
-                height,
-                radius,
-            } => {
-                finite(&key("center[0]"), center[0])?;
-                finite(&key("center[1]"), center[1])?;
-                ladder(&key("height"), height)?;
-                positive(&key("radius"), radius)?;
-            }
-            Primitive::Hills {
-                count,
-                height,
-                sigma,
-            } => {
-                if !(1..=100).contains(&count) {
-                    return Err(format!("{}: {count} must be 1 to 100", key("count")));
-                }
-                ladder(&key("height"), height)?;
-                if height <= GROUND_M {
-                    return Err(format!(
-                        "{}: {height} must be above the ground, {GROUND_M}",
-                        key("height")
-                    ));
-                }
-                positive(&key("sigma"), sigma)?;
-            }
-        }
-    }
-    Ok(())
-}
+pub use crate::rse_check::{parse_spec, validate};
 
 /// A wall's proposal at distance `d` (m) beyond its core: its height inside, then a
 /// staircase down to ground over `flank_m`·`softness`/100 m (none at softness 0), then

@@ -239,7 +239,10 @@ mod tests {
 
     #[test]
     fn flat_ground_is_one_box() {
-        let spec = parse_spec("[terrain]\nfield = [2.0, 1.5]\n").unwrap();
+        let spec = parse_spec(
+            "[terrain]\nfield = [2.0, 1.5]\n[[primitive]]\ntype = \"random\"\nmin = 0.1\nmax = 0.1\n",
+        )
+        .unwrap();
         assert_eq!(merge(&generate(&spec, 1)).len(), 1);
     }
 

@@ -33,6 +33,16 @@ pub fn setup(
     if let (Mode::Leader, true, Some(file)) = (p.mode, p.leader.goals.is_empty(), &p.world) {
         let world = caravan_world::load_world(&identity.resolve_path(file))
             .map_err(|e| format!("key 'world': world file {e}"))?;
+        // A world that lists [[start]] poses names its robots: the leader is one of them.
+        let starts = world.starts.len();
+        if starts > 0 && p.robot >= starts {
+            return Err(format!(
+                "key 'robot': world file {file} lists {starts} [[start]] pose(s), for robots 0 \
+                 to {}; robot {} is not among them",
+                starts - 1,
+                p.robot
+            ));
+        }
         if world.goals.is_empty() {
             return Err(format!(
                 "key 'leader.goals': none given, and world file {file} has no [[goal]]s"

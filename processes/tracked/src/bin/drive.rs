@@ -5,8 +5,9 @@
 //! odometry from `robot/i/joint_states` onto `robot/i/odometry`. The flippers go from the
 //! robot's start pose (in line) to `flipper_angle_rad`, then to the angles asked on
 //! `robot/i/flipper_command`, at no more than their joints' speed limit
-//! (`caravan_tracked::flippers`). Params: `robot`, `urdf`, `flipper_angle_rad`, `limits` (see
-//! the crate docs). Give it `rate = "50Hz"`.
+//! (`caravan_tracked::flippers`). Params: `robot`, `count`, `urdf`, `flipper_angle_rad`,
+//! `limits` (see the crate docs; each number's range is in `caravan_tracked::params` and
+//! docs/tracked.md). Give it `rate = "50Hz"`.
 
 use caravan::{Node, NodeIdentity, Trigger};
 use caravan_schemas::{
@@ -26,9 +27,14 @@ fn main() -> ExitCode {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Params {
-    /// The robot's index.
+    /// The robot's index: one of the group's `count` robots.
     #[serde(default)]
     robot: usize,
+    /// The robots the physics simulates (default 1, the scenario's one robot), 1 to
+    /// `caravan_tracked::params::MAX_ROBOTS`: a node cannot see the physics' params, so this
+    /// is what `robot` is checked against.
+    #[serde(default = "one")]
+    count: usize,
     /// Its description: continuous joints named `left_…` and `right_…` are the sides' wheels;
     /// revolute joints named `…flipper_joint` the flippers.
     urdf: String,
@@ -38,6 +44,10 @@ struct Params {
     flipper_angle_rad: f64,
     #[serde(default)]
     limits: DriveLimits,
+}
+
+fn one() -> usize {
+    1
 }
 
 fn flipper_rest() -> f64 {
@@ -54,9 +64,9 @@ struct Ready {
 }
 
 fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
-    if !p.flipper_angle_rad.is_finite() {
-        return Err("key 'flipper_angle_rad': must be a number".into());
-    }
+    caravan_tracked::params::robot_index(p.robot, p.count)?;
+    caravan_tracked::params::FLIPPER_ANGLE_RAD.check("flipper_angle_rad", p.flipper_angle_rad)?;
+    let radius_given = p.limits.wheel_radius_m != 0.0;
     let d = load_description(&identity.resolve_path(&p.urdf))
         .map_err(|e| format!("key 'urdf': robot description {e}"))?;
     let named = |kind: JointKind, test: &dyn Fn(&str) -> bool| -> Vec<String> {
@@ -102,6 +112,15 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     }
     limits
         .validate()
+        .and_then(|()| {
+            // The slowest wheel: the physics holds each at its joint's velocity limit.
+            let slowest = left
+                .iter()
+                .chain(&right)
+                .filter_map(|n| d.joint(n).map(|j| d.joints[j].limits.velocity))
+                .fold(f64::INFINITY, f64::min);
+            limits.check_wheel_speed(slowest, &d.file, radius_given)
+        })
         .map_err(|e| e.replace("key '", "key 'limits."))?;
     Ok(Ready {
         robot: p.robot,

@@ -8,6 +8,8 @@
 //! to `keep_line.line`), from its true pose, as an operator with a joystick would
 //! (`caravan_tracked::keep_line`); with `keep_line.straight_above_tilt_deg` it pushes straight
 //! on while the body leans more than that; `keep_line = { enabled = false }` never turns.
+//! `count` (default 1) is the robots the physics simulates, which `robot` must be one of.
+//! Each number's range is in `caravan_tracked::params` and docs/tracked.md.
 
 use caravan::{Node, NodeIdentity, Trigger};
 use caravan_schemas::{JointCommand, JointValue, Name, Twist, topics};
@@ -26,15 +28,19 @@ fn main() -> ExitCode {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Params {
+    /// The robot's index: one of the group's `count` robots.
     #[serde(default)]
     robot: usize,
-    /// Forward speed asked for, m/s.
+    /// The robots the physics simulates (default 1), as the drive's `count`.
+    #[serde(default = "one")]
+    count: usize,
+    /// Forward speed asked for, m/s, in `params::SPEED_M_S` (negative reverses).
     #[serde(default = "speed")]
     speed_m_s: f64,
-    /// When to start, s ≥ 0.
+    /// When to start, s, in `params::TIME_S`.
     #[serde(default = "start")]
     start_s: f64,
-    /// When to ask for a stop, s > `start_s`.
+    /// When to ask for a stop, s > `start_s`, in `params::TIME_S`, or never (the default).
     #[serde(default = "never")]
     stop_s: f64,
     /// Work the flippers to climb steps (angles in degrees; see `caravan_tracked::climb`).
@@ -45,6 +51,9 @@ struct Params {
     keep_line: KeepLineParams,
 }
 
+fn one() -> usize {
+    1
+}
 fn speed() -> f64 {
     0.3
 }
@@ -56,16 +65,18 @@ fn never() -> f64 {
 }
 
 fn setup(p: Params, _: &NodeIdentity) -> Result<Params, String> {
-    if !p.speed_m_s.is_finite() {
-        return Err(format!(
-            "key 'speed_m_s': must be a number, got {}",
-            p.speed_m_s
-        ));
+    use caravan_tracked::params::{SPEED_M_S, TIME_S, robot_index, show_exact};
+    robot_index(p.robot, p.count)?;
+    SPEED_M_S.check("speed_m_s", p.speed_m_s)?;
+    TIME_S.check("start_s", p.start_s)?;
+    if p.stop_s != f64::INFINITY {
+        TIME_S.check("stop_s", p.stop_s)?;
     }
-    if !(p.start_s.is_finite() && p.start_s >= 0.0 && p.stop_s > p.start_s) {
+    if p.stop_s <= p.start_s {
         return Err(format!(
-            "keys 'start_s' < 'stop_s' (start ≥ 0) must hold, got {} and {}",
-            p.start_s, p.stop_s
+            "key 'stop_s': must be after start_s ({}), got {}",
+            show_exact(p.start_s),
+            show_exact(p.stop_s)
         ));
     }
     p.climb.validate(FLIPPER_RANGE_DEG)?;
