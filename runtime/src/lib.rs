@@ -38,6 +38,7 @@ mod node;
 mod params;
 pub mod pattern;
 mod publisher;
+pub mod range;
 mod rate;
 pub mod relay;
 pub mod spin;

@@ -6,6 +6,8 @@
 //! instead of a run that overflows or a report that never ends. Each bound's constant says
 //! why it is what it is.
 
+pub use caravan::range::{above, between, shown};
+
 /// The latest time a key may name, s: a day. The shipped run lasts 20 s; a day of simulated
 /// time at the arm's 1 kHz physics is 86.4 million steps, hours of wall time even in a
 /// release build, so a later time is a typo.
@@ -58,83 +60,9 @@ pub const MAX_REPORT_TRIALS: usize = 100_000;
 const _: () = assert!(MIN_LINK_RADIUS_M < MAX_LINK_RADIUS_M);
 const _: () = assert!(HAND_RADIUS_M[0] < HAND_RADIUS_M[1]);
 
-/// `v` when it is a finite number in [`min`, `max`]; else a message naming `key`, the range
-/// and `unit` (empty for none).
-pub fn between(key: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<f64, String> {
-    if v.is_finite() && v >= min && v <= max {
-        Ok(v)
-    } else {
-        Err(format!(
-            "key '{key}': must be between {} and {}{}, got {}",
-            shown(min),
-            shown(max),
-            spaced(unit),
-            shown(v)
-        ))
-    }
-}
-
-/// `v` when it is a finite number above `min` and at most `max`; else a message naming
-/// `key`, the range and `unit`.
-pub fn above(key: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<f64, String> {
-    if v.is_finite() && v > min && v <= max {
-        Ok(v)
-    } else {
-        Err(format!(
-            "key '{key}': must be above {} and at most {}{}, got {}",
-            shown(min),
-            shown(max),
-            spaced(unit),
-            shown(v)
-        ))
-    }
-}
-
-/// A number for a message as it was written: 1e308 and 1e-300 as such, not as 309 digits.
-pub fn shown(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-4..1e16).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
-}
-
-fn spaced(unit: &str) -> String {
-    if unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {unit}")
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn between_takes_its_bounds_and_names_the_key_and_range_otherwise() {
-        assert_eq!(between("mu", 0.0, 0.0, 5.0, ""), Ok(0.0));
-        assert_eq!(between("mu", 5.0, 0.0, 5.0, ""), Ok(5.0));
-        for bad in [-0.1, 5.1, f64::NAN, f64::INFINITY] {
-            let e = between("mu", bad, 0.0, 5.0, "").unwrap_err();
-            assert!(
-                e.starts_with("key 'mu': must be between 0 and 5, got"),
-                "{e}"
-            );
-        }
-        let e = between("push.force_n", 1e308, 0.0, 1000.0, "N").unwrap_err();
-        assert_eq!(
-            e,
-            "key 'push.force_n': must be between 0 and 1000 N, got 1e308"
-        );
-    }
-
-    #[test]
-    fn above_leaves_out_its_lower_bound() {
-        assert_eq!(above("d", 1e-9, 0.0, 1.0, "m"), Ok(1e-9));
-        let e = above("d", 0.0, 0.0, 1.0, "m").unwrap_err();
-        assert_eq!(e, "key 'd': must be above 0 and at most 1 m, got 0");
-    }
 
     use crate::arm_urdf::{ArmModel, from_description, urdf};
     use crate::monte_carlo::reference_arm;

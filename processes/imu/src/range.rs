@@ -6,6 +6,7 @@
 //! that never ends or a report of `inf`. Each bound's constant says why it is what it is.
 
 use crate::scenario::{G, SETTLE_S, Scenario};
+pub use caravan::range::{above, between, bound, shown};
 use caravan_sensor::imu_errors::TriadErrors;
 
 /// The longest time a scenario's key may name, s: a day. The reference's longest scenario
@@ -107,8 +108,8 @@ impl Scenario {
                     return Err(format!(
                         "key 'rate_rad_s': must be between {} and {} rad/s either way \
                          (2000 °/s, a gyroscope's full scale), got {}",
-                        num(MIN_TURN_RATE_RAD_S),
-                        num(MAX_RATE_RAD_S),
+                        bound(MIN_TURN_RATE_RAD_S),
+                        bound(MAX_RATE_RAD_S),
                         shown(rate_rad_s)
                     ));
                 }
@@ -119,8 +120,8 @@ impl Scenario {
                         "keys 'rate_rad_s' and 'radius_m': the centripetal acceleration ω²r = \
                          {} m/s² must be at most {} m/s² (16 g, an accelerometer's full \
                          scale), got ω = {} rad/s and r = {} m",
-                        num(centripetal),
-                        num(MAX_ACCEL_M_S2),
+                        bound(centripetal),
+                        bound(MAX_ACCEL_M_S2),
                         shown(rate_rad_s),
                         shown(radius_m)
                     ));
@@ -173,7 +174,7 @@ impl Scenario {
             ));
         }
         let max = MAX_ACCEL_M_S2 * mass_kg;
-        let unit = format!("N (16 g on the {} kg of 'urdf')", num(mass_kg));
+        let unit = format!("N (16 g on the {} kg of 'urdf')", bound(mass_kg));
         above("force_n", force_n, 0.0, max, &unit)?;
         if let Some(b) = brake {
             above("brake.force_n", b.force_n, 0.0, max, &unit)?;
@@ -210,38 +211,6 @@ fn triad_within_full_scale(
 const _: () = assert!(90.0 / MIN_TILT_RATE_DEG_S <= MAX_TIME_S);
 const _: () = assert!(MIN_TURN_RATE_RAD_S < MAX_RATE_RAD_S);
 
-/// `v` when it is a finite number in [`min`, `max`]; else a message naming `key`, the range
-/// and `unit` (empty for none).
-pub fn between(key: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<f64, String> {
-    if v.is_finite() && v >= min && v <= max {
-        Ok(v)
-    } else {
-        Err(format!(
-            "key '{key}': must be between {} and {}{}, got {}",
-            num(min),
-            num(max),
-            spaced(unit),
-            shown(v)
-        ))
-    }
-}
-
-/// `v` when it is a finite number above `min` and at most `max`; else a message naming
-/// `key`, the range and `unit`.
-pub fn above(key: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<f64, String> {
-    if v.is_finite() && v > min && v <= max {
-        Ok(v)
-    } else {
-        Err(format!(
-            "key '{key}': must be above {} and at most {}{}, got {}",
-            num(min),
-            num(max),
-            spaced(unit),
-            shown(v)
-        ))
-    }
-}
-
 /// A force's sign, before its bound is known.
 fn positive(key: &str, v: f64) -> Result<(), String> {
     if v.is_finite() && v > 0.0 {
@@ -254,62 +223,9 @@ fn positive(key: &str, v: f64) -> Result<(), String> {
     }
 }
 
-/// A bound for a message: six significant digits at most (16 g on 5 kg is 784.8 N, not
-/// 784.8000000000001).
-fn num(x: f64) -> String {
-    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
-    shown(rounded)
-}
-
-/// A value for a message as it was written: 1e308 and 1e-300 as such, not as 309 digits.
-fn shown(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-4..1e16).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
-}
-
-fn spaced(unit: &str) -> String {
-    if unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {unit}")
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn between_takes_its_bounds_and_names_the_key_and_range_otherwise() {
-        assert_eq!(between("hold_s", 0.1, 0.1, 10.0, "s"), Ok(0.1));
-        assert_eq!(between("hold_s", 10.0, 0.1, 10.0, "s"), Ok(10.0));
-        for bad in [0.09, 1e308, f64::NAN, f64::INFINITY, -1.0] {
-            let e = between("hold_s", bad, 0.1, 10.0, "s").unwrap_err();
-            assert!(
-                e.starts_with("key 'hold_s': must be between 0.1 and 10 s, got"),
-                "{e}"
-            );
-        }
-        let e = between("x", 2.0, 0.0, 1.0, "").unwrap_err();
-        assert_eq!(e, "key 'x': must be between 0 and 1, got 2");
-        let e = between("x", -1e-300, 0.0, 1.0, "").unwrap_err();
-        assert_eq!(e, "key 'x': must be between 0 and 1, got -1e-300");
-    }
-
-    #[test]
-    fn above_leaves_out_its_lower_bound() {
-        assert_eq!(above("force_n", 1e-9, 0.0, 5.0, "N"), Ok(1e-9));
-        for bad in [0.0, -1.0, 5.5, f64::NAN] {
-            let e = above("force_n", bad, 0.0, 5.0, "N").unwrap_err();
-            assert!(
-                e.starts_with("key 'force_n': must be above 0 and at most 5 N, got"),
-                "{e}"
-            );
-        }
-    }
 
     fn scenario(v: serde_json::Value) -> Scenario {
         serde_json::from_value(v).unwrap()

@@ -52,22 +52,13 @@ impl Range {
     }
 
     /// `v` when it lies in the range, else the error naming `key`, in the style of every
-    /// Caravan param check: `key 'k': must be between 1 and 100 m, got 0`.
+    /// Caravan param check (`caravan::range`): `key 'k': must be between 1 and 100 m, got 0`.
     pub fn check(&self, key: &str, v: f64) -> Result<f64, String> {
-        if self.contains(v) {
-            return Ok(v);
+        if self.open_min {
+            caravan::range::above(key, v, self.min, self.max, self.unit)
+        } else {
+            caravan::range::between(key, v, self.min, self.max, self.unit)
         }
-        let unit = if self.unit.is_empty() {
-            String::new()
-        } else {
-            format!(" {}", self.unit)
-        };
-        let (min, max, v) = (show(self.min), show(self.max), show_exact(v));
-        Err(if self.open_min {
-            format!("key '{key}': must be above {min} and at most {max}{unit}, got {v}")
-        } else {
-            format!("key '{key}': must be between {min} and {max}{unit}, got {v}")
-        })
     }
 
     /// The range as docs/tracked.md writes it: `(0, 5] m/s`, `[-90, 90] °`.
