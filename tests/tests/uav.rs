@@ -84,3 +84,6 @@ fn the_shipped_learned_policy_passes_in_the_agent_process() {
     let u = uav("mlp", "s1", 6);
     assert_eq!(u["outcomes"]["passed"]["count"], 6, "{u}");
 }
+
+#[path = "ranges/uav_convoy.rs"]
+mod uav_convoy_ranges;

@@ -128,32 +128,10 @@ pub enum Outcome {
 }
 
 impl Encounter {
+    /// Checks every constant's physical range, naming the key (`encounter.*`): see
+    /// [`crate::ranges::encounter`].
     pub fn validate(&self) -> Result<(), String> {
-        let positive = [
-            ("speed_m_s", self.speed_m_s),
-            ("separation_m", self.separation_m),
-            ("collision_radius_m", self.collision_radius_m),
-            ("step_s", self.step_s),
-            ("dv_m_s", self.dv_m_s),
-            ("v_max_m_s", self.v_max_m_s),
-            ("velocity_scale_m_s", self.velocity_scale_m_s),
-            ("time_limit_s", self.time_limit_s),
-        ];
-        for (key, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("key '{key}': must be a positive number, got {v}"));
-            }
-        }
-        if !(self.floor_m.is_finite() && self.floor_m >= 0.0 && self.altitude_m > self.floor_m) {
-            return Err(format!(
-                "keys 'floor_m' ≥ 0 and 'altitude_m' > 'floor_m' must hold, got {} and {}",
-                self.floor_m, self.altitude_m
-            ));
-        }
-        if !self.terminal_reward.is_finite() {
-            return Err("key 'terminal_reward': must be finite".into());
-        }
-        Ok(())
+        crate::ranges::encounter(self)
     }
 
     /// The agent step, whole nanoseconds (the schedule's unit).

@@ -12,6 +12,7 @@
 //! - [`scenario`]: the evaluation scenarios (the training head-on, S1, S2, S3) and their starts;
 //! - [`policy`]: the policy interface and the sanity baselines (do nothing, side-step);
 //! - [`world`]: between the encounter's frame and the group's;
+//! - [`ranges`]: the physical ranges of the processes' params, checked before the start;
 //! - [`report`]: the report plugin's `uav` section;
 //! - [`rollout`]: episodes of the encounter's own kinematics, for unit tests of the rules.
 
@@ -23,6 +24,7 @@ pub mod metrics;
 pub mod mlp;
 pub mod opponent;
 pub mod policy;
+pub mod ranges;
 pub mod report;
 pub mod rollout;
 pub mod scenario;

@@ -74,9 +74,7 @@ impl Scenario {
 /// Checks the params a scenario's processes share: the encounter's constants and the
 /// scenario's name.
 pub fn checked(encounter: &Encounter, scenario: &str) -> Result<Scenario, String> {
-    encounter
-        .validate()
-        .map_err(|e| format!("key 'encounter': {e}"))?;
+    encounter.validate()?;
     Scenario::named(scenario).map_err(|e| format!("key 'scenario': {e}"))
 }
 

@@ -56,8 +56,10 @@ impl Default for Params {
 }
 
 impl Params {
-    /// Checks what serde cannot: a follower needs a predecessor, a leader needs goals.
+    /// Checks what serde cannot: every number's range (`ranges`), a follower needs a
+    /// predecessor, a leader needs goals.
     pub fn validate(&self) -> Result<(), String> {
+        crate::agent::ranges::check(self)?;
         match self.mode {
             Mode::Follower if self.robot == 0 && self.predecessor_topic.is_none() => {
                 Err("key 'robot': robot 0 has no predecessor; make it the leader (mode = \"leader\") or set 'predecessor_topic'".into())

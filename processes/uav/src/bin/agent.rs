@@ -26,9 +26,7 @@ struct Params {
 }
 
 fn setup(p: Params, identity: &NodeIdentity) -> Result<Box<dyn Policy>, String> {
-    p.encounter
-        .validate()
-        .map_err(|e| format!("key 'encounter': {e}"))?;
+    caravan_uav::ranges::encounter(&p.encounter)?;
     Ok(match p.policy.as_str() {
         "do_nothing" => Box::new(DoNothing),
         "side_step" => Box::new(SideStep::new(&p.encounter)),

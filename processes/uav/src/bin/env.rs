@@ -26,7 +26,7 @@ struct Params {
     encounter: Encounter,
     /// `head_on`, `s1`, `s2` or `s3`.
     scenario: String,
-    /// Episodes to run, ≥ 1.
+    /// Episodes to run, 1 to `ranges::MAX_EPISODES`.
     episodes: u64,
     #[serde(default)]
     frame: Frame,
@@ -41,13 +41,10 @@ struct Ready {
 }
 
 fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
-    p.encounter
-        .validate()
-        .map_err(|e| format!("key 'encounter': {e}"))?;
+    caravan_uav::ranges::encounter(&p.encounter)?;
+    caravan_uav::ranges::frame(&p.frame)?;
     let scenario = Scenario::named(&p.scenario).map_err(|e| format!("key 'scenario': {e}"))?;
-    if p.episodes == 0 {
-        return Err("key 'episodes': at least 1".into());
-    }
+    caravan_uav::ranges::episodes(p.episodes)?;
     Ok(Ready {
         e: p.encounter,
         scenario,

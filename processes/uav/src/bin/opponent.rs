@@ -32,9 +32,8 @@ struct Ready {
 }
 
 fn setup(p: Params, _: &NodeIdentity) -> Result<Ready, String> {
-    p.encounter
-        .validate()
-        .map_err(|e| format!("key 'encounter': {e}"))?;
+    caravan_uav::ranges::encounter(&p.encounter)?;
+    caravan_uav::ranges::frame(&p.frame)?;
     Ok(Ready {
         e: p.encounter,
         scenario: Scenario::named(&p.scenario).map_err(|e| format!("key 'scenario': {e}"))?,
