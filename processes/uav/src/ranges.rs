@@ -4,6 +4,8 @@
 //! with the key named (`key 'encounter.speed_m_s': must be between 0 and 40 m/s, got 1e308`)
 //! instead of a run that never ends or a report of `inf`. Each bound's constant says why.
 
+pub use caravan::range::{above, between, shown};
+
 use crate::encounter::Encounter;
 use crate::world::Frame;
 
@@ -161,74 +163,6 @@ pub fn frame(f: &Frame) -> Result<(), String> {
         )?;
     }
     Ok(())
-}
-
-/// `v` when it is a finite number in [`min`, `max`]; else a message naming `key`, the range
-/// and `unit` (empty for none; after the unit, in parentheses, what a bound is tied to).
-pub fn between(key: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<f64, String> {
-    if v.is_finite() && v >= min && v <= max {
-        Ok(v)
-    } else {
-        Err(format!(
-            "key '{key}': must be between {} and {}{}, got {}",
-            shown(min),
-            shown(max),
-            spaced(unit),
-            shown(v)
-        ))
-    }
-}
-
-/// `v` when it is a finite number above `min` and at most `max`; else a message naming `key`,
-/// the range and `unit`.
-pub fn above(key: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<f64, String> {
-    if v.is_finite() && v > min && v <= max {
-        Ok(v)
-    } else {
-        Err(format!(
-            "key '{key}': must be above {} and at most {}{}, got {}",
-            shown(min),
-            shown(max),
-            spaced(unit),
-            shown(v)
-        ))
-    }
-}
-
-fn spaced(unit: &str) -> String {
-    if unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {unit}")
-    }
-}
-
-/// A number as a launch file writes it: `1e308`, not 300 digits; 4 significant digits.
-pub fn shown(v: f64) -> String {
-    if !v.is_finite() || v == 0.0 {
-        return format!("{v}");
-    }
-    let a = v.abs();
-    if !(1e-4..1e6).contains(&a) {
-        let s = format!("{v:.3e}");
-        // 1.000e308 → 1e308
-        match s.split_once('e') {
-            Some((m, e)) => {
-                let m = m.trim_end_matches('0').trim_end_matches('.');
-                format!("{m}e{e}")
-            }
-            None => s,
-        }
-    } else {
-        // 4 significant digits, trailing zeros dropped: 1/240 → 0.004167.
-        let digits = (3 - a.log10().floor() as i32).max(0) as usize;
-        let s = format!("{v:.digits$}");
-        if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            s
-        }
-    }
 }
 
 #[cfg(test)]

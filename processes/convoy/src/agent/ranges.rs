@@ -6,6 +6,8 @@
 //! most 20 1/s, got NaN`) instead of a robot driving off or never moving. Each bound's constant
 //! says why.
 
+use caravan::range::{above, between};
+
 use crate::agent::follower::FollowerParams;
 use crate::agent::leader::LeaderParams;
 use crate::agent::params::Params;
@@ -133,57 +135,6 @@ pub fn leader(l: &LeaderParams) -> Result<(), String> {
     above(&key("omega_max"), l.omega_max, 0.0, MAX_TURN_RAD_S, "rad/s")?;
     above(&key("k_heading"), l.k_heading, 0.0, MAX_GAIN_PER_S, "1/s")?;
     Ok(())
-}
-
-/// `v` when it is a finite number in [`min`, `max`]; else a message naming `key`, the range
-/// and `unit` (after it, in parentheses, what a bound is tied to).
-fn between(key: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<f64, String> {
-    if v.is_finite() && v >= min && v <= max {
-        Ok(v)
-    } else {
-        Err(format!(
-            "key '{key}': must be between {} and {} {unit}, got {}",
-            shown(min),
-            shown(max),
-            shown(v)
-        ))
-    }
-}
-
-/// `v` when it is a finite number above `min` and at most `max`; else a message naming `key`.
-fn above(key: &str, v: f64, min: f64, max: f64, unit: &str) -> Result<f64, String> {
-    if v.is_finite() && v > min && v <= max {
-        Ok(v)
-    } else {
-        Err(format!(
-            "key '{key}': must be above {} and at most {} {unit}, got {}",
-            shown(min),
-            shown(max),
-            shown(v)
-        ))
-    }
-}
-
-/// A number as a launch file writes it: `1e308`, not 300 digits; else 4 significant digits.
-fn shown(v: f64) -> String {
-    if !v.is_finite() || v == 0.0 {
-        return format!("{v}");
-    }
-    let a = v.abs();
-    if !(1e-4..1e6).contains(&a) {
-        let s = format!("{v:.3e}");
-        return match s.split_once('e') {
-            Some((m, e)) => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
-            None => s,
-        };
-    }
-    let digits = (3 - a.log10().floor() as i32).max(0) as usize;
-    let s = format!("{v:.digits$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
 }
 
 #[cfg(test)]
