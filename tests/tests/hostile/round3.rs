@@ -28,6 +28,9 @@ fn a_host_lease_out_of_its_range_is_refused_naming_the_set() {
         let (code, err) = launch_with_set("convoy/convoy-hosts.toml", "1s", &set);
         assert_eq!(code, 2, "{set}: {err}");
         assert!(err.contains(&format!("--set {set}")), "{set}: {err}");
-        assert!(err.contains(expected), "{set}: expected '{expected}' in {err}");
+        assert!(
+            err.contains(expected),
+            "{set}: expected '{expected}' in {err}"
+        );
     }
 }
