@@ -388,3 +388,7 @@ fn key_at(text: &str, offset: usize) -> Option<String> {
 #[cfg(test)]
 #[path = "rse_check_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "rse_fuzz_tests.rs"]
+mod fuzz_tests;
