@@ -169,6 +169,29 @@ pub fn frame(f: &Frame) -> Result<(), String> {
 mod tests {
     use super::*;
 
+    /// The encounter's params under mutation fuzzing (`caravan_report::fuzz`: numbers
+    /// replaced by 0, −1, 1e308, huge integers…, lines deleted or swapped): each input is
+    /// refused with an error or accepted, never a panic, and an accepted one keeps its
+    /// promise (a step never carries a drone past the collision radius). `PROPTEST_CASES`
+    /// sets the number of inputs (2,000 in CI).
+    #[test]
+    fn fuzz_encounter_params_never_panic() {
+        let text = serde_json::to_string_pretty(&Encounter::default()).unwrap();
+        let cases: u64 = std::env::var("PROPTEST_CASES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(2_000);
+        for seed in 0..cases {
+            let mutated = caravan_report::fuzz::mutate(&text, seed);
+            let Ok(e) = serde_json::from_str::<Encounter>(&mutated) else {
+                continue;
+            };
+            if encounter(&e).is_ok() {
+                assert!(e.speed_m_s * e.step_s <= e.collision_radius_m, "{mutated}");
+            }
+        }
+    }
+
     #[test]
     fn the_default_encounter_and_frame_are_in_range() {
         encounter(&Encounter::default()).unwrap();
