@@ -1,7 +1,11 @@
 //! The world and robot-description loaders under mutation fuzzing: shipped files, edited at
 //! random (`caravan_report::fuzz`), must load or give an error, never panic. CI runs 2,000
 //! worlds and 400 robot descriptions; `PROPTEST_CASES=1000000 cargo nextest run --release -p caravan-tests
-//! --test fuzz` is the long run (docs/reliability.md).
+//! --test fuzz` is the long run (docs/reliability.md). `fuzz/inputs.rs` fuzzes recordings,
+//! hosts tables and policy files the same way.
+
+#[path = "fuzz/inputs.rs"]
+mod inputs;
 
 use caravan_report::fuzz::mutate;
 use caravan_tests::workspace_root;

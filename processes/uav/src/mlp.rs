@@ -25,6 +25,14 @@ pub struct Mlp {
 }
 
 impl Mlp {
+    /// Reads the weights file at `path` and checks it ([`Mlp::parse`]). Only a regular file
+    /// of at most [`caravan::input::MAX_INPUT_BYTES`] is read: a device, a directory or an
+    /// absurdly large file is an error at once, not a hang or an exhausted memory.
+    pub fn read(path: &std::path::Path, inputs: usize) -> Result<Self, String> {
+        let text = caravan::input::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+        Self::parse(&text, inputs)
+    }
+
     /// Reads and checks a weights file: consecutive layers must fit, the first take 6 inputs.
     pub fn parse(text: &str, inputs: usize) -> Result<Self, String> {
         let file: File =

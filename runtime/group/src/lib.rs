@@ -17,6 +17,7 @@ pub mod bad_input;
 mod bag;
 pub mod clean;
 pub mod graph;
+pub mod info;
 pub mod inject;
 pub mod launch;
 pub mod play;

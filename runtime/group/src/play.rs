@@ -116,7 +116,7 @@ pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
             }
         }
     }
-    for message in mcap::MessageStream::new(&bytes).with_context(at)? {
+    for message in crate::recording::messages(&bytes).with_context(at)? {
         let message = message.with_context(at)?;
         let channel = &message.channel;
         if !caravan_channel(channel) {

@@ -1,7 +1,7 @@
 //! A recording's Caravan messages as the player reads them, from a Caravan recording
 //! (`play.rs`) or a rosbag2 bag (`bag.rs`).
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use caravan_schemas::descriptor::Descriptor;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -44,6 +44,69 @@ impl Recording {
         }
         Ok(())
     }
+}
+
+/// Every message of the MCAP file `bytes`, in file order, each chunk's CRC checked as it is
+/// decompressed. No record may be longer than the file or [`caravan::input::MAX_INPUT_BYTES`],
+/// whichever is more, nor run past the end of its uncompressed chunk: a damaged length field
+/// is an error, not an allocation of a terabyte or an overflow (`mcap::MessageStream` sets no
+/// limit and panics on a length near 2⁶⁴; mcap 0.26's reader subtracts an uncompressed chunk's
+/// record from what remains of the chunk unchecked). Found by the recording fuzz
+/// (tests/tests/fuzz/inputs.rs).
+pub(crate) fn messages(bytes: &[u8]) -> Result<mcap::io::MessageReader<std::io::Cursor<&[u8]>>> {
+    records_fit_their_chunks(bytes)?;
+    let limit = usize::try_from(caravan::input::MAX_INPUT_BYTES)
+        .unwrap_or(usize::MAX)
+        .max(bytes.len());
+    let options = mcap::sans_io::LinearReaderOptions::default()
+        .with_record_length_limit(limit)
+        .with_validate_chunk_crcs(true);
+    Ok(mcap::io::MessageReader::new_with_options(
+        std::io::Cursor::new(bytes),
+        options,
+    ))
+}
+
+/// Checks that each record inside an uncompressed chunk ends within the chunk, walking the
+/// file's records as mcap's reader does; what that reader refuses itself is left to it.
+fn records_fit_their_chunks(bytes: &[u8]) -> Result<()> {
+    const CHUNK: u8 = 0x06;
+    const FOOTER: u8 = 0x02;
+    let number = |at: usize, width: usize| -> Option<usize> {
+        let mut le = [0u8; 8];
+        le[..width].copy_from_slice(bytes.get(at..at.checked_add(width)?)?);
+        usize::try_from(u64::from_le_bytes(le)).ok()
+    };
+    // Where a record of length field at `at + 1` ends, if before `end`.
+    let record_end = |at: usize, end: usize| {
+        number(at + 1, 8)
+            .and_then(|len| (at + 9).checked_add(len))
+            .filter(|&e| e <= end)
+    };
+    let mut at = 8;
+    while let Some(end) = record_end(at, bytes.len()) {
+        if bytes[at] == FOOTER {
+            break;
+        }
+        // A chunk: start and end times, uncompressed size and CRC, the compression's name
+        // (empty: uncompressed), the records' length, the records.
+        let content = at + 9;
+        let records = (bytes[at] == CHUNK && number(content + 28, 4) == Some(0))
+            .then(|| number(content + 32, 8))
+            .flatten()
+            .and_then(|len| (content + 40).checked_add(len))
+            .filter(|&e| e <= end);
+        if let Some(records_end) = records {
+            let mut r = content + 40;
+            while r < records_end {
+                r = record_end(r, records_end).with_context(|| {
+                    format!("a record inside the chunk at byte {at} runs past the chunk's end")
+                })?;
+            }
+        }
+        at = end;
+    }
+    Ok(())
 }
 
 /// Whether `patterns` (names or patterns with `*`, as in a launch file's `record`) select

@@ -102,31 +102,7 @@ fn prepare(args: &ResimArgs) -> Result<(LaunchFile, Vec<Recorded>)> {
     let file = &args.file;
     let bytes = caravan::input::map_recording(file)
         .with_context(|| format!("cannot read {}", file.display()))?;
-    let summary = mcap::Summary::read(&bytes)
-        .ok()
-        .flatten()
-        .ok_or_else(|| anyhow!("{}: not an MCAP file with a summary", file.display()))?;
-    let attached = summary
-        .attachment_indexes
-        .iter()
-        .find(|a| a.name == caravan_report::RESOLVED_LAUNCH_FILE)
-        .ok_or_else(|| {
-            anyhow!(
-                "{} has no launch file attached; only recordings made by `caravan launch` can \
-                 be re-simulated",
-                file.display()
-            )
-        })?;
-    let text = String::from_utf8(mcap::read::attachment(&bytes, attached)?.data.into_owned())
-        .context("the attached launch file is not UTF-8")?;
-    let mut recorded_path = None;
-    for index in &summary.metadata_indexes {
-        let m = mcap::read::metadata(&bytes, index)?;
-        if let Some(p) = m.metadata.get(LAUNCH_FILE_KEY) {
-            recorded_path = Some(PathBuf::from(p));
-        }
-    }
-    let recorded_path = recorded_path.unwrap_or_else(|| PathBuf::from("launch.toml"));
+    let (text, recorded_path) = attached_launch_file(file, &bytes)?;
     let launch_dir = match &args.launch_dir {
         Some(dir) => dir.clone(),
         None => recorded_path
@@ -187,6 +163,39 @@ fn prepare(args: &ResimArgs) -> Result<(LaunchFile, Vec<Recorded>)> {
         );
     }
     Ok((lf, original))
+}
+
+/// The launch file attached to the recording `bytes` (read from `file`, named in errors) and
+/// the path it was launched from, as the run's metadata records it (`launch.toml` when it
+/// does not): what `caravan resim` reruns. An error for a file without a summary or without
+/// the attachment, or whose records the summary points at are damaged.
+pub fn attached_launch_file(file: &Path, bytes: &[u8]) -> Result<(String, PathBuf)> {
+    let summary = mcap::Summary::read(bytes)
+        .ok()
+        .flatten()
+        .ok_or_else(|| anyhow!("{}: not an MCAP file with a summary", file.display()))?;
+    let attached = summary
+        .attachment_indexes
+        .iter()
+        .find(|a| a.name == caravan_report::RESOLVED_LAUNCH_FILE)
+        .ok_or_else(|| {
+            anyhow!(
+                "{} has no launch file attached; only recordings made by `caravan launch` can \
+                 be re-simulated",
+                file.display()
+            )
+        })?;
+    let text = String::from_utf8(mcap::read::attachment(bytes, attached)?.data.into_owned())
+        .context("the attached launch file is not UTF-8")?;
+    let mut recorded_path = None;
+    for index in &summary.metadata_indexes {
+        let m = mcap::read::metadata(bytes, index)?;
+        if let Some(p) = m.metadata.get(LAUNCH_FILE_KEY) {
+            recorded_path = Some(PathBuf::from(p));
+        }
+    }
+    let recorded_path = recorded_path.unwrap_or_else(|| PathBuf::from("launch.toml"));
+    Ok((text, recorded_path))
 }
 
 /// Compares what `node` published in the recording with what it published in the rerun, up

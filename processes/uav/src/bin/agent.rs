@@ -34,9 +34,8 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Box<dyn Policy>, String> 
             let path = p
                 .weights
                 .ok_or("key 'weights': the policy 'mlp' needs a weights file")?;
-            let text = std::fs::read_to_string(identity.resolve_path(&path))
-                .map_err(|e| format!("key 'weights': cannot read {path}: {e}"))?;
-            let mlp = Mlp::parse(&text, 6).map_err(|e| format!("key 'weights': {path}: {e}"))?;
+            let mlp = Mlp::read(&identity.resolve_path(&path), 6)
+                .map_err(|e| format!("key 'weights': {path}: {e}"))?;
             if mlp.outputs() != 2 {
                 return Err(format!(
                     "key 'weights': {path}: 2 outputs expected, got {}",
