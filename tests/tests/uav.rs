@@ -85,5 +85,7 @@ fn the_shipped_learned_policy_passes_in_the_agent_process() {
     assert_eq!(u["outcomes"]["passed"]["count"], 6, "{u}");
 }
 
+#[path = "ranges/refused.rs"]
+mod refused;
 #[path = "ranges/uav_convoy.rs"]
 mod uav_convoy_ranges;

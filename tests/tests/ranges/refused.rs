@@ -6,8 +6,8 @@ use caravan_tests::{TestGroup, workspace_bin, workspace_root};
 use std::process::Command;
 
 /// Launches `launch/<file>` with `--set set` into a runs directory of its own and checks the
-/// launch was refused before the start, naming `key`.
-pub fn assert_refused_before_start(file: &str, set: &str, key: &str) {
+/// launch was refused before the start, naming `key`; returns what it said.
+pub fn assert_refused_before_start(file: &str, set: &str, key: &str) -> String {
     let group = TestGroup::new("range");
     let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
     let out = Command::new(workspace_bin("caravan"))
@@ -38,4 +38,5 @@ pub fn assert_refused_before_start(file: &str, set: &str, key: &str) {
     );
     assert_eq!(run_dirs, 0, "{set}: a run directory was made: {err}");
     assert!(shm.is_empty(), "{set}: {shm:?}");
+    err
 }

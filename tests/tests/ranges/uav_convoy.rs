@@ -3,35 +3,19 @@
 //! before anything starts (exit 2), with a message naming the key and the `--set` that wrote
 //! it, no panic and no run directory.
 
-use caravan_tests::{TestGroup, workspace_bin, workspace_root};
-use std::process::Command;
+use super::refused::assert_refused_before_start;
 
-/// Launches `launch/<file>` with `--set set` into a runs directory of its own and checks that
-/// it was refused before the start, naming `key` (as the message quotes it) and the `--set`.
-fn assert_refused(file: &str, set: &str, key: &str) {
-    let group = TestGroup::new("range");
-    let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
-    let out = Command::new(workspace_bin("caravan"))
-        .arg("launch")
-        .arg(workspace_root().join("launch").join(file))
-        // Short, so that a value let through does not run the whole scenario.
-        .args(["--quiet", "--duration", "1s", "--set", set, "--set"])
-        .arg(format!("group.name={}", group.name))
-        .arg("--runs-dir")
-        .arg(&runs)
-        .output()
-        .expect("run caravan launch");
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    let run_dirs = std::fs::read_dir(&runs).map_or(0, |d| d.count());
-    let _ = std::fs::remove_dir_all(&runs);
-    assert_eq!(out.status.code(), Some(2), "{set}: {err}");
-    assert!(!err.contains("panicked"), "{set}: {err}");
-    assert!(err.contains(key), "{set}: expected {key} in: {err}");
-    assert!(
-        err.contains("--set"),
-        "{set}: the --set is not named: {err}"
-    );
-    assert_eq!(run_dirs, 0, "{set}: a run directory was made: {err}");
+/// `launch/<file>` with `--set set` is refused before the start, saying `what` (a key as the
+/// message quotes it, `key '…'`, or the launcher's own wording for a value it cannot pass,
+/// which it reports at the process's `params`) and the `--set` that wrote it.
+fn assert_refused(file: &str, set: &str, what: &str) {
+    let key = match what.strip_prefix("key '") {
+        Some(rest) => rest.trim_end_matches('\''),
+        None => "params",
+    };
+    let err = assert_refused_before_start(file, set, key);
+    assert!(err.contains(what), "{set}: expected {what} in: {err}");
+    assert!(err.contains("--set"), "{set}: the --set is not named: {err}");
 }
 
 #[test]
