@@ -15,7 +15,10 @@ fn assert_refused(file: &str, set: &str, what: &str) {
     };
     let err = assert_refused_before_start(file, set, key);
     assert!(err.contains(what), "{set}: expected {what} in: {err}");
-    assert!(err.contains("--set"), "{set}: the --set is not named: {err}");
+    assert!(
+        err.contains("--set"),
+        "{set}: the --set is not named: {err}"
+    );
 }
 
 #[test]
