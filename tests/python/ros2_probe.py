@@ -80,7 +80,12 @@ CYCLONEDDS_XML = (
     "</Domain></CycloneDDS>"
 )
 
-HISTORY_DEPTH = 10
+# Samples a reader keeps until the probe takes them. ROS 2's default of 10 is too few for a
+# logger: a Python probe on a loaded machine falls behind, and on a topic fed by several
+# sources (every robot's transforms on /tf, one at 100 Hz) the last ten would all be one
+# source's. Writers keep ROS 2's 10.
+READER_DEPTH = 1000
+WRITER_DEPTH = 10
 
 
 def cyclone_config():
@@ -155,7 +160,7 @@ def parse_endpoint(spec):
     return topic, ros_type, (reliability, durability)
 
 
-def make_qos(reliability, durability):
+def make_qos(reliability, durability, depth):
     return Qos(
         Policy.Reliability.Reliable(duration(milliseconds=100))
         if reliability == "reliable"
@@ -163,7 +168,7 @@ def make_qos(reliability, durability):
         Policy.Durability.TransientLocal
         if durability == "transient_local"
         else Policy.Durability.Volatile,
-        Policy.History.KeepLast(HISTORY_DEPTH),
+        Policy.History.KeepLast(depth),
         # Plain CDR (XCDR1) like every ROS 2 middleware; Cyclone would also offer XCDR2.
         Policy.DataRepresentation(use_cdrv0_representation=True),
     )
@@ -251,7 +256,9 @@ def run(args):
     waitset = WaitSet(participant)
     readers = []
     for ros_topic, ros_type, qos in args.listen:
-        reader = DataReader(participant, dds_topic(ros_topic, ros_type), qos=make_qos(*qos))
+        reader = DataReader(
+            participant, dds_topic(ros_topic, ros_type), qos=make_qos(*qos, READER_DEPTH)
+        )
         condition = ReadCondition(reader, SampleState.Any | ViewState.Any | InstanceState.Any)
         waitset.attach(condition)
         readers.append((ros_topic, ros_type, reader, condition))
@@ -259,7 +266,9 @@ def run(args):
     writer = None
     if args.publish is not None:
         ros_topic, ros_type, qos = args.publish
-        writer = DataWriter(participant, dds_topic(ros_topic, ros_type), qos=make_qos(*qos))
+        writer = DataWriter(
+            participant, dds_topic(ros_topic, ros_type), qos=make_qos(*qos, WRITER_DEPTH)
+        )
 
     # Tests wait for this line before they start the group, so that a slow start of Python
     # and Cyclone DDS does not miss the run.

@@ -8,6 +8,7 @@ pub mod convoy;
 pub mod engine_f32;
 pub mod engine_f64;
 pub mod firmware;
+pub mod link_twists;
 pub mod messages;
 pub mod motor;
 pub mod params;

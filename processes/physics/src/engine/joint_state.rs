@@ -35,17 +35,6 @@ pub struct JointIo {
     pub reading: JointReading,
 }
 
-fn iso(p: &Pose) -> Isometry3<f64> {
-    let t = p.translation;
-    let q = p.rotation;
-    Isometry3::from_parts(
-        nalgebra::Translation3::new(t.x as f64, t.y as f64, t.z as f64),
-        UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
-            q.w as f64, q.x as f64, q.y as f64, q.z as f64,
-        )),
-    )
-}
-
 impl JointIo {
     pub fn new(
         joint: usize,
@@ -214,8 +203,8 @@ impl JointIo {
     pub fn read(&mut self, bodies: &RigidBodySet, multibodies: &MultibodyJointSet) {
         let (b1, b2) = (&bodies[self.body1], &bodies[self.body2]);
         let axis_w = self.world_axis(bodies);
-        let joint_w = iso(b1.position()) * self.frame;
-        let child = iso(b2.position());
+        let joint_w = shapes::isometry(b1.position()) * self.frame;
+        let child = shapes::isometry(b2.position());
         let generalized = self.multibody.and_then(|h| {
             let (mb, link) = multibodies.get(h)?;
             mb.joint_velocity(mb.link(link)?)

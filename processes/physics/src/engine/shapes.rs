@@ -25,6 +25,22 @@ pub fn pose(iso: &Isometry3<f64>) -> Pose {
     Pose::from_parts(vector(&iso.translation.vector), rotation(&iso.rotation))
 }
 
+/// The inverse of [`vector`]: rapier's vector in f64.
+pub fn vector_f64(v: Vector) -> Vector3<f64> {
+    Vector3::new(v.x as f64, v.y as f64, v.z as f64)
+}
+
+/// The inverse of [`pose`]: rapier's pose in f64.
+pub fn isometry(p: &Pose) -> Isometry3<f64> {
+    let q = p.rotation;
+    Isometry3::from_parts(
+        vector_f64(p.translation).into(),
+        UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+            q.w as f64, q.x as f64, q.y as f64, q.z as f64,
+        )),
+    )
+}
+
 /// The collider frame for `geometry` placed at `at` (body frame): `at` itself, except that a
 /// cylinder's frame is turned so that rapier's y axis lies along the URDF's z axis.
 pub fn collider_iso(geometry: &Geometry, at: &Isometry3<f64>) -> Isometry3<f64> {

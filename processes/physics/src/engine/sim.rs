@@ -346,26 +346,41 @@ impl Simulation {
         })
     }
 
-    /// Pose (world frame) and twist of every link of robot `i`, in description order.
+    /// Pose (world frame) and twist of every link of robot `i`, in description order. The
+    /// twists are carried out from the root's along the tree by the joints' speeds after the
+    /// step ([`crate::link_twists`]), so each is the velocity of the link's origin at the
+    /// instant of its pose.
     pub fn link_states(&self, i: usize) -> Vec<(caravan_schemas::Pose3D, Twist)> {
         let rb = &self.scene.robots[i];
+        let r = &self.robots[i];
         let bodies = &self.scene.physics.bodies;
-        rb.plan
+        let poses: Vec<Pose> = rb
+            .plan
             .link_body
             .iter()
-            .enumerate()
-            .map(|(link, (b, in_body))| {
-                let body = &bodies[rb.bodies[*b]];
-                // A rim's body does not spin; its link does.
-                let spin = self
-                    .rims
-                    .spin(i, link)
-                    .map_or(Vector::ZERO, |w| *body.rotation() * w);
-                let pose = *body.position() * super::shapes::pose(in_body);
-                let origin = pose.translation;
+            .map(|(b, in_body)| *bodies[rb.bodies[*b]].position() * super::shapes::pose(in_body))
+            .collect();
+        let exact: Vec<nalgebra::Isometry3<f64>> =
+            poses.iter().map(super::shapes::isometry).collect();
+        let d = &r.description;
+        let mut speeds = vec![0.0; d.joints.len()];
+        for io in &r.joints {
+            speeds[io.joint] = io.reading.velocity;
+        }
+        let root = self.root_twist(i, &exact[d.root]);
+        let twists = crate::link_twists::link_twists(d, &exact, root, |j| speeds[j]);
+        let v = |v: nalgebra::Vector3<f64>| Vector3 {
+            x: v.x,
+            y: v.y,
+            z: v.z,
+        };
+        poses
+            .iter()
+            .zip(twists)
+            .map(|(pose, twist)| {
                 let q = pose.rotation;
                 let p3 = caravan_schemas::Pose3D {
-                    position: v3(origin),
+                    position: v3(pose.translation),
                     orientation: caravan_schemas::Quaternion {
                         x: q.x as f64,
                         y: q.y as f64,
@@ -373,12 +388,46 @@ impl Simulation {
                         w: q.w as f64,
                     },
                 };
-                (
-                    p3,
-                    twist_of(body.velocity_at_point(origin), body.angvel() + spin),
-                )
+                let twist = Twist {
+                    linear: v(twist.linear),
+                    angular: v(twist.angular),
+                };
+                (p3, twist)
             })
             .collect()
+    }
+
+    /// The twist of robot `i`'s root link, whose pose is `root`. A free multibody root's
+    /// velocity is its generalized one, the state after the step (rapier leaves the root
+    /// body's as it was at the start of the last substep); any other root's is its body's.
+    fn root_twist(
+        &self,
+        i: usize,
+        root: &nalgebra::Isometry3<f64>,
+    ) -> crate::link_twists::LinkTwist {
+        let rb = &self.scene.robots[i];
+        let physics = &self.scene.physics;
+        let handle = rb.bodies[rb.plan.link_body[self.robots[i].description.root].0];
+        let body = &physics.bodies[handle];
+        let generalized = physics
+            .multibody_joints
+            .rigid_body_link(handle)
+            .and_then(|id| {
+                let mb = physics.multibody_joints.get_multibody(id.multibody)?;
+                let link = mb.link(id.id).filter(|l| l.is_root())?;
+                let speeds: Vec<Real> = mb.joint_velocity(link).iter().copied().collect();
+                (speeds.len() == 6).then(|| link.joint.jacobian_mul_coordinates(&speeds))
+            });
+        let (linvel, angvel) =
+            generalized.map_or((body.linvel(), body.angvel()), |v| (v.linvel, v.angvel));
+        let f64v = super::shapes::vector_f64;
+        let com = super::shapes::isometry(body.position())
+            * nalgebra::Point3::from(f64v(body.local_center_of_mass()));
+        let angular = f64v(angvel);
+        crate::link_twists::LinkTwist {
+            linear: f64v(linvel) + angular.cross(&(root.translation.vector - com.coords)),
+            angular,
+        }
     }
 
     /// Pose (map frame) and twist (map frame) of robot `i`'s root link.
