@@ -21,8 +21,9 @@ docs/recording.md says what a recording holds.
 
 A message of a type that ``caravan.schemas`` has is decoded into its class (``msg.to_dict()``
 is the recorded JSON without its header); one of another type into the class its recorded
-descriptor describes (``caravan.types.message_class``), else a ``dict``. Each item also has
-``.header`` (a ``schemas.Header``), ``.type_name`` and ``.json`` (the message as recorded).
+descriptor describes (``caravan.types.message_class``), else a ``dict`` of its fields. Each
+item also has ``.header`` (a ``schemas.Header``: ``seq``, ``stamp_ns``, ``source_id``),
+``.type_name`` and ``.json`` (the message as recorded, header included).
 
 Every error is a ``RecordingError`` naming the file: a file that is missing, not MCAP, not a
 Caravan recording, cut short (no footer: the recorder did not finish it), or damaged (a chunk
@@ -122,8 +123,8 @@ def open(path: Union[str, os.PathLike], *, decode: bool = True) -> "Recording": 
 class Recording:
     """A Caravan recording, opened and checked: its summary read, its header's writer checked.
 
-    ``decode=False`` yields every message as its recorded ``dict`` (faster for large messages
-    such as maps, when only a few fields are needed)."""
+    ``decode=False`` yields every message as a ``dict`` of its recorded fields (faster for
+    large messages such as maps, when only a few fields are needed)."""
 
     def __init__(self, path: Union[str, os.PathLike], *, decode: bool = True):
         self.path = os.fspath(path)
@@ -272,11 +273,12 @@ class Recording:
         if not isinstance(view, dict):
             raise RecordingError(f"{self.path}: a message on {topic} is not a JSON object")
         header = from_dict(schemas.Header, view.get("header") or {})
+        # The header is the envelope the recorder adds (the classes have no such field).
+        fields = {k: v for k, v in view.items() if k != "header"}
         cls = self._types.get(type_name) if self._decode else None
         if cls is None:
-            decoded = view
+            decoded = fields
         else:
-            fields = {k: v for k, v in view.items() if k != "header"}
             try:
                 decoded = from_dict(cls, fields)
             except (TypeError, ValueError, KeyError, IndexError) as e:

@@ -437,3 +437,6 @@ fn python_package_installs_with_pip() {
     assert!(target.join("caravan/node.py").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[path = "python/recording.rs"]
+mod recording_and_report;
