@@ -6,7 +6,9 @@
 use caravan_schemas::{
     FixedString, JointState, JointValue, LaserScan, NodeStatus, OccupancyGrid, Path2D, Pose2D,
 };
-use caravan_tests::{TestGroup, python_env, recording, workspace_bin, workspace_root};
+use caravan_tests::{
+    Scenario, TestGroup, ping_pong, python_env, recording, workspace_bin, workspace_root,
+};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -469,4 +471,48 @@ fn python_decodes_every_shape_and_names_an_encoding_it_cannot_read() {
         "{err}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The Python plugin docs/scenarios.md shows beside the Rust one
+/// (tests/src/bin/caravan-count-report.rs) runs under the launcher and writes, on the same run,
+/// the section the Rust one writes: the protocol and the page's example both hold.
+#[test]
+fn the_documented_python_plugin_writes_what_the_rust_one_writes() {
+    let docs = std::fs::read_to_string(workspace_root().join("docs/scenarios.md")).unwrap();
+    let opening = "```python\nfrom caravan import report";
+    let start = docs
+        .find(opening)
+        .expect("a Python plugin in docs/scenarios.md")
+        + 10;
+    let end = start + docs[start..].find("```").unwrap();
+    let launcher = workspace_root().join("python/caravan-python");
+    let params = r#"{ topic = "demo/ping", field = "x" }"#;
+    let body = format!(
+        "{}\n[[report]]\nexec = \"{} count.py\"\nparams = {params}\n",
+        ping_pong(),
+        launcher.display()
+    );
+    python_env();
+    let s = Scenario::new("py-count", &body);
+    std::fs::write(s.dir.join("count.py"), &docs[start..end]).unwrap();
+    let out = s.run(&["--duration", "5s"]);
+    assert!(out.status.success(), "{}", text(&out));
+    let report = s.report();
+    // ping steps at 0, 0.1, …, 5.0 s and publishes its step index as x.
+    let expected = json!({"topic": "demo/ping", "messages": 51, "sum": 1275.0});
+    assert_eq!(report["count"], expected, "{report}");
+
+    let dir = s.run_dirs().pop().unwrap();
+    let read = |ext: &str| std::fs::read_to_string(dir.join(format!("sections/count.{ext}")));
+    let (python_json, python_md) = (read("json").unwrap(), read("md").unwrap());
+    std::fs::remove_dir_all(dir.join("sections")).unwrap();
+    let rust = Command::new(workspace_bin("caravan-count-report"))
+        .arg(&dir)
+        .env("CARAVAN_PARAMS", r#"{"topic": "demo/ping", "field": "x"}"#)
+        .output()
+        .unwrap();
+    assert!(rust.status.success(), "{}", text(&rust));
+    let parse = |t: &str| serde_json::from_str::<Value>(t).unwrap();
+    assert_eq!(parse(&python_json), parse(&read("json").unwrap()));
+    assert_eq!(python_md, read("md").unwrap());
 }
