@@ -5,6 +5,10 @@ schemas, ``caravan.types`` builds those of types learned at run time (``node.mes
 ``caravan.identity`` the node's identity and params, ``caravan.ports`` typed publishers and
 subscribers, ``caravan.node`` the node and its realtime and lockstep step loops.
 See docs/agents.md, section Python, and examples/python/follower.py.
+
+``caravan.recording`` reads a run's ``record.mcap`` back into those classes and
+``caravan.report`` makes a script a report plugin (docs/scenarios.md, and
+python/examples/travelled_distance/); import them by name (``from caravan import report``).
 """
 
 from . import schemas, types

@@ -209,8 +209,8 @@ pub fn launch_with_set(file: &str, duration: &str, set: &str) -> (i32, String) {
 }
 
 /// The interpreter of `<workspace>/.venv`, the environment Python agents run in. The first
-/// call has `python/caravan-python --setup` create it (with the iceoryx2 package from the
-/// package registry), the same set-up a launch file's Python agent gets on first use; it is
+/// call has `python/caravan-python --setup` create it (with the iceoryx2, mcap and zstandard
+/// packages from the package registry), the same set-up a launch file's Python agent gets on first use; it is
 /// safe when several test processes call it at once.
 pub fn python_env() -> std::path::PathBuf {
     let root = workspace_root();
