@@ -85,7 +85,26 @@ fn spin_up_times_are_within_one_step_of_i_omega_over_m() {
         // The threshold crossing comes after the fitted end: the speed loop's last approach.
         assert!(f("threshold_s") >= f("fit_s") - f("step_s"), "{imu}");
         assert!(f("paper_s") > 0.0, "a reference row: {imu}");
+        // On the axis the IMU reads (0, 0, g) throughout, the tangential axis included
+        // (1.7e-5 m/s² there while link velocities lagged a step).
+        assert!(f("accel_readings") > 1000.0, "{imu}");
+        assert!(f("tangential_max_err_m_s2") <= 1e-6, "{imu}");
+        assert_eq!(imu["accel_within_target"], true, "{imu}");
     }
+}
+
+#[test]
+fn an_imu_on_a_forearm_turned_about_the_shoulder_meets_the_targets() {
+    // The forearm's origin (the elbow) and centre of mass are off the shoulder's axis; bent
+    // 60°, the IMU reads a tangential force in its own frame. Until link twists were carried
+    // along the tree, this missed by 8.4e-5 m/s².
+    let imu = run("arm.toml", &["--duration", "2.6s"]);
+    assert_met(&imu, &["rest", "bending", "bent", "turning"]);
+    let turning = &imu["phases"][3]["expected_accel_m_s2"];
+    let (w, l, d, b) = (1.2f64, 0.45, 0.2, 60f64.to_radians());
+    let (x, y) = (turning[0].as_f64().unwrap(), turning[1].as_f64().unwrap());
+    assert!((x + w * w * (l * b.cos() + d)).abs() < 1e-12, "{turning}");
+    assert!((y - w * w * l * b.sin()).abs() < 1e-12, "{turning}");
 }
 
 /// The force-sensor section's phase names and its largest |F/m − finite difference| per phase.
@@ -181,6 +200,16 @@ fn an_imu_lift_force_of_1e308_n_is_refused_before_start() {
         "imu/lift.toml",
         "process.driver.params.force_n=1e308",
         "force_n",
+    );
+}
+
+#[test]
+fn an_arm_turning_before_its_elbow_has_bent_is_refused_before_start() {
+    // The elbow bends 60° at 1 rad/s from 0.5 s, until 1.55 s.
+    assert_refused_before_start(
+        "imu/arm.toml",
+        "process.driver.params.spin_from_s=1.0",
+        "spin_from_s",
     );
 }
 

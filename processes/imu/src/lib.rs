@@ -6,6 +6,7 @@
 //! against the analytic value of its phase.
 //!
 //! - [`allan_run`]: the Allan-deviation check of the IMU's error model;
+//! - [`arm`]: an IMU on an arm's forearm, off the axis the arm turns about;
 //! - [`scenario`]: the scenarios, their commands over time and their analytic readings;
 //! - [`range`]: the physical range of every param of the scenarios, checked before start;
 //! - [`phase_errors`]: max and RMS error per axis of the readings of each phase;
@@ -14,6 +15,7 @@
 //! - [`report`]: the report plugin's section.
 
 pub mod allan_run;
+pub mod arm;
 pub mod phase_errors;
 pub mod plot;
 pub mod range;

@@ -103,16 +103,8 @@ impl Scenario {
                 from_s,
                 end_s,
             } => {
+                turn_rate(rate_rad_s)?;
                 let rate = rate_rad_s.abs();
-                if !(rate.is_finite() && (MIN_TURN_RATE_RAD_S..=MAX_RATE_RAD_S).contains(&rate)) {
-                    return Err(format!(
-                        "key 'rate_rad_s': must be between {} and {} rad/s either way \
-                         (2000 °/s, a gyroscope's full scale), got {}",
-                        bound(MIN_TURN_RATE_RAD_S),
-                        bound(MAX_RATE_RAD_S),
-                        shown(rate_rad_s)
-                    ));
-                }
                 between("radius_m", radius_m, 0.0, MAX_RADIUS_M, "m")?;
                 let centripetal = rate * rate * radius_m;
                 if centripetal > MAX_ACCEL_M_S2 {
@@ -146,6 +138,28 @@ impl Scenario {
                                 on both triads"
                             .into(),
                     );
+                }
+            }
+            Scenario::Arm {
+                rate_rad_s,
+                elbow_deg,
+                imu_x_m,
+                bend_from_s,
+                spin_from_s,
+                end_s,
+                ..
+            } => {
+                turn_rate(rate_rad_s)?;
+                between("elbow_deg", elbow_deg, -180.0, 180.0, "°")?;
+                between("imu_x_m", imu_x_m, 0.0, MAX_RADIUS_M, "m")?;
+                phase("bend_from_s", bend_from_s)?;
+                time("spin_from_s", spin_from_s)?;
+                time("end_s", end_s)?;
+                if !(spin_from_s > bend_from_s && end_s > spin_from_s) {
+                    return Err(format!(
+                        "keys 'bend_from_s' < 'spin_from_s' < 'end_s' must hold, got \
+                         {bend_from_s}, {spin_from_s}, {end_s}"
+                    ));
                 }
             }
             Scenario::SpinUp { start_s, end_s, .. } => {
@@ -211,6 +225,21 @@ fn triad_within_full_scale(
 const _: () = assert!(90.0 / MIN_TILT_RATE_DEG_S <= MAX_TIME_S);
 const _: () = assert!(MIN_TURN_RATE_RAD_S < MAX_RATE_RAD_S);
 
+/// A constant turn's rate (key `rate_rad_s`), either way.
+fn turn_rate(rate_rad_s: f64) -> Result<(), String> {
+    let rate = rate_rad_s.abs();
+    if rate.is_finite() && (MIN_TURN_RATE_RAD_S..=MAX_RATE_RAD_S).contains(&rate) {
+        return Ok(());
+    }
+    Err(format!(
+        "key 'rate_rad_s': must be between {} and {} rad/s either way (2000 °/s, a \
+         gyroscope's full scale), got {}",
+        bound(MIN_TURN_RATE_RAD_S),
+        bound(MAX_RATE_RAD_S),
+        shown(rate_rad_s)
+    ))
+}
+
 /// A force's sign, before its bound is known.
 fn positive(key: &str, v: f64) -> Result<(), String> {
     if v.is_finite() && v > 0.0 {
@@ -237,7 +266,7 @@ mod tests {
 
     #[test]
     fn the_reference_defaults_are_in_range() {
-        for name in ["tilt", "lift", "rotation", "spin_up"] {
+        for name in ["tilt", "lift", "rotation", "spin_up", "arm"] {
             let s = scenario(serde_json::json!({ "scenario": name }));
             s.validate().unwrap();
             s.validate_forces(5.0).unwrap();

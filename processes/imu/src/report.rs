@@ -5,6 +5,7 @@
 //! JSON: `{scenario, readings, phases: [PhaseErrors], accel_max_err_m_s2,
 //! gyro_max_err_rad_s, accel_target_m_s2, gyro_target_rad_s, within_target}`.
 
+use crate::arm::{Arm, ArmGeometry};
 use crate::phase_errors::{PhaseErrors, Reading, score};
 use crate::scenario::Scenario;
 use crate::spin_up::{self, Bar};
@@ -39,6 +40,8 @@ pub struct ImuReport {
     mass_kg: f64,
     /// The spin-up's bar and motor.
     bar: Option<Bar>,
+    /// The arm's keys and geometry.
+    arm: Option<(Arm, ArmGeometry)>,
 }
 
 impl ReportPlugin for ImuReport {
@@ -50,6 +53,7 @@ impl ReportPlugin for ImuReport {
             caravan_world::description::load_description(&inputs.path(urdf))
                 .map_err(|e| format!("key 'urdf': robot description {e}"))
         };
+        let mut arm = None;
         let (mass_kg, bar) = match &scenario {
             Scenario::Lift { urdf, .. } => {
                 let mass_kg = load(urdf)?.mass();
@@ -59,12 +63,25 @@ impl ReportPlugin for ImuReport {
             Scenario::SpinUp { urdf, joint, .. } => {
                 (0.0, Some(Bar::from_description(&load(urdf)?, joint)?))
             }
+            Scenario::Arm {
+                urdf,
+                shoulder,
+                elbow,
+                ..
+            } => {
+                let g = ArmGeometry::from_description(&load(urdf)?, shoulder, elbow)?;
+                let keys = Arm::of(&scenario).expect("the arm");
+                keys.validate(&g)?;
+                arm = Some((keys, g));
+                (0.0, None)
+            }
             _ => (0.0, None),
         };
         Ok(Self {
             scenario,
             mass_kg,
             bar,
+            arm,
         })
     }
 
@@ -91,12 +108,11 @@ impl ReportPlugin for ImuReport {
         if let Scenario::Allan { imu_errors } = &self.scenario {
             return Ok(vec![allan_section(imu_errors, &readings, &run.dir)?]);
         }
-        let phases: Vec<PhaseErrors> = self
-            .scenario
-            .phases(self.mass_kg)
-            .iter()
-            .map(|p| score(p, &readings))
-            .collect();
+        let windows = match &self.arm {
+            Some((arm, g)) => arm.phases(g),
+            None => self.scenario.phases(self.mass_kg),
+        };
+        let phases: Vec<PhaseErrors> = windows.iter().map(|p| score(p, &readings)).collect();
         // The design the reference study rejected, where the run records it: a test mass on
         // a force sensor, a = F/m. Physics stamps a force with the end of its step; the
         // sensor publishes the IMU reading of that step at its next step, so the reading
@@ -123,7 +139,6 @@ impl ReportPlugin for ImuReport {
         // Where the two designs part: per phase, the largest difference at one instant (the
         // finite difference measures the body's own motion, so this is the force sensor's
         // error as a measurement of it), and when.
-        let windows = self.scenario.phases(self.mass_kg);
         let diffs: Vec<(f64, f64)> = windows
             .iter()
             .map(|p| {
@@ -307,6 +322,24 @@ fn spin_up_section(bar: &Bar, readings: &[Reading]) -> anyhow::Result<Section> {
     let rate_deg_s = bar.rate_rad_s.to_degrees();
     let paper = spin_up::reference_row(bar.torque_nm, rate_deg_s, bar.mass_kg);
     let within = fit_err.abs() <= step_s;
+    // The IMU rides on the joint's axis, so whatever the bar does it reads (0, 0, g): x along
+    // the bar (radial), y tangential. The gyro ramps, and is timed above instead.
+    let on_axis = score(
+        &crate::scenario::Phase {
+            name: "on the axis",
+            from_s: crate::scenario::SETTLE_S,
+            to_s: f64::INFINITY,
+            accel: crate::scenario::Expect::Vector([0.0, 0.0, crate::scenario::G]),
+            gyro: [0.0; 3],
+        },
+        readings,
+    );
+    let accel_err = on_axis
+        .accel_err_m_s2
+        .iter()
+        .map(|s| s.max)
+        .collect::<Vec<_>>();
+    let accel_within = on_axis.accel_max() <= ACCEL_TARGET_M_S2;
     let json = serde_json::json!({
         "scenario": "spinup",
         "torque_nm": bar.torque_nm,
@@ -324,6 +357,12 @@ fn spin_up_section(bar: &Bar, readings: &[Reading]) -> anyhow::Result<Section> {
         "within_one_step": within,
         "paper_s": paper.map(|p| p.paper_s),
         "paper_err_s": paper.map(|p| p.paper_err_s),
+        "accel_readings": on_axis.readings,
+        "accel_max_err_m_s2": on_axis.accel_max(),
+        "accel_err_xyz_m_s2": accel_err,
+        "tangential_max_err_m_s2": accel_err[1],
+        "accel_target_m_s2": ACCEL_TARGET_M_S2,
+        "accel_within_target": accel_within,
         "plot": PLOT_FILE,
     });
     let opt =
@@ -335,6 +374,9 @@ fn spin_up_section(bar: &Bar, readings: &[Reading]) -> anyhow::Result<Section> {
          | analytic I·ω/M (s) | fit (s) | fit error (s) | threshold (s) | threshold error (s) | paper (s) | paper's error (s) |\n\
          |---:|---:|---:|---:|---:|---:|---:|\n\
          | {analytic:.4} | {:.4} | {fit_err:.1e} | {} | {} | {} | {} |\n\n\
+         The IMU rides on the axis, so it reads f = (0, 0, g) throughout: largest error over \
+         {} readings from {:.2} s, radial / tangential / vertical {:.1e} / {:.1e} / {:.1e} \
+         m/s², target {ACCEL_TARGET_M_S2:.0e}: **{}**.\n\n\
          ![IMU readings against time]({PLOT_FILE})\n",
         bar.torque_nm,
         bar.mass_kg,
@@ -347,6 +389,12 @@ fn spin_up_section(bar: &Bar, readings: &[Reading]) -> anyhow::Result<Section> {
         threshold_err.map_or("–".into(), |e| format!("{e:.1e}")),
         opt(paper.map(|p| p.paper_s), 3),
         opt(paper.map(|p| p.paper_err_s), 3),
+        on_axis.readings,
+        crate::scenario::SETTLE_S,
+        accel_err[0],
+        accel_err[1],
+        accel_err[2],
+        if accel_within { "met" } else { "missed" },
     );
     Ok(Section {
         name: "imu".into(),

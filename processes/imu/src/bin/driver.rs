@@ -1,11 +1,13 @@
 //! `caravan-imu-driver`: moves robot 0 as its scenario says (see `caravan_imu::scenario`):
 //! the platform's angular velocity on `robot/0/cmd_vel` (world frame) every step, one
 //! upward push on `robot/0/wrench` at the cube's centre of mass, or the bar's joint to its
-//! velocity limit on `robot/0/joint_command`. Params: the scenario table,
+//! velocity limit on `robot/0/joint_command`, or the arm's elbow to its bend and its
+//! shoulder to its rate there. Params: the scenario table,
 //! e.g. `{ scenario = "tilt", rate_deg_s = 3.0 }`. Give it a `rate` whose period divides the
 //! scenario's switching times, so that every switch falls on a step.
 
 use caravan::{Node, NodeIdentity, Trigger};
+use caravan_imu::arm::{Arm, ArmGeometry};
 use caravan_imu::scenario::{Command, Scenario};
 use caravan_imu::spin_up::Bar;
 use caravan_schemas::{JointCommand, JointValue, Name, Twist, Vector3, Wrench, topics};
@@ -36,6 +38,16 @@ fn setup(scenario: Scenario, identity: &NodeIdentity) -> Result<Ready, String> {
         // The pushes are bounded by the cube's mass (16 g at most).
         Scenario::Lift { urdf, .. } => {
             scenario.validate_forces(load(urdf)?.mass())?;
+            None
+        }
+        Scenario::Arm {
+            urdf,
+            shoulder,
+            elbow,
+            ..
+        } => {
+            let g = ArmGeometry::from_description(&load(urdf)?, shoulder, elbow)?;
+            Arm::of(&scenario).expect("the arm").validate(&g)?;
             None
         }
         _ => None,
@@ -77,18 +89,42 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
             }
             Command::Spin => {
                 let (joint, rate) = spin.as_ref().expect("a spin-up has its joint");
-                let mut cmd = caravan_schemas::placement_new::<JointCommand>();
-                let _ = cmd.joints.push(JointValue {
-                    name: Name::new(joint),
-                    position: f64::NAN,
-                    velocity: *rate,
-                    effort: f64::NAN,
-                });
-                joints.publish(&cmd)?;
+                joints.publish(&joint_command(&[(joint.as_str(), f64::NAN, *rate)]))?;
+            }
+            Command::Arm {
+                elbow_rad,
+                shoulder_rad_s,
+            } => {
+                let Scenario::Arm {
+                    shoulder, elbow, ..
+                } = &scenario
+                else {
+                    unreachable!("only the arm commands an arm")
+                };
+                // Until the shoulder turns it stands still (a kinematic joint never
+                // commanded holds where it is; the elbow likewise until it bends).
+                joints.publish(&joint_command(&[
+                    (elbow.as_str(), elbow_rad.unwrap_or(f64::NAN), 0.0),
+                    (shoulder.as_str(), f64::NAN, shoulder_rad_s.unwrap_or(0.0)),
+                ]))?;
             }
             Command::Idle => {}
         }
         Ok(())
     })?;
     Ok(())
+}
+
+/// A joint command of (joint, position target or NaN, velocity target) for each joint.
+fn joint_command(targets: &[(&str, f64, f64)]) -> JointCommand {
+    let mut cmd = caravan_schemas::placement_new::<JointCommand>();
+    for &(joint, position, velocity) in targets {
+        let _ = cmd.joints.push(JointValue {
+            name: Name::new(joint),
+            position,
+            velocity,
+            effort: f64::NAN,
+        });
+    }
+    cmd
 }

@@ -9,6 +9,7 @@ mod determinism;
 mod driving;
 mod force_torque;
 mod lab;
+mod link_twists;
 mod precision;
 mod step_response;
 mod tracks;

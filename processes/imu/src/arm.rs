@@ -1,0 +1,233 @@
+//! The arm: an IMU on a link away from the axis it turns about, where the reference's
+//! scenarios have it on the axis (the tilt, the spin-up) or on a platform turned as one body
+//! (the rotation). A two-link arm on a fixed base, both joints kinematic: the elbow bends to
+//! `elbow_deg` at its URDF velocity limit, then the shoulder turns the whole arm steadily
+//! at `rate_rad_s` about its vertical axis. The IMU rides on the forearm, `imu_x_m` along it
+//! from the elbow, so that the forearm's origin and centre of mass are both off the axis.
+//!
+//! With L the elbow's distance from the shoulder axis, β the elbow angle, ω the shoulder rate
+//! and d the IMU's offset, the IMU moves on a circle of radius |(L + d·cos β, d·sin β)| and,
+//! in the forearm's frame (turned β from the upper arm's), reads
+//! - bending (elbow at ωₑ about the still elbow): f = (−ωₑ²·d, 0, g), ω = (0, 0, ωₑ);
+//! - turning: f = (−ω²·(L·cos β + d), ω²·L·sin β, g), ω = (0, 0, ω);
+//! - at rest before and between: f = (0, 0, g), ω = 0.
+
+use crate::range::{between, bound, shown};
+use crate::scenario::{Expect, G, Phase, SETTLE_S, Scenario};
+use caravan_world::description::RobotDescription;
+
+/// What the arm's readings depend on besides the scenario's keys, from its description.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArmGeometry {
+    /// The elbow's distance from the shoulder's axis, m.
+    pub upper_m: f64,
+    /// The elbow's bending rate: its `<limit velocity>`, rad/s.
+    pub elbow_rate_rad_s: f64,
+}
+
+impl ArmGeometry {
+    /// Reads joints `shoulder` and `elbow` of `d`: both about the vertical axis, the elbow a
+    /// child of the shoulder's link, with a velocity limit. The error names the key.
+    pub fn from_description(
+        d: &RobotDescription,
+        shoulder: &str,
+        elbow: &str,
+    ) -> Result<Self, String> {
+        let find = |key: &str, name: &str| {
+            d.joint(name).ok_or_else(|| {
+                format!(
+                    "key '{key}': robot description {} has no joint '{name}'",
+                    d.file
+                )
+            })
+        };
+        let (s, e) = (find("shoulder", shoulder)?, find("elbow", elbow)?);
+        let (s, e) = (&d.joints[s], &d.joints[e]);
+        for (key, j) in [("shoulder", s), ("elbow", e)] {
+            let vertical = (j.origin.rotation * j.axis.normalize()).z;
+            if !j.kind.is_movable() || (vertical.abs() - 1.0).abs() > 1e-9 {
+                return Err(format!(
+                    "key '{key}': joint '{}' of {} must turn about the vertical axis",
+                    j.name, d.file
+                ));
+            }
+        }
+        if e.parent != s.child || s.origin.rotation.angle() > 1e-9 {
+            return Err(format!(
+                "key 'elbow': joint '{}' of {} must join the shoulder's link, unturned",
+                e.name, d.file
+            ));
+        }
+        let o = e.origin.translation.vector;
+        Ok(Self {
+            upper_m: o.x.hypot(o.y),
+            elbow_rate_rad_s: e.limits.velocity,
+        })
+    }
+}
+
+/// The arm's keys, as [`Scenario::Arm`] holds them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Arm {
+    pub rate_rad_s: f64,
+    pub elbow_deg: f64,
+    pub imu_x_m: f64,
+    pub bend_from_s: f64,
+    pub spin_from_s: f64,
+    pub end_s: f64,
+}
+
+impl Arm {
+    /// The arm's keys, if `s` is the arm.
+    pub fn of(s: &Scenario) -> Option<Self> {
+        match *s {
+            Scenario::Arm {
+                rate_rad_s,
+                elbow_deg,
+                imu_x_m,
+                bend_from_s,
+                spin_from_s,
+                end_s,
+                ..
+            } => Some(Self {
+                rate_rad_s,
+                elbow_deg,
+                imu_x_m,
+                bend_from_s,
+                spin_from_s,
+                end_s,
+            }),
+            _ => None,
+        }
+    }
+
+    /// When the elbow has bent, s.
+    pub fn bent_s(&self, g: &ArmGeometry) -> f64 {
+        self.bend_from_s + self.elbow_deg.abs().to_radians() / g.elbow_rate_rad_s
+    }
+
+    /// The checks that need the arm's description: a bending rate, the bend done before the
+    /// turn, and at most 16 g on the IMU.
+    pub fn validate(&self, g: &ArmGeometry) -> Result<(), String> {
+        let max_rate = crate::range::MAX_RATE_RAD_S;
+        between(
+            "urdf",
+            g.elbow_rate_rad_s,
+            crate::range::MIN_TURN_RATE_RAD_S,
+            max_rate,
+            "rad/s (the elbow's <limit velocity>)",
+        )?;
+        let bent = self.bent_s(g);
+        if bent + SETTLE_S > self.spin_from_s {
+            return Err(format!(
+                "key 'spin_from_s': the elbow bends until {} s at its {} rad/s, so the turn \
+                 may start at {} s at the earliest, got {}",
+                bound(bent),
+                bound(g.elbow_rate_rad_s),
+                bound(bent + SETTLE_S),
+                shown(self.spin_from_s)
+            ));
+        }
+        let radius = self.radius_m(g);
+        let centripetal = self.rate_rad_s.powi(2) * radius;
+        if centripetal > crate::range::MAX_ACCEL_M_S2 {
+            return Err(format!(
+                "keys 'rate_rad_s' and 'imu_x_m': the IMU's centripetal acceleration ω²r = {} \
+                 m/s² must be at most {} m/s² (16 g, an accelerometer's full scale)",
+                bound(centripetal),
+                bound(crate::range::MAX_ACCEL_M_S2)
+            ));
+        }
+        Ok(())
+    }
+
+    /// The IMU's distance from the shoulder axis once bent, m.
+    pub fn radius_m(&self, g: &ArmGeometry) -> f64 {
+        let b = self.elbow_deg.to_radians();
+        (g.upper_m + self.imu_x_m * b.cos()).hypot(self.imu_x_m * b.sin())
+    }
+
+    /// The scored phases: at rest, bending, bent and still, turning.
+    pub fn phases(&self, g: &ArmGeometry) -> Vec<Phase> {
+        let still = Expect::Vector([0.0, 0.0, G]);
+        let (b, w, we) = (
+            self.elbow_deg.to_radians(),
+            self.rate_rad_s,
+            g.elbow_rate_rad_s * self.elbow_deg.signum(),
+        );
+        let (l, d) = (g.upper_m, self.imu_x_m);
+        let bent = self.bent_s(g);
+        let phase = |name, from_s, to_s, accel, gyro| Phase {
+            name,
+            from_s,
+            to_s,
+            accel,
+            gyro,
+        };
+        vec![
+            phase("rest", SETTLE_S, self.bend_from_s, still, [0.0; 3]),
+            // The last step of the bend may be shorter; its reading is not scored.
+            phase(
+                "bending",
+                self.bend_from_s + SETTLE_S,
+                bent - SETTLE_S,
+                Expect::Vector([-we * we * d, 0.0, G]),
+                [0.0, 0.0, we],
+            ),
+            phase("bent", bent + SETTLE_S, self.spin_from_s, still, [0.0; 3]),
+            phase(
+                "turning",
+                self.spin_from_s + SETTLE_S,
+                self.end_s,
+                Expect::Vector([-w * w * (l * b.cos() + d), w * w * l * b.sin(), G]),
+                [0.0, 0.0, w],
+            ),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Rotation2, Vector2};
+
+    fn arm() -> Arm {
+        let s: Scenario = serde_json::from_value(serde_json::json!({ "scenario": "arm" })).unwrap();
+        s.validate().unwrap();
+        Arm::of(&s).unwrap()
+    }
+
+    const GEOMETRY: ArmGeometry = ArmGeometry {
+        upper_m: 0.45,
+        elbow_rate_rad_s: 1.0,
+    };
+
+    #[test]
+    fn the_turning_reading_is_the_centripetal_acceleration_in_the_forearms_frame() {
+        let a = arm();
+        a.validate(&GEOMETRY).unwrap();
+        let turning = &a.phases(&GEOMETRY)[3];
+        let Expect::Vector(f) = turning.accel else {
+            panic!()
+        };
+        // The IMU's position in the upper arm's frame; its acceleration −ω²·p, seen from the
+        // forearm (turned β).
+        let b = a.elbow_deg.to_radians();
+        let p = Vector2::new(0.45, 0.0) + Rotation2::new(b) * Vector2::new(a.imu_x_m, 0.0);
+        let in_forearm = Rotation2::new(-b) * (-a.rate_rad_s.powi(2) * p);
+        assert!((f[0] - in_forearm.x).abs() < 1e-12 && (f[1] - in_forearm.y).abs() < 1e-12);
+        assert!((p.norm() - a.radius_m(&GEOMETRY)).abs() < 1e-12);
+        // Off the axis and tangential in the sensor's frame: what the arm is for.
+        assert!(f[1].abs() > 0.1);
+    }
+
+    #[test]
+    fn the_turn_must_wait_for_the_bend() {
+        let mut a = arm();
+        a.spin_from_s = a.bent_s(&GEOMETRY);
+        assert!(a.validate(&GEOMETRY).unwrap_err().contains("'spin_from_s'"));
+        a.spin_from_s = 3.0;
+        a.rate_rad_s = 30.0;
+        assert!(a.validate(&GEOMETRY).unwrap_err().contains("16 g"));
+    }
+}
