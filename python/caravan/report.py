@@ -294,38 +294,49 @@ def plugin(program: str, params: Optional[dict] = None, setup=None):
 
 def line_plot(path, series: dict, title: str = "", x_label: str = "", y_label: str = "",
               equal_axes: bool = False) -> None:
-    """A small SVG line plot of ``series`` (label to a list of ``(x, y)``) at ``path``; with
-    ``equal_axes`` one unit is as long on both axes (trajectories)."""
+    """A small SVG line plot of ``series`` (label to a list of ``(x, y)``) at ``path``, with
+    the axes' ranges written at their ends; with ``equal_axes`` one unit is as long on both
+    axes (trajectories), the data centred in the frame."""
     points = [(x, y) for s in series.values() for x, y in s
               if math.isfinite(x) and math.isfinite(y)]
     width, height, margin = 640, 480, 56
     x0, x1 = (min(p[0] for p in points), max(p[0] for p in points)) if points else (0, 1)
     y0, y1 = (min(p[1] for p in points), max(p[1] for p in points)) if points else (0, 1)
-    span_x, span_y = (x1 - x0) or 1.0, (y1 - y0) or 1.0
-    sx, sy = (width - 2 * margin) / span_x, (height - 2 * margin) / span_y
+    inner_w, inner_h = width - 2 * margin, height - 2 * margin
     if equal_axes:
-        sx = sy = min(sx, sy)
+        # One scale for both; the shorter side's range widened about its centre to fill.
+        scale = min(inner_w / ((x1 - x0) or 1.0), inner_h / ((y1 - y0) or 1.0))
+        cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+        x0, x1 = cx - inner_w / scale / 2, cx + inner_w / scale / 2
+        y0, y1 = cy - inner_h / scale / 2, cy + inner_h / scale / 2
+    sx, sy = inner_w / ((x1 - x0) or 1.0), inner_h / ((y1 - y0) or 1.0)
 
     def at(x, y):
         return f"{margin + (x - x0) * sx:.2f},{height - margin - (y - y0) * sy:.2f}"
 
     colours = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2"]
+    bottom, right = height - margin, width - margin
     out = [
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
         f'font-family="sans-serif" font-size="12">',
         f'<rect width="{width}" height="{height}" fill="white"/>',
-        f'<text x="{width / 2}" y="20" text-anchor="middle" font-size="14">{_xml(title)}</text>',
-        f'<text x="{width / 2}" y="{height - 12}" text-anchor="middle">{_xml(x_label)} '
-        f"[{x0:.3g} … {x1:.3g}]</text>",
-        f'<text x="14" y="{height / 2}" transform="rotate(-90 14 {height / 2})" '
-        f'text-anchor="middle">{_xml(y_label)} [{y0:.3g} … {y1:.3g}]</text>',
+        f'<rect x="{margin}" y="{margin}" width="{inner_w}" height="{inner_h}" fill="none" '
+        f'stroke="#888"/>',
+        f'<text x="{width / 2}" y="24" text-anchor="middle" font-size="14">{_xml(title)}</text>',
+        f'<text x="{width / 2}" y="{height - 14}" text-anchor="middle">{_xml(x_label)}</text>',
+        f'<text x="{margin}" y="{bottom + 16}" text-anchor="start">{x0:.4g}</text>',
+        f'<text x="{right}" y="{bottom + 16}" text-anchor="end">{x1:.4g}</text>',
+        f'<text x="16" y="{height / 2}" transform="rotate(-90 16 {height / 2})" '
+        f'text-anchor="middle">{_xml(y_label)}</text>',
+        f'<text x="{margin - 4}" y="{bottom}" text-anchor="end">{y0:.4g}</text>',
+        f'<text x="{margin - 4}" y="{margin + 10}" text-anchor="end">{y1:.4g}</text>',
     ]
     for i, (label, s) in enumerate(series.items()):
         colour = colours[i % len(colours)]
         drawn = " ".join(at(x, y) for x, y in s if math.isfinite(x) and math.isfinite(y))
         out.append(f'<polyline fill="none" stroke="{colour}" stroke-width="1.5" '
                    f'points="{drawn}"/>')
-        out.append(f'<text x="{width - margin}" y="{40 + 16 * i}" text-anchor="end" '
+        out.append(f'<text x="{right - 6}" y="{margin + 16 + 16 * i}" text-anchor="end" '
                    f'fill="{colour}">{_xml(label)}</text>')
     out.append("</svg>\n")
     Path(path).write_text("\n".join(out), encoding="utf-8")
