@@ -4,7 +4,10 @@
 //! base left the world's floor plan, in practice sideways: a run driven straight that veered
 //! off the terrain, which the reference's operator would have steered back) or **stuck**
 //! (none of these, by the end of the run). The first of them to happen decides; in one sample
-//! tipping over comes first.
+//! tipping over comes first. The figures (furthest x, largest tilt, highest climb) describe
+//! the crossing up to that decision: a robot that has passed drives on until the run ends,
+//! off the terrain's far end and over the floor's edge (1 m past the world's `size`), and
+//! that fall is not the crossing's.
 
 use serde::Serialize;
 
@@ -53,11 +56,11 @@ pub struct Crossing {
     pub outcome: Outcome,
     /// When the base crossed the goal line, s (passed only).
     pub passed_at_s: Option<f64>,
-    /// Furthest x the base reached, m.
+    /// Furthest x the base reached until the outcome was decided, m.
     pub max_x_m: f64,
-    /// Largest tilt, degrees.
+    /// Largest tilt until the outcome was decided, degrees.
     pub max_tilt_deg: f64,
-    /// Highest the base rose above its start, m.
+    /// Highest the base rose above its start until the outcome was decided, m.
     pub max_climb_m: f64,
 }
 
@@ -79,15 +82,16 @@ pub fn classify(samples: &[Sample], goal_x_m: f64, size: Option<[f64; 2]>) -> Op
         c.max_x_m = c.max_x_m.max(s.position[0]);
         c.max_tilt_deg = c.max_tilt_deg.max(s.tilt_deg());
         c.max_climb_m = c.max_climb_m.max(s.position[2] - first.position[2]);
-        if c.outcome == Outcome::Stuck {
-            if s.tilt_deg() > FLIP_TILT_DEG {
-                c.outcome = Outcome::Flipped;
-            } else if off(s.position) {
-                c.outcome = Outcome::OffWorld;
-            } else if s.position[0] >= goal_x_m {
-                c.outcome = Outcome::Passed;
-                c.passed_at_s = Some(s.t_s);
-            }
+        if s.tilt_deg() > FLIP_TILT_DEG {
+            c.outcome = Outcome::Flipped;
+        } else if off(s.position) {
+            c.outcome = Outcome::OffWorld;
+        } else if s.position[0] >= goal_x_m {
+            c.outcome = Outcome::Passed;
+            c.passed_at_s = Some(s.t_s);
+        }
+        if c.outcome != Outcome::Stuck {
+            break;
         }
     }
     Some(c)
@@ -115,9 +119,12 @@ mod tests {
 
     #[test]
     fn outcomes() {
-        let passed = classify(&[at(0.0, 1.0, 0.0), at(1.0, 5.1, 20.0)], 5.0, None).unwrap();
+        // Passed at 1 s, then off the far end and over the floor's edge, falling.
+        let run = [at(0.0, 1.0, 0.0), at(1.0, 5.1, 20.0), at(2.0, 8.1, 165.0)];
+        let passed = classify(&run, 5.0, Some([7.0, 3.0])).unwrap();
         assert_eq!(passed.outcome, Outcome::Passed);
         assert_eq!(passed.passed_at_s, Some(1.0));
+        assert_eq!((passed.max_x_m, passed.max_tilt_deg.round()), (5.1, 20.0));
         let stuck = classify(&[at(0.0, 1.0, 0.0), at(1.0, 3.0, 40.0)], 5.0, None).unwrap();
         assert_eq!(stuck.outcome, Outcome::Stuck);
         assert_eq!(stuck.max_x_m, 3.0);
@@ -143,6 +150,8 @@ mod tests {
         ];
         let c = on_world(&run);
         assert_eq!((c.outcome, c.passed_at_s), (Outcome::OffWorld, None));
+        // The figures stop where the outcome was decided: the tumble is not the crossing.
+        assert_eq!((c.max_x_m, c.max_tilt_deg.round()), (4.0, 10.0));
         // Tipped over and off in the same sample: flipped.
         let both = [veer(1.5, 1.0, 0.0), veer(3.2, 4.0, 120.0)];
         assert_eq!(on_world(&both).outcome, Outcome::Flipped);
