@@ -440,3 +440,6 @@ fn python_package_installs_with_pip() {
 
 #[path = "python/recording.rs"]
 mod recording_and_report;
+
+#[path = "python/plugin.rs"]
+mod plugin_protocol;
