@@ -237,7 +237,8 @@ class Recording:
     ) -> Iterator[Recorded]:
         """The messages of ``topics`` (all Caravan topics when ``None``) logged in
         ``[start_ns, end_ns)``, in file order (log-time order for the recorder's files).
-        Every chunk's CRC is checked as it is read."""
+        Every chunk's CRC is checked as it is read. A topic the file has no channel for yields
+        nothing (``topics()`` lists those it has)."""
         if isinstance(topics, str):
             topics = [topics]
         wanted = set(self._topics) if topics is None else set(topics)

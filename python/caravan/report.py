@@ -52,9 +52,12 @@ __all__ = [
     "Run",
     "SECTIONS_DIR",
     "Section",
+    "check_name",
     "line_plot",
     "main",
+    "parse_params",
     "plugin",
+    "run_plugin",
 ]
 
 # Where plugins leave their sections, inside the run directory (caravan_report::SECTIONS_DIR).
