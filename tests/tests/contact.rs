@@ -31,6 +31,39 @@ fn a_live_run_tracks_each_push_within_the_monte_carlo_errors() {
     assert!(svg.starts_with("<svg") && svg.contains("<circle"));
 }
 
+#[test]
+fn without_noise_subtracting_the_arms_dynamics_leaves_a_hundredth_of_the_static_error() {
+    // One push (from 1 s, scored from 1.75 s: 350 estimates), no torque noise: the static method reads the arm's leftover motion
+    // as part of the push; the dynamic one subtracts M(q)·q̈ + C(q, q̇)·q̇.
+    let force_error = |dynamics: &str| {
+        let run = run_scenario(
+            "contact",
+            "push.toml",
+            &[
+                "--duration",
+                "2.1s",
+                "--set",
+                "args.sigma=0.0",
+                "--set",
+                &format!("args.dynamics={dynamics}"),
+                // The Monte-Carlo beside the live run is not what this compares.
+                "--set",
+                "report.0.params.monte_carlo_trials=20",
+            ],
+        );
+        let live = run.report["contact"]["live"].clone();
+        assert_eq!(live["pushes"], 1, "{live}");
+        assert_eq!(live["no_solution_pct"], 0.0, "{live}");
+        live["force_error_n"]["mean"].as_f64().unwrap()
+    };
+    let (stat, dynamic) = (force_error("false"), force_error("true"));
+    assert!(stat > 1e-3, "static {stat} N");
+    assert!(
+        dynamic < stat / 30.0,
+        "dynamic {dynamic} N, static {stat} N"
+    );
+}
+
 /// Runs the shipped launch file briefly with `set`: the exit code and stderr.
 fn launch_with(set: &str) -> (i32, String) {
     launch_with_set("contact/push.toml", "2s", set)

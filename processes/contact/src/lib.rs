@@ -2,6 +2,8 @@
 //! after `shared/reference/contact-identification.md`, as a Caravan scenario.
 //!
 //! - [`arm_urdf`]: the arm as a URDF, generated and read back;
+//! - [`arm_dynamics`]: the arm's own joint torques M(q)·q̈ + C(q, q̇)·q̇, for the dynamic
+//!   estimator;
 //! - [`contour`]: a link's surface, a convex contour of 16 segments;
 //! - [`planar_arm`]: the arm's geometry, kinematics and the torques of a push;
 //! - [`identify`]: the analytical identification (extended wrench, line of action, entry
@@ -18,6 +20,7 @@
 //! - [`push`]: random poses and pushes, for the Monte-Carlo and the scripted person;
 //! - [`range`]: the physical range of every param, checked before the group starts;
 
+pub mod arm_dynamics;
 pub mod arm_urdf;
 pub mod contour;
 pub mod depth;

@@ -37,11 +37,23 @@ fn link_radius() -> f64 {
 impl ArmParams {
     /// Checks `link_radius` and loads the URDF at `path` (the resolved `urdf`).
     pub fn load(&self, path: &Path) -> Result<ArmModel, String> {
+        Ok(self.load_with_masses(path)?.0)
+    }
+
+    /// [`ArmParams::load`], and the links' mass properties for the dynamic estimator.
+    pub fn load_with_masses(
+        &self,
+        path: &Path,
+    ) -> Result<(ArmModel, Result<crate::arm_dynamics::ArmDynamics, String>), String> {
         let (lo, hi) = (MIN_LINK_RADIUS_M, MAX_LINK_RADIUS_M);
         between("arm.link_radius", self.link_radius, lo, hi, "m")?;
         let d = caravan_world::description::load_description(path)
             .map_err(|e| format!("key 'arm.urdf': robot description {e}"))?;
-        from_description(&d, self.link_radius).map_err(|e| format!("key 'arm': {e}"))
+        let model =
+            from_description(&d, self.link_radius).map_err(|e| format!("key 'arm': {e}"))?;
+        let masses = crate::arm_dynamics::ArmDynamics::from_description(&d, &model.links)
+            .map_err(|e| format!("key 'estimator.dynamics': {e}"));
+        Ok((model, masses))
     }
 }
 
@@ -254,6 +266,11 @@ pub struct EstimatorParams {
     /// 0 to 5.
     #[serde(default = "mu")]
     pub mu: f64,
+    /// Subtract the arm's own dynamics from the torques before identifying
+    /// ([`crate::arm_dynamics`]): τ_ext = M(q)·q̈ + C(q, q̇)·q̇ − τ_act, q̈ from successive
+    /// joint speeds. Off: the reference's static method, τ_ext = −τ_act.
+    #[serde(default)]
+    pub dynamics: bool,
 }
 
 fn floor() -> f64 {

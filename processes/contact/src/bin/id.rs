@@ -1,9 +1,12 @@
 //! `caravan-contact-id`: the perception process. On every `robot/0/joint_states` (the torque
 //! sensors' rate) it takes the joints' external torques (minus the actuators' efforts, plus the
 //! sensors' noise `estimator.torque_sigma`), the depth sensor's latest scan without the arm's
-//! own returns, identifies the contact and publishes it on `robot/0/contact_estimate`.
+//! own returns, identifies the contact and publishes it on `robot/0/contact_estimate`. With
+//! `estimator.dynamics` it first subtracts the arm's own dynamics from the torques
+//! (`caravan_contact::arm_dynamics`).
 
 use caravan::{Node, NodeIdentity, Trigger};
+use caravan_contact::arm_dynamics::ArmDynamics;
 use caravan_contact::arm_urdf::ArmModel;
 use caravan_contact::depth::{Scanner, self_filter};
 use caravan_contact::identify::{NoForce, PointSource, Settings, identify};
@@ -31,6 +34,8 @@ struct Params {
 
 struct Ready {
     model: ArmModel,
+    /// The links' masses, when the estimator subtracts the arm's dynamics.
+    dynamics: Option<ArmDynamics>,
     scanner: Scanner,
     self_filter_m: f64,
     settings: Settings,
@@ -38,8 +43,16 @@ struct Ready {
 }
 
 fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
+    let (model, masses) = p
+        .arm
+        .load_with_masses(&identity.resolve_path(&p.arm.urdf))?;
     Ok(Ready {
-        model: p.arm.load(&identity.resolve_path(&p.arm.urdf))?,
+        model,
+        dynamics: if p.estimator.dynamics {
+            Some(masses?)
+        } else {
+            None
+        },
         scanner: p.depth.scanner()?,
         self_filter_m: p.depth.self_filter_m,
         settings: p.estimator.settings()?,
@@ -59,6 +72,8 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
     let out = node.publisher(&contact_estimate(0))?;
     let mut noise = Gaussian::new(r.seed, 0);
     let mut ranges: Vec<f64> = Vec::new();
+    // The last joint reading and its stamp (ns), for the joint accelerations.
+    let mut last: Option<(u64, joints::Reading)> = None;
     let trigger = node.trigger(Trigger::on(topics::joint_states(0).name()))?;
     node.run(trigger, |_| {
         if let Some(scan) = scans.latest()? {
@@ -68,14 +83,26 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
                 .collect();
         }
         while let Some(m) = states.receive()? {
-            let Some((q, effort)) = joints::read(&m, &r.model.joints) else {
+            let Some(now) = joints::read_all(&m, &r.model.joints) else {
                 continue;
             };
-            // The external torque is what the actuator holds against.
-            let tau: Vec<f64> = effort
+            let stamp = m.header().stamp_ns;
+            // The external torque is what the actuator holds against, less (dynamic) what
+            // moves the arm over the step that ended at this reading.
+            let own = match (&r.dynamics, &last) {
+                (Some(d), Some((t0, before))) if stamp > *t0 => {
+                    own_torques(d, &r.model, before, &now, stamp - t0)
+                }
+                _ => vec![0.0; now.efforts.len()],
+            };
+            let tau: Vec<f64> = now
+                .efforts
                 .iter()
-                .map(|e| -e + noise.sample(r.settings.torque_sigma))
+                .zip(&own)
+                .map(|(e, own)| own - e + noise.sample(r.settings.torque_sigma))
                 .collect();
+            let q = now.angles.clone();
+            last = Some((stamp, now));
             let pose = r.model.arm.pose(&q);
             let depth: Vec<Point2<f64>> =
                 self_filter(&r.scanner.points(&ranges), &pose.contours, r.self_filter_m);
@@ -110,4 +137,25 @@ fn run(mut node: Node, r: Ready) -> Result<(), caravan::Error> {
         Ok(())
     })?;
     Ok(())
+}
+
+/// The torques the arm's own motion took over the step from `before` to `now`, `dt_ns`
+/// apart: M(q)·q̈ + C(q, q̇)·q̇ at the step's start, q̈ the change of the joint speeds over
+/// it, as physics' semi-implicit step turns the torques of a step into the speeds at its
+/// end.
+fn own_torques(
+    d: &ArmDynamics,
+    model: &ArmModel,
+    before: &joints::Reading,
+    now: &joints::Reading,
+    dt_ns: u64,
+) -> Vec<f64> {
+    let dt = dt_ns as f64 * 1e-9;
+    let qdd: Vec<f64> = now
+        .speeds
+        .iter()
+        .zip(&before.speeds)
+        .map(|(v1, v0)| (v1 - v0) / dt)
+        .collect();
+    d.torques(&model.arm, &before.angles, &before.speeds, &qdd)
 }
