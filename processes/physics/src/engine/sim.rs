@@ -330,6 +330,19 @@ impl Simulation {
     /// base's angular velocity, both in the map frame.
     pub fn twist(&self, i: usize) -> Twist {
         let body = self.base(i);
+        if self.free_root_velocity(i).is_some() {
+            // A free multibody root: its velocity after the step, as `link_states` gives it.
+            let t = self.root_twist(i, &super::shapes::isometry(body.position()));
+            let v = |v: nalgebra::Vector3<f64>| Vector3 {
+                x: v.x,
+                y: v.y,
+                z: v.z,
+            };
+            return Twist {
+                linear: v(t.linear),
+                angular: v(t.angular),
+            };
+        }
         twist_of(body.velocity_at_point(body.translation()), body.angvel())
     }
 
@@ -405,21 +418,10 @@ impl Simulation {
         i: usize,
         root: &nalgebra::Isometry3<f64>,
     ) -> crate::link_twists::LinkTwist {
-        let rb = &self.scene.robots[i];
-        let physics = &self.scene.physics;
-        let handle = rb.bodies[rb.plan.link_body[self.robots[i].description.root].0];
-        let body = &physics.bodies[handle];
-        let generalized = physics
-            .multibody_joints
-            .rigid_body_link(handle)
-            .and_then(|id| {
-                let mb = physics.multibody_joints.get_multibody(id.multibody)?;
-                let link = mb.link(id.id).filter(|l| l.is_root())?;
-                let speeds: Vec<Real> = mb.joint_velocity(link).iter().copied().collect();
-                (speeds.len() == 6).then(|| link.joint.jacobian_mul_coordinates(&speeds))
-            });
-        let (linvel, angvel) =
-            generalized.map_or((body.linvel(), body.angvel()), |v| (v.linvel, v.angvel));
+        let body = self.base(i);
+        let (linvel, angvel) = self
+            .free_root_velocity(i)
+            .unwrap_or((body.linvel(), body.angvel()));
         let f64v = super::shapes::vector_f64;
         let com = super::shapes::isometry(body.position())
             * nalgebra::Point3::from(f64v(body.local_center_of_mass()));
@@ -428,6 +430,18 @@ impl Simulation {
             linear: f64v(linvel) + angular.cross(&(root.translation.vector - com.coords)),
             angular,
         }
+    }
+
+    /// The velocity of robot `i`'s centre of mass and its angular velocity after the step, if
+    /// its root is a free multibody root: its generalized velocity.
+    fn free_root_velocity(&self, i: usize) -> Option<(Vector, Vector)> {
+        let multibodies = &self.scene.physics.multibody_joints;
+        let id = multibodies.rigid_body_link(self.scene.robots[i].base())?;
+        let mb = multibodies.get_multibody(id.multibody)?;
+        let link = mb.link(id.id).filter(|l| l.is_root())?;
+        let speeds: Vec<Real> = mb.joint_velocity(link).iter().copied().collect();
+        let v = (speeds.len() == 6).then(|| link.joint.jacobian_mul_coordinates(&speeds))?;
+        Some((v.linvel, v.angvel))
     }
 
     /// Pose (map frame) and twist (map frame) of robot `i`'s root link.
