@@ -41,9 +41,11 @@ fn perp(a: Vector2<f64>) -> Vector2<f64> {
 }
 
 impl ArmDynamics {
-    /// The links `links` (names, joint order) of `d`: each needs an `<inertial>` whose
-    /// origin is unturned (the planar model keeps izz only).
+    /// The links `links` (names, joint order) of `d`: each needs an `<inertial>` (a turned
+    /// one is turned into the link's frame; the planar model keeps its izz). A link fixed to
+    /// one of them (the tip frame) must carry no mass, which this model would leave out.
     pub fn from_description(d: &RobotDescription, links: &[String]) -> Result<Self, String> {
+        let links_named = links;
         let links = links
             .iter()
             .map(|name| {
@@ -75,6 +77,18 @@ impl ArmDynamics {
                 })
             })
             .collect::<Result<Vec<_>, String>>()?;
+        let in_chain = |l: usize| links_named.iter().any(|n| *n == d.links[l].name);
+        if let Some(j) = d.joints.iter().find(|j| {
+            j.kind == caravan_world::description::JointKind::Fixed
+                && in_chain(j.parent)
+                && d.links[j.child].inertial.is_some()
+        }) {
+            return Err(format!(
+                "{}: link '{}' is fixed to the arm and has an <inertial>; the dynamic \
+                 estimator models only the joints' own links",
+                d.file, d.links[j.child].name
+            ));
+        }
         Ok(Self { links })
     }
 

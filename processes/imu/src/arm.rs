@@ -43,29 +43,32 @@ impl ArmGeometry {
         };
         let (s, e) = (find("shoulder", shoulder)?, find("elbow", elbow)?);
         let (s, e) = (&d.joints[s], &d.joints[e]);
+        // The readings below assume both joints turn counter-clockwise about +z from
+        // unturned origins, and the elbow on the upper arm's x axis.
         for (key, j) in [("shoulder", s), ("elbow", e)] {
-            let vertical = (j.origin.rotation * j.axis.normalize()).z;
-            if !j.kind.is_movable() || (vertical.abs() - 1.0).abs() > 1e-9 {
+            let up = (j.origin.rotation * j.axis.normalize()).z;
+            if !j.kind.is_movable() || (up - 1.0).abs() > 1e-9 || j.origin.rotation.angle() > 1e-9 {
                 return Err(format!(
-                    "key '{key}': joint '{}' of {} must turn about the vertical axis",
+                    "key '{key}': joint '{}' of {} must turn about +z (axis 0 0 1), its origin \
+                     unturned",
                     j.name, d.file
                 ));
             }
         }
-        if e.parent != s.child || s.origin.rotation.angle() > 1e-9 {
+        let o = e.origin.translation.vector;
+        if e.parent != s.child || o.y.abs() > 1e-9 || o.x <= 0.0 {
             return Err(format!(
-                "key 'elbow': joint '{}' of {} must join the shoulder's link, unturned",
+                "key 'elbow': joint '{}' of {} must sit on the shoulder's link at (L, 0, z), \
+                 L > 0",
                 e.name, d.file
             ));
         }
-        let o = e.origin.translation.vector;
         Ok(Self {
-            upper_m: o.x.hypot(o.y),
+            upper_m: o.x,
             elbow_rate_rad_s: e.limits.velocity,
         })
     }
 }
-
 /// The arm's keys, as [`Scenario::Arm`] holds them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Arm {
@@ -126,6 +129,15 @@ impl Arm {
                 bound(g.elbow_rate_rad_s),
                 bound(bent + SETTLE_S),
                 shown(self.spin_from_s)
+            ));
+        }
+        let bending = g.elbow_rate_rad_s.powi(2) * self.imu_x_m;
+        if bending > crate::range::MAX_ACCEL_M_S2 {
+            return Err(format!(
+                "keys 'imu_x_m' and 'urdf': the IMU's centripetal acceleration while the elbow \
+                 bends, ωₑ²d = {} m/s², must be at most {} m/s² (16 g)",
+                bound(bending),
+                bound(crate::range::MAX_ACCEL_M_S2)
             ));
         }
         let radius = self.radius_m(g);
@@ -219,6 +231,33 @@ mod tests {
         assert!((p.norm() - a.radius_m(&GEOMETRY)).abs() < 1e-12);
         // Off the axis and tangential in the sensor's frame: what the arm is for.
         assert!(f[1].abs() > 0.1);
+    }
+
+    #[test]
+    fn only_the_arm_the_readings_assume_is_taken() {
+        let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../launch/imu/robots/arm.urdf");
+        let text = std::fs::read_to_string(shipped).unwrap();
+        let parse = |t: &str| {
+            let d = caravan_world::description::parse(t, "arm.urdf", std::path::Path::new("."))
+                .unwrap();
+            ArmGeometry::from_description(&d, "shoulder", "elbow")
+        };
+        assert_eq!(parse(&text).unwrap(), GEOMETRY);
+        // Turning clockwise flips the gyro's sign and the tangential reading.
+        let down = text.replacen("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"0 0 -1\"/>", 1);
+        assert!(parse(&down).unwrap_err().contains("'shoulder'"));
+        // An elbow off the upper arm's x axis changes the lever the readings assume.
+        let aside = text.replace("<origin xyz=\"0.45 0 0\"/>", "<origin xyz=\"0.45 0.1 0\"/>");
+        assert!(parse(&aside).unwrap_err().contains("'elbow'"));
+        // Bending at 30 rad/s swings the IMU 0.2 m out at 180 m/s², past 16 g.
+        let mut a = arm();
+        a.imu_x_m = 0.2;
+        let fast = ArmGeometry {
+            elbow_rate_rad_s: 30.0,
+            ..GEOMETRY
+        };
+        assert!(a.validate(&fast).unwrap_err().contains("bends"));
     }
 
     #[test]

@@ -2,8 +2,8 @@
 //! link's twist and each joint's speed after the step, carried out to the children.
 //!
 //! Why not each link body's own velocity, as rapier keeps it: a multibody link's body velocity
-//! is computed at the start of rapier's last substep, from the configuration before it, and
-//! not again after the positions move (rapier 0.36, `integrate_multibody_positions`). A link
+//! is computed at the start of the step's last substep (the step's start, with one substep),
+//! from the configuration before it, and not again after the positions move (rapier 0.36, `integrate_multibody_positions`). A link
 //! turning steadily about an axis away from its centre of mass then reports its centre's
 //! velocity of one step earlier with the new pose: a point on the axis moves outward at about
 //! ω²·r·dt, and an IMU differencing such velocities reads a false tangential force of about
@@ -38,17 +38,13 @@ pub fn link_twists(
     root: LinkTwist,
     speed: impl Fn(usize) -> f64,
 ) -> Vec<LinkTwist> {
-    let mut children = vec![Vec::new(); d.links.len()];
-    for (j, joint) in d.joints.iter().enumerate() {
-        children[joint.parent].push(j);
-    }
     let mut twists = vec![LinkTwist::default(); d.links.len()];
     twists[d.root] = root;
     let mut open = vec![d.root];
     while let Some(parent) = open.pop() {
         let p = twists[parent];
         let from = poses[parent].translation.vector;
-        for &j in &children[parent] {
+        for j in d.child_joints(parent) {
             let joint = &d.joints[j];
             let to = poses[joint.child].translation.vector;
             let mut twist = LinkTwist {

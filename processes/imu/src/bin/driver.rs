@@ -101,8 +101,8 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
                 else {
                     unreachable!("only the arm commands an arm")
                 };
-                // Until the shoulder turns it stands still (a kinematic joint never
-                // commanded holds where it is; the elbow likewise until it bends).
+                // Each joint is held still (velocity 0) until its phase: the elbow until it
+                // bends to its angle, the shoulder until it turns.
                 joints.publish(&joint_command(&[
                     (elbow.as_str(), elbow_rad.unwrap_or(f64::NAN), 0.0),
                     (shoulder.as_str(), f64::NAN, shoulder_rad_s.unwrap_or(0.0)),

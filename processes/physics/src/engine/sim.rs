@@ -330,20 +330,11 @@ impl Simulation {
     /// base's angular velocity, both in the map frame.
     pub fn twist(&self, i: usize) -> Twist {
         let body = self.base(i);
-        if self.free_root_velocity(i).is_some() {
+        match self.free_root_velocity(i) {
             // A free multibody root: its velocity after the step, as `link_states` gives it.
-            let t = self.root_twist(i, &super::shapes::isometry(body.position()));
-            let v = |v: nalgebra::Vector3<f64>| Vector3 {
-                x: v.x,
-                y: v.y,
-                z: v.z,
-            };
-            return Twist {
-                linear: v(t.linear),
-                angular: v(t.angular),
-            };
+            Some(v) => twist_from(twist_at(body, v, &super::shapes::isometry(body.position()))),
+            None => twist_of(body.velocity_at_point(body.translation()), body.angvel()),
         }
-        twist_of(body.velocity_at_point(body.translation()), body.angvel())
     }
 
     /// Robot `i`'s joints in joint order: (name, position, velocity, effort).
@@ -382,54 +373,27 @@ impl Simulation {
         }
         let root = self.root_twist(i, &exact[d.root]);
         let twists = crate::link_twists::link_twists(d, &exact, root, |j| speeds[j]);
-        let v = |v: nalgebra::Vector3<f64>| Vector3 {
-            x: v.x,
-            y: v.y,
-            z: v.z,
-        };
         poses
             .iter()
             .zip(twists)
-            .map(|(pose, twist)| {
-                let q = pose.rotation;
-                let p3 = caravan_schemas::Pose3D {
-                    position: v3(pose.translation),
-                    orientation: caravan_schemas::Quaternion {
-                        x: q.x as f64,
-                        y: q.y as f64,
-                        z: q.z as f64,
-                        w: q.w as f64,
-                    },
-                };
-                let twist = Twist {
-                    linear: v(twist.linear),
-                    angular: v(twist.angular),
-                };
-                (p3, twist)
-            })
+            .map(|(pose, twist)| (pose3d(pose), twist_from(twist)))
             .collect()
     }
 
     /// The twist of robot `i`'s root link, whose pose is `root`. A free multibody root's
     /// velocity is its generalized one, the state after the step (rapier leaves the root
-    /// body's as it was at the start of the last substep); any other root's is its body's.
+    /// body's as it was at the start of the step's last substep); any other root's is its
+    /// body's.
     fn root_twist(
         &self,
         i: usize,
         root: &nalgebra::Isometry3<f64>,
     ) -> crate::link_twists::LinkTwist {
         let body = self.base(i);
-        let (linvel, angvel) = self
+        let velocity = self
             .free_root_velocity(i)
             .unwrap_or((body.linvel(), body.angvel()));
-        let f64v = super::shapes::vector_f64;
-        let com = super::shapes::isometry(body.position())
-            * nalgebra::Point3::from(f64v(body.local_center_of_mass()));
-        let angular = f64v(angvel);
-        crate::link_twists::LinkTwist {
-            linear: f64v(linvel) + angular.cross(&(root.translation.vector - com.coords)),
-            angular,
-        }
+        twist_at(body, velocity, root)
     }
 
     /// The velocity of robot `i`'s centre of mass and its angular velocity after the step, if
@@ -439,15 +403,18 @@ impl Simulation {
         let id = multibodies.rigid_body_link(self.scene.robots[i].base())?;
         let mb = multibodies.get_multibody(id.multibody)?;
         let link = mb.link(id.id).filter(|l| l.is_root())?;
-        let speeds: Vec<Real> = mb.joint_velocity(link).iter().copied().collect();
-        let v = (speeds.len() == 6).then(|| link.joint.jacobian_mul_coordinates(&speeds))?;
+        let speeds = mb.joint_velocity(link);
+        let v =
+            (speeds.len() == 6).then(|| link.joint.jacobian_mul_coordinates(speeds.as_slice()))?;
         Some((v.linvel, v.angvel))
     }
 
     /// Pose (map frame) and twist (map frame) of robot `i`'s root link.
     pub fn ground_truth(&self, i: usize) -> (caravan_schemas::Pose3D, Twist) {
-        let root = self.robots[i].description.root;
-        self.link_states(i).swap_remove(root)
+        let in_body = &self.scene.robots[i].plan.link_body[self.robots[i].description.root].1;
+        let pose = *self.base(i).position() * super::shapes::pose(in_body);
+        let twist = self.root_twist(i, &super::shapes::isometry(&pose));
+        (pose3d(&pose), twist_from(twist))
     }
 
     /// Robot `i`'s wheels: angles, speeds relative to the chassis, voltages. Zero for a robot
@@ -534,6 +501,51 @@ fn v3(v: Vector) -> Vector3 {
         x: v.x as f64,
         y: v.y as f64,
         z: v.z as f64,
+    }
+}
+
+/// A rapier pose as a message's.
+fn pose3d(pose: &Pose) -> caravan_schemas::Pose3D {
+    let q = pose.rotation;
+    caravan_schemas::Pose3D {
+        position: v3(pose.translation),
+        orientation: caravan_schemas::Quaternion {
+            x: q.x as f64,
+            y: q.y as f64,
+            z: q.z as f64,
+            w: q.w as f64,
+        },
+    }
+}
+
+/// A link's twist (f64) as a message's.
+fn twist_from(t: crate::link_twists::LinkTwist) -> Twist {
+    let v = |v: nalgebra::Vector3<f64>| Vector3 {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    };
+    Twist {
+        linear: v(t.linear),
+        angular: v(t.angular),
+    }
+}
+
+/// The twist at `at` of `body` moving with `(linvel, angvel)`: its centre of mass's velocity
+/// and its angular velocity. The centre is placed from the body's pose, not rapier's cached
+/// world centre, which its last substep may not have updated.
+fn twist_at(
+    body: &RigidBody,
+    (linvel, angvel): (Vector, Vector),
+    at: &nalgebra::Isometry3<f64>,
+) -> crate::link_twists::LinkTwist {
+    let f64v = super::shapes::vector_f64;
+    let com = super::shapes::isometry(body.position())
+        * nalgebra::Point3::from(f64v(body.local_center_of_mass()));
+    let angular = f64v(angvel);
+    crate::link_twists::LinkTwist {
+        linear: f64v(linvel) + angular.cross(&(at.translation.vector - com.coords)),
+        angular,
     }
 }
 
