@@ -81,6 +81,27 @@ pub struct Arm {
 }
 
 impl Arm {
+    /// The arm's keys and geometry, checked together, if `s` is the arm; `load` reads the
+    /// description its `urdf` names (the driver and the report resolve the path their way).
+    pub fn load(
+        s: &Scenario,
+        load: impl FnOnce(&str) -> Result<RobotDescription, String>,
+    ) -> Result<Option<(Self, ArmGeometry)>, String> {
+        let Scenario::Arm {
+            urdf,
+            shoulder,
+            elbow,
+            ..
+        } = s
+        else {
+            return Ok(None);
+        };
+        let g = ArmGeometry::from_description(&load(urdf)?, shoulder, elbow)?;
+        let keys = Self::of(s).expect("the arm");
+        keys.validate(&g)?;
+        Ok(Some((keys, g)))
+    }
+
     /// The arm's keys, if `s` is the arm.
     pub fn of(s: &Scenario) -> Option<Self> {
         match *s {

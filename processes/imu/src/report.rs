@@ -63,16 +63,8 @@ impl ReportPlugin for ImuReport {
             Scenario::SpinUp { urdf, joint, .. } => {
                 (0.0, Some(Bar::from_description(&load(urdf)?, joint)?))
             }
-            Scenario::Arm {
-                urdf,
-                shoulder,
-                elbow,
-                ..
-            } => {
-                let g = ArmGeometry::from_description(&load(urdf)?, shoulder, elbow)?;
-                let keys = Arm::of(&scenario).expect("the arm");
-                keys.validate(&g)?;
-                arm = Some((keys, g));
+            Scenario::Arm { .. } => {
+                arm = Arm::load(&scenario, load)?;
                 (0.0, None)
             }
             _ => (0.0, None),

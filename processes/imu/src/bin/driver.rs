@@ -7,7 +7,7 @@
 //! scenario's switching times, so that every switch falls on a step.
 
 use caravan::{Node, NodeIdentity, Trigger};
-use caravan_imu::arm::{Arm, ArmGeometry};
+use caravan_imu::arm::Arm;
 use caravan_imu::scenario::{Command, Scenario};
 use caravan_imu::spin_up::Bar;
 use caravan_schemas::{JointCommand, JointValue, Name, Twist, Vector3, Wrench, topics};
@@ -40,14 +40,8 @@ fn setup(scenario: Scenario, identity: &NodeIdentity) -> Result<Ready, String> {
             scenario.validate_forces(load(urdf)?.mass())?;
             None
         }
-        Scenario::Arm {
-            urdf,
-            shoulder,
-            elbow,
-            ..
-        } => {
-            let g = ArmGeometry::from_description(&load(urdf)?, shoulder, elbow)?;
-            Arm::of(&scenario).expect("the arm").validate(&g)?;
+        Scenario::Arm { .. } => {
+            Arm::load(&scenario, load)?;
             None
         }
         _ => None,
