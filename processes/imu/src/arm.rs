@@ -15,6 +15,7 @@
 use crate::range::{between, bound, shown};
 use crate::scenario::{Expect, G, Phase, SETTLE_S, Scenario};
 use caravan_world::description::RobotDescription;
+use serde::Deserialize;
 
 /// What the arm's readings depend on besides the scenario's keys, from its description.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,15 +70,68 @@ impl ArmGeometry {
         })
     }
 }
-/// The arm's keys, as [`Scenario::Arm`] holds them.
-#[derive(Debug, Clone, Copy, PartialEq)]
+
+/// The arm's keys: `scenario = "arm"` and these.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Arm {
+    /// The arm's description (relative to the launch file).
+    #[serde(default = "arm_urdf")]
+    pub urdf: String,
+    /// The shoulder's joint: vertical, at the base.
+    #[serde(default = "arm_shoulder")]
+    pub shoulder: String,
+    /// The elbow's joint: vertical, on the shoulder's link; it bends at its URDF velocity
+    /// limit.
+    #[serde(default = "arm_elbow")]
+    pub elbow: String,
+    /// The shoulder's turn rate, rad/s, 1e-4 to 34.9 either way, ω²r at most 16 g.
+    #[serde(default = "arm_rate")]
     pub rate_rad_s: f64,
+    /// The elbow's bend, degrees, −180 to 180 (0: the arm straight).
+    #[serde(default = "arm_elbow_deg")]
     pub elbow_deg: f64,
+    /// The IMU's distance from the elbow along the forearm, m, 0 to 100 (the sensor's
+    /// `imu_offset` x).
+    #[serde(default = "arm_imu_x")]
     pub imu_x_m: f64,
+    /// When the elbow starts bending, s, 0.1 to 86 400.
+    #[serde(default = "arm_bend_from")]
     pub bend_from_s: f64,
+    /// When the shoulder starts turning, s: after the bend, ≤ 86 400.
+    #[serde(default = "arm_spin_from")]
     pub spin_from_s: f64,
+    /// End of the run, s, > `spin_from_s`, ≤ 86 400.
+    #[serde(default = "arm_end")]
     pub end_s: f64,
+}
+
+fn arm_urdf() -> String {
+    "robots/arm.urdf".into()
+}
+fn arm_shoulder() -> String {
+    "shoulder".into()
+}
+fn arm_elbow() -> String {
+    "elbow".into()
+}
+fn arm_rate() -> f64 {
+    1.2
+}
+fn arm_elbow_deg() -> f64 {
+    60.0
+}
+fn arm_imu_x() -> f64 {
+    0.2
+}
+fn arm_bend_from() -> f64 {
+    0.5
+}
+fn arm_spin_from() -> f64 {
+    2.0
+}
+fn arm_end() -> f64 {
+    4.0
 }
 
 impl Arm {
@@ -87,42 +141,12 @@ impl Arm {
         s: &Scenario,
         load: impl FnOnce(&str) -> Result<RobotDescription, String>,
     ) -> Result<Option<(Self, ArmGeometry)>, String> {
-        let Scenario::Arm {
-            urdf,
-            shoulder,
-            elbow,
-            ..
-        } = s
-        else {
+        let Scenario::Arm(arm) = s else {
             return Ok(None);
         };
-        let g = ArmGeometry::from_description(&load(urdf)?, shoulder, elbow)?;
-        let keys = Self::of(s).expect("the arm");
-        keys.validate(&g)?;
-        Ok(Some((keys, g)))
-    }
-
-    /// The arm's keys, if `s` is the arm.
-    pub fn of(s: &Scenario) -> Option<Self> {
-        match *s {
-            Scenario::Arm {
-                rate_rad_s,
-                elbow_deg,
-                imu_x_m,
-                bend_from_s,
-                spin_from_s,
-                end_s,
-                ..
-            } => Some(Self {
-                rate_rad_s,
-                elbow_deg,
-                imu_x_m,
-                bend_from_s,
-                spin_from_s,
-                end_s,
-            }),
-            _ => None,
-        }
+        let g = ArmGeometry::from_description(&load(&arm.urdf)?, &arm.shoulder, &arm.elbow)?;
+        arm.validate(&g)?;
+        Ok(Some((arm.clone(), g)))
     }
 
     /// When the elbow has bent, s.
@@ -227,7 +251,8 @@ mod tests {
     fn arm() -> Arm {
         let s: Scenario = serde_json::from_value(serde_json::json!({ "scenario": "arm" })).unwrap();
         s.validate().unwrap();
-        Arm::of(&s).unwrap()
+        let Scenario::Arm(a) = s else { panic!() };
+        a
     }
 
     const GEOMETRY: ArmGeometry = ArmGeometry {

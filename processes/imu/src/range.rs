@@ -140,7 +140,7 @@ impl Scenario {
                     );
                 }
             }
-            Scenario::Arm {
+            Scenario::Arm(crate::arm::Arm {
                 rate_rad_s,
                 elbow_deg,
                 imu_x_m,
@@ -148,7 +148,7 @@ impl Scenario {
                 spin_from_s,
                 end_s,
                 ..
-            } => {
+            }) => {
                 turn_rate(rate_rad_s)?;
                 between("elbow_deg", elbow_deg, -180.0, 180.0, "°")?;
                 between("imu_x_m", imu_x_m, 0.0, MAX_RADIUS_M, "m")?;

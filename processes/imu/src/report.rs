@@ -63,7 +63,7 @@ impl ReportPlugin for ImuReport {
             Scenario::SpinUp { urdf, joint, .. } => {
                 (0.0, Some(Bar::from_description(&load(urdf)?, joint)?))
             }
-            Scenario::Arm { .. } => {
+            Scenario::Arm(_) => {
                 arm = Arm::load(&scenario, load)?;
                 (0.0, None)
             }

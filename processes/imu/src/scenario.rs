@@ -88,37 +88,7 @@ pub enum Scenario {
         end_s: f64,
     },
     /// An IMU on the forearm of a two-link arm turned about its shoulder (see [`crate::arm`]).
-    Arm {
-        /// The arm's description (relative to the launch file).
-        #[serde(default = "arm_urdf")]
-        urdf: String,
-        /// The shoulder's joint: vertical, at the base.
-        #[serde(default = "arm_shoulder")]
-        shoulder: String,
-        /// The elbow's joint: vertical, on the shoulder's link; it bends at its URDF velocity
-        /// limit.
-        #[serde(default = "arm_elbow")]
-        elbow: String,
-        /// The shoulder's turn rate, rad/s, 1e-4 to 34.9 either way, ω²r at most 16 g.
-        #[serde(default = "arm_rate")]
-        rate_rad_s: f64,
-        /// The elbow's bend, degrees, −180 to 180 (0: the arm straight).
-        #[serde(default = "arm_elbow_deg")]
-        elbow_deg: f64,
-        /// The IMU's distance from the elbow along the forearm, m, 0 to 100 (the sensor's
-        /// `imu_offset` x).
-        #[serde(default = "arm_imu_x")]
-        imu_x_m: f64,
-        /// When the elbow starts bending, s, 0.1 to 86 400.
-        #[serde(default = "arm_bend_from")]
-        bend_from_s: f64,
-        /// When the shoulder starts turning, s: after the bend, ≤ 86 400.
-        #[serde(default = "arm_spin_from")]
-        spin_from_s: f64,
-        /// End of the run, s, > `spin_from_s`, ≤ 86 400.
-        #[serde(default = "arm_end")]
-        end_s: f64,
-    },
+    Arm(crate::arm::Arm),
     Allan {
         /// The sensor's error model, as its `imu_errors` param (the configured values the
         /// report recovers); each term at most its triad's full scale (16 g, 2000 °/s).
@@ -163,34 +133,6 @@ fn spin_up_start() -> f64 {
 }
 fn spin_up_end() -> f64 {
     1.5
-}
-
-fn arm_urdf() -> String {
-    "robots/arm.urdf".into()
-}
-fn arm_shoulder() -> String {
-    "shoulder".into()
-}
-fn arm_elbow() -> String {
-    "elbow".into()
-}
-fn arm_rate() -> f64 {
-    1.2
-}
-fn arm_elbow_deg() -> f64 {
-    60.0
-}
-fn arm_imu_x() -> f64 {
-    0.2
-}
-fn arm_bend_from() -> f64 {
-    0.5
-}
-fn arm_spin_from() -> f64 {
-    2.0
-}
-fn arm_end() -> f64 {
-    4.0
 }
 
 fn tilt_rate() -> f64 {
@@ -282,7 +224,7 @@ impl Scenario {
             Scenario::Lift { .. } => "lift",
             Scenario::Rotation { .. } => "rotation",
             Scenario::SpinUp { .. } => "spinup",
-            Scenario::Arm { .. } => "arm",
+            Scenario::Arm(_) => "arm",
             Scenario::Allan { .. } => "allan",
         }
     }
@@ -328,7 +270,7 @@ impl Scenario {
             Scenario::Lift { fall_end_s, .. } => fall_end_s,
             Scenario::Rotation { end_s, .. }
             | Scenario::SpinUp { end_s, .. }
-            | Scenario::Arm { end_s, .. } => end_s,
+            | Scenario::Arm(crate::arm::Arm { end_s, .. }) => end_s,
             // As long as the group runs.
             Scenario::Allan { .. } => f64::INFINITY,
         }
@@ -355,13 +297,13 @@ impl Scenario {
             Scenario::Rotation { rate_rad_s, .. } => Command::Turn([0.0, 0.0, rate_rad_s]),
             Scenario::SpinUp { start_s, .. } if t_s >= start_s => Command::Spin,
             Scenario::SpinUp { .. } | Scenario::Allan { .. } => Command::Idle,
-            Scenario::Arm {
+            Scenario::Arm(crate::arm::Arm {
                 rate_rad_s,
                 elbow_deg,
                 bend_from_s,
                 spin_from_s,
                 ..
-            } => Command::Arm {
+            }) => Command::Arm {
                 elbow_rad: (t_s >= bend_from_s).then(|| elbow_deg.to_radians()),
                 shoulder_rad_s: (t_s >= spin_from_s).then_some(rate_rad_s),
             },
@@ -443,7 +385,7 @@ impl Scenario {
                 Expect::Vector([-rate_rad_s * rate_rad_s * radius_m, 0.0, G]),
                 [0.0, 0.0, rate_rad_s],
             )],
-            Scenario::SpinUp { .. } | Scenario::Allan { .. } | Scenario::Arm { .. } => Vec::new(),
+            Scenario::SpinUp { .. } | Scenario::Allan { .. } | Scenario::Arm(_) => Vec::new(),
         }
     }
 }

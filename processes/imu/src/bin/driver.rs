@@ -40,7 +40,7 @@ fn setup(scenario: Scenario, identity: &NodeIdentity) -> Result<Ready, String> {
             scenario.validate_forces(load(urdf)?.mass())?;
             None
         }
-        Scenario::Arm { .. } => {
+        Scenario::Arm(_) => {
             Arm::load(&scenario, load)?;
             None
         }
@@ -89,17 +89,18 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
                 elbow_rad,
                 shoulder_rad_s,
             } => {
-                let Scenario::Arm {
-                    shoulder, elbow, ..
-                } = &scenario
-                else {
+                let Scenario::Arm(arm) = &scenario else {
                     unreachable!("only the arm commands an arm")
                 };
                 // Each joint is held still (velocity 0) until its phase: the elbow until it
                 // bends to its angle, the shoulder until it turns.
                 joints.publish(&joint_command(&[
-                    (elbow.as_str(), elbow_rad.unwrap_or(f64::NAN), 0.0),
-                    (shoulder.as_str(), f64::NAN, shoulder_rad_s.unwrap_or(0.0)),
+                    (arm.elbow.as_str(), elbow_rad.unwrap_or(f64::NAN), 0.0),
+                    (
+                        arm.shoulder.as_str(),
+                        f64::NAN,
+                        shoulder_rad_s.unwrap_or(0.0),
+                    ),
                 ]))?;
             }
             Command::Idle => {}
