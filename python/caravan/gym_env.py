@@ -16,10 +16,16 @@ learner's next ``step`` supplies the action, so in lockstep the whole group wait
 learner and runs are reproducible. The node and its ports live on that thread (iceoryx2's
 ports stay on the thread that made them). Run the learner as the group's agent process::
 
-    env = CaravanEnv(action="continuous")   # joins the group as this process's node
-    params = env.params({"steps": 10000})   # the launch file's params for this process
-    model.learn(...)                        # calls env.reset() and env.step(a)
+    env = CaravanEnv(action="continuous", params={"steps": 10000})
+    p = env.p                               # the launch file's params for this process
+    model.learn(total_timesteps=p.steps)    # calls env.reset() and env.step(a)
     env.close()                             # the node leaves the group
+
+``params`` declares the process's params (names and defaults): they are read before the node
+joins, so the launcher's check before start refuses an unknown or mistyped key and nothing
+starts. The launch file's params must match: ``launch/uav/gym.toml`` passes ``policy``, so a
+script run in its place declares ``policy`` too, or the launch replaces the params
+(``--set 'process.agent.params={}'``).
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from .identity import Identity, parse_params
 from .node import Node
 from .schemas import fixed_vec, set_fixed_vec
 from .types import message_class
@@ -64,10 +71,17 @@ class CaravanEnv(gym.Env):
         observation_size: int = 6,
         action_size: int = 2,
         n_actions: int = 9,
+        params: Optional[dict] = None,
     ) -> None:
         super().__init__()
         if action not in ("continuous", "discrete"):
             raise ValueError(f"action must be 'continuous' or 'discrete', got {action!r}")
+        # Params first: in the launcher's check before start, the node's thread ends at its
+        # first port, so a key read after that would be checked only once the group runs.
+        self.p = None
+        if params is not None:
+            identity = Identity.from_env()
+            self.p = parse_params(identity.name, identity.params, params)
         self.continuous = action == "continuous"
         self.observation_space = spaces.Box(-1.0, 1.0, (observation_size,), np.float32)
         self.action_space = (
@@ -88,7 +102,9 @@ class CaravanEnv(gym.Env):
         self.episode = 0
 
     def params(self, defaults: dict):
-        """This process's params from the launch file, over ``defaults`` (see ``Node.params``)."""
+        """This process's params from the launch file, over ``defaults`` (see ``Node.params``).
+        Read once the node has joined: prefer ``CaravanEnv(params=defaults)``, which the
+        launcher's check before start covers."""
         return self.node.params(defaults)
 
     # -- the node's thread --------------------------------------------------------------------

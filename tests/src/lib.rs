@@ -190,12 +190,19 @@ pub fn run_scenario(scenario: &str, file: &str, extra: &[&str]) -> ScenarioRun {
 /// runs directory removed afterwards; returns the exit code (-1 if killed) and stderr. For
 /// tests of bad input.
 pub fn launch_with_set(file: &str, duration: &str, set: &str) -> (i32, String) {
+    launch_with_sets(file, duration, &[set])
+}
+
+/// [`launch_with_set`] with several `--set`s, applied in order.
+pub fn launch_with_sets(file: &str, duration: &str, sets: &[&str]) -> (i32, String) {
     let group = TestGroup::new("bad");
     let runs = std::env::temp_dir().join(format!("caravan-{}", group.name));
     let out = Command::new(workspace_bin("caravan"))
         .arg("launch")
         .arg(workspace_root().join("launch").join(file))
-        .args(["--quiet", "--duration", duration, "--set", set, "--set"])
+        .args(["--quiet", "--duration", duration])
+        .args(sets.iter().flat_map(|s| ["--set", s]))
+        .arg("--set")
         .arg(format!("group.name={}", group.name))
         .arg("--runs-dir")
         .arg(&runs)

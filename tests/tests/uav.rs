@@ -2,7 +2,7 @@
 //! scripted opponent, policy process), ended by the environment after a number of episodes;
 //! the report counts the outcomes.
 
-use caravan_tests::{launch_with_set, run_scenario};
+use caravan_tests::{launch_with_set, launch_with_sets, run_scenario};
 use serde_json::Value;
 
 fn uav(policy: &str, scenario: &str, episodes: u32) -> Value {
@@ -75,6 +75,63 @@ fn a_gymnasium_agent_plays_episodes_through_the_bridge() {
     assert!(log.contains("played 3 episodes"), "{log}");
     // Random increments make it leave its line: every episode records actions.
     assert_eq!(u["metrics"]["action_change"]["n"], 3, "{u}");
+    // The report names the Python policy by what it ran.
+    assert_eq!(u["policy"], "python random", "{u}");
+}
+
+#[test]
+fn a_gymnasium_script_declaring_its_params_is_refused_before_the_start_on_a_key_it_lacks() {
+    // gym.toml passes `policy`; a script of one's own that declares only `steps` (through
+    // CaravanEnv's `params`, read before the node joins) stops the launch in the check before
+    // anything starts, naming the key, and runs once the launch replaces the params table.
+    let dir = std::env::temp_dir().join(caravan_tests::unique_group("gym-script"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = dir.join("mine.py");
+    std::fs::write(
+        &script,
+        "from caravan import main\n\
+         from caravan.gym_env import CaravanEnv, GroupEnded\n\
+         def agent():\n\
+         \x20   env = CaravanEnv(params={'steps': 5})\n\
+         \x20   try:\n\
+         \x20       while True:\n\
+         \x20           env.reset()\n\
+         \x20           done = False\n\
+         \x20           while not done:\n\
+         \x20               _, _, t, u, _ = env.step(env.action_space.sample())\n\
+         \x20               done = t or u\n\
+         \x20   except GroupEnded:\n\
+         \x20       print('steps param', env.p.steps)\n\
+         \x20   finally:\n\
+         \x20       env.close()\n\
+         main(agent)\n",
+    )
+    .unwrap();
+    let exec = format!(
+        "process.agent.exec='../../python/caravan-python --venv gym --requirements uav/requirements-gym.txt {}'",
+        script.display()
+    );
+    let (code, err) = launch_with_sets("uav/gym.toml", "100000s", &[&exec]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("policy") && !err.contains("Traceback"), "{err}");
+    let run = run_scenario(
+        "uav",
+        "gym.toml",
+        &[
+            "--set",
+            &exec,
+            "--set",
+            "process.agent.params={ steps = 7 }",
+            "--set",
+            "args.episodes=1",
+            "--set",
+            "args.label=mine",
+        ],
+    );
+    let log = std::fs::read_to_string(run.dir.join("logs/agent.log")).unwrap();
+    assert!(log.contains("steps param 7"), "{log}");
+    assert_eq!(run.report["uav"]["policy"], "mine");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
