@@ -22,13 +22,18 @@ pub const EXIT_FAILURE: u8 = 1;
 /// its params and inputs are good and 2 with the message when not, so a bad process param,
 /// world or robot description stops the launch before any process of the group runs.
 ///
+/// Started as `PROGRAM --describe-params` ([`crate::DESCRIBE_PARAMS_FLAG`]), it prints the
+/// params `P` as a JSON Schema ([`crate::describe_params`]: keys, types, defaults, doc comments)
+/// and exits 0 without reading its environment.
+///
 /// Errors are printed as `program: message`. The exit code is [`EXIT_BAD_INPUT`] (2) for bad
 /// params or input (`setup` failing, or `run` returning [`Error::Params`], [`Error::Env`] or
 /// [`Error::Input`]) and [`EXIT_FAILURE`] (1) for a failure at run time.
 ///
 /// ```no_run
 /// # use serde::Deserialize;
-/// #[derive(Deserialize)]
+/// #[derive(Deserialize, caravan::schemars::JsonSchema)]
+/// #[schemars(crate = "caravan::schemars")]
 /// #[serde(deny_unknown_fields)]
 /// struct Params { gain: f64 }
 ///
@@ -45,11 +50,15 @@ pub const EXIT_FAILURE: u8 = 1;
 ///     )
 /// }
 /// ```
-pub fn node_main<P: DeserializeOwned, S>(
+pub fn node_main<P: DeserializeOwned + schemars::JsonSchema, S>(
     program: &str,
     setup: impl FnOnce(P, &NodeIdentity) -> Result<S, String>,
     run: impl FnOnce(Node, S) -> Result<(), Error>,
 ) -> ExitCode {
+    if crate::describe_params_requested() {
+        crate::print_params_description::<P>();
+        return ExitCode::SUCCESS;
+    }
     let classify = |e: Error| match e {
         Error::Params { .. } | Error::Env { .. } | Error::Input(_) => (EXIT_BAD_INPUT, e),
         other => (EXIT_FAILURE, other),

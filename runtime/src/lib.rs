@@ -58,9 +58,13 @@ pub use error::Error;
 pub use executor::Step;
 pub use identity::{NodeIdentity, check_only, env_vars};
 pub use node::{Node, NodeBuilder};
-pub use params::parse_params;
+pub use params::{
+    DESCRIBE_PARAMS_FLAG, describe_params, describe_params_requested, parse_params,
+    print_params_description,
+};
 pub use publisher::{Loan, Publisher};
 pub use rate::{MAX_DURATION, MIN_PERIOD, Trigger, parse_duration, parse_rate, seconds};
+pub use schemars;
 pub use spin::{MAX_SPIN, parse_spin};
 pub use stats::{StepCompute, StepStats, process_cpu_ns, thread_cpu_ns};
 pub use subscriber::{Received, Subscriber};

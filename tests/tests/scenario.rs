@@ -69,13 +69,23 @@ fn a_scenario_report_plugin_adds_its_section() {
 #[test]
 fn bad_plugin_params_start_nothing() {
     workspace_bin("caravan-count-report");
-    let s = Scenario::new("tiny-bad", &tiny(r#"{ topic = "demo/ping", feild = "x" }"#));
+    let text = tiny(r#"{ topic = "demo/ping", feild = "x" }"#);
+    let s = Scenario::new("tiny-bad", &text);
     let out = s.run(&FIVE_SECONDS);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     let err = stderr(&out);
     assert!(
         err.contains("caravan-count-report") && err.contains("'feild'"),
         "{err}"
+    );
+    // Named at the params' line of the file, as a process's bad param is.
+    let line = 1 + text
+        .lines()
+        .position(|l| l.starts_with("params = { topic"))
+        .unwrap();
+    assert!(
+        err.contains(&format!(".toml:{line}:")),
+        "line {line}: {err}"
     );
     assert!(s.run_dirs().is_empty(), "a run directory was created");
     assert!(s.shm_entries().is_empty());

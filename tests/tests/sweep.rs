@@ -70,7 +70,9 @@ fn a_grid_of_pingpong_groups_is_summarised_and_resumed() {
     assert_eq!(summary["axes"][0]["key"], "process.pong.params.gain");
     let cells = summary["cells"].as_array().unwrap();
     assert_eq!(cells.len(), 2);
-    for (cell, gain) in cells.iter().zip(["1", "3"]) {
+    // Values keep the type they have as `--set` values: the gains are numbers.
+    assert_eq!(summary["axes"][0]["values"], serde_json::json!([1, 3]));
+    for (cell, gain) in cells.iter().zip([1, 3]) {
         assert_eq!(cell["values"]["process.pong.params.gain"], gain);
         assert_eq!(cell["sets"]["process.pong.params.gain"], gain);
         assert_eq!(cell["runs"].as_array().unwrap().len(), 2);
@@ -176,7 +178,7 @@ fast = ["process.ping.rate=20Hz", "process.pong.params.gain=4"]
     let cells = summary["cells"].as_array().unwrap();
     let ids: Vec<&str> = cells.iter().map(|c| c["id"].as_str().unwrap()).collect();
     assert_eq!(ids, ["speed=slow", "speed=fast"]);
-    assert_eq!(cells[1]["sets"]["process.pong.params.gain"], "4");
+    assert_eq!(cells[1]["sets"]["process.pong.params.gain"], 4);
     // 2 s: ping steps 11 times at 5 Hz, 41 times at 20 Hz.
     assert_eq!(cells[0]["metrics"]["nodes.ping.steps"]["mean"], 11.0);
     assert_eq!(cells[1]["metrics"]["nodes.ping.steps"]["mean"], 41.0);

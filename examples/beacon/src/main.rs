@@ -5,7 +5,7 @@ use beacon::{Beacon, HISTORY, SET, TOPIC};
 use caravan::{Error, Node, Topic, Trigger};
 
 /// The beacon takes no params.
-#[derive(serde::Deserialize)]
+#[derive(serde::Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {}
 

@@ -6,7 +6,7 @@ use caravan_schemas::{Pose2D, WheelSetpoint, topics};
 use caravan_world::{RobotModel, kinematics::wheel_speeds};
 use serde::Deserialize;
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 struct Params {
     robot: usize,     // this robot's index; it follows robot - 1

@@ -22,7 +22,7 @@ use serde_json::Value;
 /// The plot, in the run directory.
 pub const PLOT_FILE: &str = "contact.svg";
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
     pub arm: ArmParams,

@@ -20,7 +20,7 @@ pub const HAND_TOPIC: &str = "person/hand";
 pub const DEPTH_TOPIC: &str = "depth/scan";
 
 /// `arm = { urdf = "robots/arm.urdf", link_radius = 0.05 }`.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ArmParams {
     /// The arm's URDF (see [`crate::arm_urdf`]), relative to the launch file.
@@ -59,7 +59,7 @@ impl ArmParams {
 
 /// `depth = { origin = [-1.0, -1.0], first_angle_deg = 0, fov_deg = 90, beams = 64, … }`:
 /// the depth sensor, as the depth process simulates it and the perception reads its scans.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DepthParams {
     /// Where it sits in the arm's plane, m, each within ±10 km.
@@ -144,7 +144,7 @@ impl DepthParams {
 }
 
 /// `push = { links = [3, 4], force_n = [90, 110], … }`: the scripted person's pushes.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PushParams {
     /// Links that may be pushed, numbered from 1 as in the reference.
@@ -252,7 +252,7 @@ impl PushParams {
 }
 
 /// `estimator = { torque_sigma = 0.1, torque_floor = 0.2, mu = 0.5 }`.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EstimatorParams {
     /// The torque sensors' noise, N·m, 0 to 20: added to every reading, and the thresholds

@@ -28,7 +28,7 @@ const RATE_HZ: f64 = 10.0;
 pub const MAX_ROBOTS: usize = MAX_METRICS.div_ceil(2);
 
 /// The monitor's params.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
     /// Robots in the convoy, 2 … [`MAX_ROBOTS`]; robot 0 leads.

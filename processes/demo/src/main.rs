@@ -16,7 +16,7 @@ use caravan_schemas::Pose2D;
 use rand::{Rng, SeedableRng};
 use serde::Deserialize;
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 struct Params {
     gain: f64,

@@ -72,7 +72,7 @@ impl ArmGeometry {
 }
 
 /// The arm's keys: `scenario = "arm"` and these.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Arm {
     /// The arm's description (relative to the launch file).

@@ -36,7 +36,7 @@ pub const SETTLE_S: f64 = 0.05;
 /// tenths of a second (errors up to 3.6e-2 m/s² before 0.3 s, below 1e-8 from 0.5 s).
 pub const REST_FROM_S: f64 = 0.5;
 
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "scenario", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Scenario {
     Tilt {
@@ -113,7 +113,7 @@ pub enum Scenario {
 }
 
 /// A braking phase: an upward force smaller than the weight, so the rising cube slows down.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Brake {
     /// Upward force, N, > 0 and at most 16 g on the cube's mass.

@@ -30,7 +30,17 @@ use caravan_schemas::Pose2D;
 const MAX_ROTATION_STEP: f64 = 0.2;
 
 /// Which map field the end points are matched to.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Deserialize,
+    serde::Serialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum MatchField {
     /// Hector's choice: the occupancy probability. End points are drawn into occupied space,

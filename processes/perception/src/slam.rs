@@ -38,7 +38,7 @@ pub const RESOLUTION_RANGE_M: RangeInclusive<f64> = 0.001..=10.0;
 pub const MIN_POINTS: usize = 20;
 
 /// The SLAM node's params.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SlamParams {
     /// Cell side of the finest map level, m (Hector's default, the reference's choice).

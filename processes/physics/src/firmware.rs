@@ -16,7 +16,7 @@ use serde::Deserialize;
 
 /// PID gains and rate (the `dc_motor` actuator's `pid` keys). Defaults: the convoy robot's
 /// firmware, fitted as [`crate::step_response`] documents.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct FirmwareParams {
     /// Proportional gain kp, V per rad/s.

@@ -20,7 +20,7 @@ use serde::Deserialize;
 
 /// Motor and gearbox constants (the `dc_motor` actuator's `motor` keys). Defaults: the convoy
 /// robot's motor, a property of that motor, fitted as [`crate::step_response`] documents.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MotorParams {
     /// Supply voltage, V; the firmware's command is clamped to ±this.

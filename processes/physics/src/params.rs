@@ -19,7 +19,9 @@ use crate::spec::RobotSpec;
 use serde::Deserialize;
 
 /// Floating-point precision of the physics.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Precision {
     /// rapier3d (f32): the fast default.
@@ -45,7 +47,7 @@ fn non_empty_robots<'de, D: serde::Deserializer<'de>>(
 
 /// The params as given. [`Default`] is every key left out, which [`Params::validate`]
 /// refuses: the world and the robots have no default.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Params {
     /// World file, relative to the launch file's directory. Required.

@@ -16,7 +16,9 @@ use caravan_world::description::{JointKind, RobotDescription};
 use serde::Deserialize;
 
 /// How a robot's root link is held.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Base {
     /// A free body under gravity and contacts (a wheeled robot, a thrown box).
@@ -30,7 +32,9 @@ pub enum Base {
 }
 
 /// How joints are solved.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum JointModel {
     /// Multibody for a fixed base, impulse joints otherwise.
@@ -45,7 +49,9 @@ pub enum JointModel {
 }
 
 /// A frame of velocity commands for a kinematic base.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum CmdVelFrame {
     /// Velocities in the base link's frame, as ROS `cmd_vel`.
@@ -59,7 +65,7 @@ pub enum CmdVelFrame {
 /// later entries override earlier ones for the same joint. Torques are bounded by the URDF's
 /// `<limit effort>`, speed targets by `<limit velocity>`, position targets by the joint's
 /// position limits.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ActuatorSpec {
     /// A DC gear motor ([`crate::motor`]) under a wheel-speed firmware (an incremental PID
@@ -224,7 +230,7 @@ impl ActuatorSpec {
 }
 
 /// One kind of robot and its instances.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
     /// Robot description (URDF), relative to the launch file's directory.
@@ -290,7 +296,7 @@ pub struct RobotSpec {
 /// counterpart of ODE's ERP and CFM), not a physical spring: on a 1 kg test mass at 10 Hz and
 /// 0.3, a step of load reaches 63 % of its final reading after about 20 ms and does not
 /// overshoot.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Softness {
     /// rapier's natural frequency, Hz, > 0 (its rigid default is 1e6).
@@ -299,7 +305,9 @@ pub struct Softness {
     pub damping_ratio: f64,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Drive {
     Diff,

@@ -32,7 +32,7 @@ use caravan_schemas::Pose2D;
 use serde::{Deserialize, Serialize};
 
 /// Local planner parameters.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct LocalParams {
     /// Slowest forward speed, m/s (the leader cannot stand still while driving).

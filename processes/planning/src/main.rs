@@ -17,7 +17,7 @@ use caravan_schemas::{Twist, topics};
 use serde::Deserialize;
 use std::process::ExitCode;
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 struct Params {
     /// The robot that plans (the leader).

@@ -22,7 +22,7 @@ use serde::Deserialize;
 pub const FLICKER_FLOOR: f64 = 0.664;
 
 /// One triad's error parameters; all zero by default (an ideal sensor).
-#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct TriadErrors {
     /// White noise density N, units/√Hz (m/s²/√Hz, rad/s/√Hz), ≥ 0.
@@ -38,7 +38,7 @@ pub struct TriadErrors {
 }
 
 /// The error model of both triads (the sensor's `imu_errors` table).
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ImuErrors {
     #[serde(default)]

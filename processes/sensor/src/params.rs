@@ -13,7 +13,7 @@ use crate::laser::LaserConfig;
 use serde::Deserialize;
 
 /// Unknown keys are rejected by `caravan::parse_params`, which names them.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 pub struct Params {
     /// Index i of the robot this instance belongs to (topics `robot/i/...`).
     pub robot: usize,
@@ -106,7 +106,9 @@ pub struct Params {
 }
 
 /// The accelerometer's design.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Accelerometer {
     #[default]

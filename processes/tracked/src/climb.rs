@@ -20,7 +20,7 @@ pub fn nose_up_deg(q: &Quaternion) -> f64 {
 
 /// The sequence's angles, degrees. Flipper angles are above the main track's line (positive
 /// raises the tip); pitch is nose-up positive.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ClimbParams {
     /// Work the flippers (default false: they stay at the drive's angle).

@@ -48,7 +48,7 @@ pub fn circumscribed_radius(link: &Link) -> f64 {
 }
 
 /// The reference's limits and geometry; every field has the reference's value as default.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DriveLimits {
     /// |v| bound, m/s, in [`ranges::MAX_V_M_S`].

@@ -8,7 +8,7 @@
 use serde::Deserialize;
 
 /// How the operator keeps to the line.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct KeepLineParams {
     /// Steer back to the line (default true); off, the turn rate asked for is always 0.

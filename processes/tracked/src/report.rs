@@ -16,7 +16,7 @@ pub const TRUTH_TOPIC: &str = "robot/0/ground_truth";
 /// The operator's velocity command to it.
 pub const CMD_VEL_TOPIC: &str = "robot/0/cmd_vel";
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
     /// The goal line: the run passes when the base's x reaches it, m, in

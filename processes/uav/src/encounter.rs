@@ -17,7 +17,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// The encounter's constants. The reference gives none of them.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Encounter {
     /// Forward speed of both drones, m/s, > 0.
@@ -64,7 +64,7 @@ impl Default for Encounter {
 }
 
 /// What the agent does in one step.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Action {
     /// The reference's 9 discrete actions: 0 none; 1 +y; 2 −y; 3 +z; 4 −z; 5 +y+z; 6 +y−z;
     /// 7 −y+z; 8 −y−z.
@@ -114,7 +114,7 @@ pub struct State {
 }
 
 /// How an episode ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Outcome {
     /// The agent passed the opponent's start x.

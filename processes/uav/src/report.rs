@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 /// The outcomes, in the order the table shows them.
 pub const OUTCOMES: [&str; 4] = ["passed", "collided", "floor", "timeout"];
 
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
     /// A label for the policy in the table.

@@ -8,7 +8,7 @@ use caravan_sensor::noise::Gaussian;
 use serde::{Deserialize, Serialize};
 
 /// A scenario: how the opponent starts and flies.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
     /// The opponent's start is shifted by Δy, Δz drawn uniformly in ±`offset_m`, m ≥ 0

@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 
 /// The encounter's frame in the world: its origin (x, y), m; z is the world's.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Frame {
     pub origin: [f64; 2],

@@ -4,7 +4,7 @@
 use crate::report;
 use crate::run::{self, output::Console};
 use anyhow::{Context, Result};
-use caravan_launch::model::{Exec, LaunchFile};
+use caravan_launch::model::{EntryProblem, Exec, LaunchFile};
 use caravan_launch::{LaunchError, Problem};
 use caravan_report::ReportEntry;
 use clap::Args;
@@ -113,29 +113,23 @@ pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
 /// [`run::preflight`]) and every report plugin its params (`PROGRAM --check`), so that
 /// nothing bad gets started.
 pub fn load_file(path: &Path, sets: &[String]) -> Result<LaunchFile, LaunchError> {
-    let lf = caravan_launch::load_checked(
-        path,
-        sets,
-        &run::exec::resolve_exec,
-        &run::preflight::check_processes,
-    )?;
-    let problems: Vec<Problem> = report_entries(&lf)
-        .iter()
-        .filter_map(|entry| {
-            let why = report::check(entry).err()?;
-            Some(Problem {
-                location: lf.path.display().to_string(),
-                line: None,
-                rank: 0,
-                message: format!("report '{}': {why}", entry.exec.join(" ")),
-            })
-        })
-        .collect();
-    if problems.is_empty() {
-        Ok(lf)
-    } else {
-        Err(LaunchError::Invalid(problems))
+    caravan_launch::load_checked(path, sets, &run::exec::resolve_exec, &check_entries)
+}
+
+/// Every process's check of its input, then every report plugin's (`PROGRAM --check`).
+fn check_entries(lf: &LaunchFile) -> Vec<EntryProblem> {
+    let mut problems = run::preflight::check_processes(lf);
+    for (index, entry) in report_entries(lf).iter().enumerate() {
+        if let Err(why) = report::check(entry) {
+            problems.push(run::preflight::report_problem(
+                index,
+                &entry.exec.join(" "),
+                &entry.params,
+                &why,
+            ));
+        }
     }
+    problems
 }
 
 /// Runs the group; returns the process exit code.

@@ -26,16 +26,16 @@ pub fn load(
     load_checked(path, overrides, resolve_exec, &|_| Vec::new())
 }
 
-/// [`load`], then `check_processes` on the valid file: the problems it returns (each process's
-/// own check of its params and inputs) are reported at the process's params in the file, or at
-/// the override that set them, like every other problem.
+/// [`load`], then `check_entries` on the valid file: the problems it returns (each process's
+/// and report plugin's own check of its params and inputs) are reported at the entry's params
+/// in the file, or at the override that set them, like every other problem.
 pub fn load_checked(
     path: &Path,
     overrides: &[String],
     resolve_exec: &dyn Fn(&str) -> Option<PathBuf>,
-    check_processes: &dyn Fn(&LaunchFile) -> Vec<ProcessProblem>,
+    check_entries: &dyn Fn(&LaunchFile) -> Vec<EntryProblem>,
 ) -> Result<LaunchFile, LaunchError> {
-    load_source(path, None, overrides, resolve_exec, check_processes)
+    load_source(path, None, overrides, resolve_exec, check_entries)
 }
 
 /// [`load_checked`] of `text` (when given) as if it were the file at `path`.
@@ -44,7 +44,7 @@ pub fn load_source(
     text: Option<String>,
     overrides: &[String],
     resolve_exec: &dyn Fn(&str) -> Option<PathBuf>,
-    check_processes: &dyn Fn(&LaunchFile) -> Vec<ProcessProblem>,
+    check_entries: &dyn Fn(&LaunchFile) -> Vec<EntryProblem>,
 ) -> Result<LaunchFile, LaunchError> {
     let read = match text {
         Some(text) => Source::parse(path, text, 0),
@@ -157,8 +157,8 @@ pub fn load_source(
             resolved_toml: String::new(),
             left_out: Default::default(),
         };
-        for p in check_processes(&file) {
-            let mut at = root.at("process");
+        for p in check_entries(&file) {
+            let mut at = root.at(p.list.key());
             at.push(Seg::Index(p.index));
             at.push(Seg::Key("params".into()));
             at.extend(p.key.as_deref().map(key_path).unwrap_or_default());

@@ -237,11 +237,32 @@ pub struct ProcessSpec {
     pub launch_dir: PathBuf,
 }
 
-/// What a process's check (`CARAVAN_CHECK=1`) found wrong with its input, before the group
-/// started.
+/// The list of the launch file an entry belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EntryList {
+    /// `[[process]]`: [`LaunchFile::processes`].
+    Process,
+    /// `[[report]]`: [`LaunchFile::reports`].
+    Report,
+}
+
+impl EntryList {
+    /// The list's key in the file.
+    pub fn key(self) -> &'static str {
+        match self {
+            EntryList::Process => "process",
+            EntryList::Report => "report",
+        }
+    }
+}
+
+/// What a process's check (`CARAVAN_CHECK=1`) or a report plugin's (`--check`) found wrong
+/// with its input, before the group started.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ProcessProblem {
-    /// Index of the process in [`LaunchFile::processes`].
+pub struct EntryProblem {
+    /// Whether the entry is a process or a report plugin.
+    pub list: EntryList,
+    /// Index of the entry in its list.
     pub index: usize,
     /// The params key the message names (dotted, as `poses[0].x`), when it names one.
     pub key: Option<String>,

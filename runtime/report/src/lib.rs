@@ -23,7 +23,8 @@
 //! use caravan_report::{Inputs, ReportPlugin, Run, Section};
 //! use serde::Deserialize;
 //!
-//! #[derive(Deserialize)]
+//! #[derive(Deserialize, caravan::schemars::JsonSchema)]
+//! #[schemars(crate = "caravan::schemars")]
 //! #[serde(deny_unknown_fields)]
 //! struct Params {
 //!     /// The topic whose messages are counted.

@@ -4,7 +4,8 @@
 //! `PROGRAM --check`, so bad params stop the launch with nothing started; and after the run,
 //! as `PROGRAM RUN_DIR`, to write its sections. Both times the entry's `params` come as JSON
 //! in `CARAVAN_PARAMS` and the launch file's directory in `CARAVAN_LAUNCH_DIR`. Exit codes:
-//! 0 done, 2 bad params or input, 1 a failure while computing.
+//! 0 done, 2 bad params or input, 1 a failure while computing. `PROGRAM --describe-params`
+//! prints the params as a JSON Schema, as every node does ([`caravan::describe_params`]).
 
 use crate::{RecordedMessage, RunFacts, Section};
 use serde::de::DeserializeOwned;
@@ -54,7 +55,7 @@ impl Run {
 /// A report plugin: built from its params (checked before the run starts), then asked for
 /// the sections of a run.
 pub trait ReportPlugin: Sized {
-    type Params: DeserializeOwned;
+    type Params: DeserializeOwned + caravan::schemars::JsonSchema;
 
     /// Checks the params and loads what they name; an error names the key.
     fn new(params: Self::Params, inputs: &Inputs) -> Result<Self, String>;
@@ -72,6 +73,10 @@ pub fn main<P: ReportPlugin>(program: &str) -> ExitCode {
         ExitCode::from(code)
     };
     let run_dir = match args.as_slice() {
+        [flag] if flag == caravan::DESCRIBE_PARAMS_FLAG => {
+            caravan::print_params_description::<P::Params>();
+            return ExitCode::SUCCESS;
+        }
         [flag] if flag == "--check" => None,
         [dir] if !dir.starts_with('-') => Some(PathBuf::from(dir)),
         _ => {

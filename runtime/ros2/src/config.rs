@@ -7,7 +7,7 @@ use crate::ros_type::{RosType, Way};
 use serde::Deserialize;
 
 /// The params as the launch file writes them.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
     /// The DDS domain id, 0–232; default `ROS_DOMAIN_ID` from the environment, else 0.
@@ -25,7 +25,7 @@ fn yes() -> bool {
 }
 
 /// One topic that crosses.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Entry {
     /// The Caravan topic, e.g. `robot/0/scan`.
@@ -52,7 +52,9 @@ pub struct Entry {
 }
 
 /// Which way an entry crosses.
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Direction {
     #[default]
@@ -61,7 +63,7 @@ pub enum Direction {
 }
 
 /// A topic's quality of service, in ROS 2's words.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Qos {
     pub reliability: Reliability,
@@ -81,7 +83,9 @@ impl Default for Qos {
 }
 
 /// `reliable` (a reliable writer also serves best-effort readers) or `best_effort`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Reliability {
     Reliable,
@@ -89,7 +93,9 @@ pub enum Reliability {
 }
 
 /// `volatile`, or `transient_local`: late readers get the last `depth` messages (a map).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Durability {
     Volatile,

@@ -3,6 +3,7 @@
 
 use super::grid::{Axis, Cell};
 use anyhow::{Context, Result};
+use caravan_launch::overrides::value_json;
 use caravan_report::stats::describe;
 use caravan_report::wilson::wilson95;
 use serde_json::{Map, Value, json};
@@ -102,7 +103,10 @@ pub fn summarise(header: &Header, cells: &[Cell], runs: &[Vec<RunEntry>]) -> Val
         .map(|a| {
             let values: Vec<&str> = a.values.iter().map(|v| v.label.as_str()).collect();
             match &a.key {
-                Some(key) => json!({"key": key, "values": values}),
+                Some(key) => {
+                    let typed: Vec<Value> = values.iter().map(|v| value_json(v)).collect();
+                    json!({"key": key, "values": typed})
+                }
                 None => {
                     let sets: Map<String, Value> = a
                         .values
@@ -114,10 +118,16 @@ pub fn summarise(header: &Header, cells: &[Cell], runs: &[Vec<RunEntry>]) -> Val
             }
         })
         .collect();
+    let plain: Vec<&str> = header
+        .axes
+        .iter()
+        .filter(|a| a.key.is_some())
+        .map(|a| a.label.as_str())
+        .collect();
     let cells: Vec<Value> = cells
         .iter()
         .zip(runs)
-        .map(|(cell, runs)| cell_summary(cell, runs))
+        .map(|(cell, runs)| cell_summary(cell, runs, &plain))
         .collect();
     json!({
         "name": header.name,
@@ -128,7 +138,9 @@ pub fn summarise(header: &Header, cells: &[Cell], runs: &[Vec<RunEntry>]) -> Val
     })
 }
 
-fn cell_summary(cell: &Cell, runs: &[RunEntry]) -> Value {
+/// `plain` names the axes over a key, whose values are typed as `--set` reads them (a named
+/// axis' value is its name).
+fn cell_summary(cell: &Cell, runs: &[RunEntry], plain: &[&str]) -> Value {
     let mut numbers: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
     let mut flags: BTreeMap<&str, (usize, usize)> = BTreeMap::new();
     for run in runs {
@@ -166,13 +178,20 @@ fn cell_summary(cell: &Cell, runs: &[RunEntry]) -> Value {
     let values: Map<String, Value> = cell
         .values
         .iter()
-        .map(|(a, v)| (a.clone(), json!(v)))
+        .map(|(a, v)| {
+            let typed = if plain.contains(&a.as_str()) {
+                value_json(v)
+            } else {
+                json!(v)
+            };
+            (a.clone(), typed)
+        })
         .collect();
     let sets: Map<String, Value> = cell
         .sets
         .iter()
         .filter_map(|s| s.split_once('='))
-        .map(|(k, v)| (k.trim().to_string(), json!(v.trim())))
+        .map(|(k, v)| (k.trim().to_string(), value_json(v)))
         .collect();
     let runs: Vec<Value> = runs
         .iter()
@@ -213,7 +232,11 @@ pub fn csv(summary: &Value) -> String {
     for cell in summary["cells"].as_array().into_iter().flatten() {
         let lead: Vec<String> = axes
             .iter()
-            .map(|a| cell["values"][*a].as_str().unwrap_or("").to_string())
+            .map(|a| match &cell["values"][*a] {
+                Value::String(s) => s.clone(),
+                Value::Null => String::new(),
+                v => v.to_string(),
+            })
             .chain([cell["id"].as_str().unwrap_or("").to_string()])
             .collect();
         for (key, m) in cell["metrics"].as_object().into_iter().flatten() {

@@ -5,7 +5,7 @@
 use caravan_report::{Inputs, ReportPlugin, Run, Section};
 use serde::Deserialize;
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
     /// The topic whose messages are counted.

@@ -25,7 +25,7 @@ use serde::Deserialize;
 use std::io::Write;
 use std::time::Duration;
 
-#[derive(Deserialize, Default)]
+#[derive(Deserialize, schemars::JsonSchema, Default)]
 #[serde(default)]
 struct Params {
     topic: String,

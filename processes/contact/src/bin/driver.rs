@@ -20,7 +20,7 @@ fn main() -> ExitCode {
 /// The driver's rate when the launch file gives none.
 const DEFAULT_RATE_HZ: f64 = 100.0;
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
     arm: ArmParams,

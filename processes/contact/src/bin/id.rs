@@ -23,7 +23,7 @@ fn main() -> ExitCode {
     caravan::node_main("caravan-contact-id", setup, run)
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
     arm: ArmParams,

@@ -35,7 +35,7 @@ use caravan_schemas::Pose2D;
 use caravan_world::geometry::{footprint, rect_distance};
 use serde::Deserialize;
 
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct FollowerParams {
     pub k1: f64,

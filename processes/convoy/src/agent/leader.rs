@@ -8,7 +8,7 @@ use crate::agent::angle::wrap;
 use caravan_schemas::Pose2D;
 use serde::Deserialize;
 
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct LeaderParams {
     /// Goals A, B, C, D… as [x, y] in the map frame.

@@ -4,7 +4,9 @@ use crate::agent::follower::FollowerParams;
 use crate::agent::leader::LeaderParams;
 use serde::Deserialize;
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(
+    Debug, Clone, Copy, Deserialize, serde::Serialize, schemars::JsonSchema, PartialEq, Eq, Default,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {
     Leader,
@@ -15,7 +17,7 @@ pub enum Mode {
     Drive,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct Params {
     /// This robot's index: 0 is the leader, i follows i − 1.

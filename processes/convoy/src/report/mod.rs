@@ -29,7 +29,7 @@ use convoy::{Footprint, Scene};
 use serde::Deserialize;
 
 /// The plugin's params.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
     /// The world file, relative to the launch file.

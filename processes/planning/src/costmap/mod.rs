@@ -31,7 +31,7 @@ pub const INSCRIBED: u8 = 253;
 pub const LETHAL: u8 = 254;
 
 /// How occupancy becomes cost. Deserialised from the planner's parameter file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct CostmapParams {
     /// Occupancy (percent) at or above which a cell is an obstacle (costmap_2d's

@@ -25,7 +25,7 @@ fn main() -> ExitCode {
     caravan::node_main("caravan-tracked-driver", setup, run)
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
     /// The robot's index: one of the group's `count` robots.

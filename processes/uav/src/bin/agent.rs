@@ -15,7 +15,7 @@ fn main() -> ExitCode {
     caravan::node_main("caravan-uav-agent", setup, run)
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
     policy: String,

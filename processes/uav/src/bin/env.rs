@@ -19,7 +19,7 @@ fn main() -> ExitCode {
     caravan::node_main("caravan-uav-env", setup, run)
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
     #[serde(default)]

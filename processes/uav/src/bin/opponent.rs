@@ -14,7 +14,7 @@ fn main() -> ExitCode {
     caravan::node_main("caravan-uav-opponent", setup, run)
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
     #[serde(default)]

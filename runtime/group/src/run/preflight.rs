@@ -4,7 +4,7 @@
 //! (`caravan::node_main`, `caravan.main` in Python). A bad param of any process then stops
 //! the launch before anything started, as a bad key of the launch file does.
 
-use caravan_launch::model::{LaunchFile, ProcessProblem};
+use caravan_launch::model::{EntryList, EntryProblem, LaunchFile};
 use crossbeam::channel::{RecvTimeoutError, bounded};
 use std::path::Path;
 use std::process::{Output, Stdio};
@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 pub const CHECK_TIMEOUT: Duration = Duration::from_secs(600);
 
 /// Runs the checks of `lf`'s processes at once and returns what they found wrong.
-pub fn check_processes(lf: &LaunchFile) -> Vec<ProcessProblem> {
+pub fn check_processes(lf: &LaunchFile) -> Vec<EntryProblem> {
     let mut env = match super::group_environment(lf) {
         Ok(env) => env,
         Err(e) => {
@@ -123,7 +123,7 @@ fn judge(
     program: &Path,
     params: &serde_json::Value,
     output: std::io::Result<Output>,
-) -> Option<ProcessProblem> {
+) -> Option<EntryProblem> {
     let output = match output {
         Ok(output) if output.status.success() => return None,
         Ok(output) => output,
@@ -145,7 +145,8 @@ fn judge(
         (None, true) => format!("process '{name}': its check was killed by a signal"),
     };
     let key = named.or(found);
-    Some(ProcessProblem {
+    Some(EntryProblem {
+        list: EntryList::Process,
         index,
         key,
         message,
@@ -229,8 +230,34 @@ fn leaves(v: &serde_json::Value, path: String, f: &mut dyn FnMut(String, &serde_
     }
 }
 
-fn problem(index: usize, message: String) -> ProcessProblem {
-    ProcessProblem {
+/// A report plugin's refusal of its params (`PROGRAM --check` said `text`), at the key it
+/// names, found as for a process.
+pub fn report_problem(
+    index: usize,
+    exec: &str,
+    params: &serde_json::Value,
+    text: &str,
+) -> EntryProblem {
+    let named = named_key(text);
+    let found = named
+        .is_none()
+        .then(|| key_of_quoted_value(text, params))
+        .flatten();
+    let message = match &found {
+        Some(key) => format!("report '{exec}', key '{key}': {text}"),
+        None => format!("report '{exec}': {text}"),
+    };
+    EntryProblem {
+        list: EntryList::Report,
+        index,
+        key: named.or(found),
+        message,
+    }
+}
+
+fn problem(index: usize, message: String) -> EntryProblem {
+    EntryProblem {
+        list: EntryList::Process,
         index,
         key: None,
         message,
