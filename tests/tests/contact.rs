@@ -142,10 +142,10 @@ fn without_noise_the_live_estimates_agree_with_an_independent_estimator() {
     );
     // (c) The live estimate against the independent one. Without noise both solve the same
     // three equations (the torques of the joints up to the pushed link) exactly, so they
-    // agree far closer than either agrees with the push: 5e-10 N and 3e-9 mm measured, from
-    // the search's finest grid step (2 mm / 8⁹ ≈ 1.5e-11 m) and round-off. A thousand
-    // times that still catches any change to the force or the point the estimator reports
-    // (a force 5 % too large is 5 N off).
+    // agree far closer than either agrees with the push: 3e-10 N and 2e-9 mm at most
+    // measured, from the search's last grid step (0.4 mm / 8⁹ ≈ 3e-12 m) and round-off. A
+    // thousand times that still catches any change to the force or the point the estimator
+    // reports (a force 5 % too large is 5 N off).
     assert!(
         stat("live_vs_independent", "force_error_n", "max") < 1e-6,
         "{s}"

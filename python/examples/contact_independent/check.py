@@ -140,7 +140,8 @@ def read(run_dir: str, joints: list) -> dict:
                 if all(n in by for n in joints):
                     states.append((t, [num(by[n]["position"]) for n in joints], [num(by[n]["effort"]) for n in joints]))
             else:
-                estimates.append((t, int(j["status"]), j["link"], (num(j["force"]["x"]), num(j["force"]["y"])),
+                estimates.append((t, int(j["status"]), j["link"], int(j["last_candidate"]),
+                                  (num(j["force"]["x"]), num(j["force"]["y"])),
                                   (num(j["point"]["x"]), num(j["point"]["y"]))))
     return {"pushes": pushes, "poses": poses, "states": states, "estimates": estimates, "params": params, "seed": seed}
 
@@ -151,7 +152,7 @@ def scored(data: dict, settle_s: float) -> dict:
     pose_t = np.array([t for t, _ in data["poses"]])
     state_t = np.array([t for t, _, _ in data["states"]])
     rows = []
-    for t, status, link, f, p in data["estimates"]:
+    for t, status, link, last, f, p in data["estimates"]:
         push = next((u for u in data["pushes"] if u["start"] <= t and (u["end"] is None or t < u["end"])), None)
         if push is None or t < push["start"] + settle:
             continue
@@ -163,7 +164,7 @@ def scored(data: dict, settle_s: float) -> dict:
         c, s = math.cos(h), math.sin(h)
         (lx, ly), (fx, fy) = push["point"], push["force"]
         rows.append({
-            "t": t, "status": status, "link": link, "force": f, "point": p, "state": js,
+            "t": t, "status": status, "link": link, "last_candidate": last, "force": f, "point": p, "state": js,
             "true_point": (x + c * lx - s * ly, y + s * lx + c * ly),
             "true_force": (c * fx - s * fy, s * fx + c * fy), "true_link": push["link"],
         })
@@ -204,6 +205,29 @@ def mean_difference(a: np.ndarray, b: np.ndarray, rng) -> dict | None:
             "ratio": float(a.mean() / b.mean()) if b.mean() > 0 else None}
 
 
+def live_noise(rows, q, tau_true, live_f, live_p, arm, sigma, rng) -> dict | None:
+    """The torque noise the perception added, recovered from its output: where it fitted the
+    wrench to exactly three joints (``last_candidate`` = 3) and found a point, its force F at
+    its point p solves those three equations exactly, so n_i = (p − j_i) × F − τ_i for
+    joints 1–3 (τ the noise-free external torque). Their spread against σ checks the
+    perception's noise model without the estimator in the way."""
+    pick = np.array([r["last_candidate"] == 3 and r["status"] == FOUND for r in rows])
+    if sigma <= 0 or pick.sum() < 2:
+        return None
+    origin, _ = arm.frames(q[pick])
+    d = live_p[pick][:, None, :] - origin[:, :3, :]
+    f = live_f[pick][:, None, :]
+    n = d[..., 0] * f[..., 1] - d[..., 1] * f[..., 0] - tau_true[pick][:, :3]
+    x = n.ravel()
+    boot = np.array([x[rng.integers(0, len(x), len(x))].std() for _ in range(200)])
+    z = (x - x.mean()) / x.std()
+    return {"n": int(len(x)), "instants": int(pick.sum()), "mean": float(x.mean()),
+            "std_over_sigma": float(x.std() / sigma),
+            "std_over_sigma_bootstrap_ci95": [float(np.quantile(boot, 0.025) / sigma), float(np.quantile(boot, 0.975) / sigma)],
+            "std_over_sigma_by_joint": [float(v / sigma) for v in n.std(0)],
+            "skewness": float((z ** 3).mean()), "excess_kurtosis": float((z ** 4).mean() - 3)}
+
+
 def check(run_dir: str, sigma: float | None, seed: int, urdf: str | None, spacing: float) -> dict:
     # The URDF named by the run's launch file, relative to launch/contact/ (push.toml's place).
     with recording.open(os.path.join(run_dir, "record.mcap")) as rec:
@@ -224,9 +248,9 @@ def check(run_dir: str, sigma: float | None, seed: int, urdf: str | None, spacin
     if not rows:
         raise SystemExit(f"{run_dir}: no estimate was scored")
     q = np.array([data["states"][r["state"]][1] for r in rows])
-    tau = -np.array([data["states"][r["state"]][2] for r in rows])
+    tau_true = -np.array([data["states"][r["state"]][2] for r in rows])
     noise_rng = np.random.default_rng(seed)
-    tau = tau + (noise_rng.normal(0.0, sigma, tau.shape) if sigma > 0 else 0.0)
+    tau = tau_true + (noise_rng.normal(0.0, sigma, tau_true.shape) if sigma > 0 else 0.0)
     out = {k: [] for k in ("force", "point", "link", "residual")}
     for i in range(0, len(rows), CHUNK):
         e = est.estimate(q[i:i + CHUNK], tau[i:i + CHUNK])
@@ -258,6 +282,8 @@ def check(run_dir: str, sigma: float | None, seed: int, urdf: str | None, spacin
     # the independent one's, over the same instants, for a like-for-like comparison.
     a_matched = dict(a, point_error_mm=errors(ind["force"], ind["point"], true_f, true_p, ind_found & live_found)["point_error_mm"])
     links = np.array([arm.links[k] if k >= 0 else "" for k in ind["link"]])
+    beyond = np.array([r["last_candidate"] > arm.links.index(r["true_link"]) + 1 for r in rows])
+    live_err = np.linalg.norm(live_f - true_f, axis=1)
     true_links = np.array([r["true_link"] for r in rows])
     summary = {
         "run_dir": run_dir, "seed": data["seed"], "sigma": sigma, "noise_seed": seed, "settle_s": params["settle_s"],
@@ -273,6 +299,12 @@ def check(run_dir: str, sigma: float | None, seed: int, urdf: str | None, spacin
         "independent_wrong_link_pct": 100.0 * float((links[ind_found] != true_links[ind_found]).mean()) if ind_found.any() else None,
         "live_no_solution_pct": 100.0 * float((~live_found).mean()),
         "independent_residual_n_m": describe(ind["residual"][ind_found], stats_rng),
+        # The live fit on more joints than the pushed link's (its thresholds let a wrong
+        # model through): how often, and its force error then and otherwise.
+        "live_beyond_pushed_link_pct": 100.0 * float(beyond.mean()),
+        "live_force_error_n_beyond_pushed_link": describe(live_err[beyond & np.isfinite(live_err)], stats_rng),
+        "live_force_error_n_up_to_pushed_link": describe(live_err[~beyond & np.isfinite(live_err)], stats_rng),
+        "live_noise": live_noise(rows, q, tau_true, live_f, live_p, arm, sigma, stats_rng),
     }
     report = os.path.join(run_dir, "report.json")
     if os.path.exists(report):

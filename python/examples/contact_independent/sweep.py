@@ -64,6 +64,29 @@ def table(results: list) -> str:
         out.append(f"| {sigma:g} | {len(rs)} | " + " | ".join(cells) + f" | {verdicts} | "
                    f"{fmt(avg(lambda r: r['independent_no_point_pct']))} / {fmt(avg(lambda r: r['live_no_solution_pct']))} | "
                    f"{fmt(avg(lambda r: r['independent_wrong_link_pct']))} |")
+    out += [
+        "",
+        "| σ (N·m) | live fit beyond the pushed link's joints (%) | live force error (N) there / elsewhere "
+        "| independent force error (N) | live noise recovered: std / σ [bootstrap 95 %], skewness, excess kurtosis |",
+        "|---|---|---|---|---|",
+    ]
+    for sigma in sorted(by_sigma):
+        rs = by_sigma[sigma]
+
+        def avg(f):
+            xs = [f(r) for r in rs]
+            xs = [x for x in xs if x is not None]
+            return sum(xs) / len(xs) if xs else None
+
+        noise = [r["live_noise"] for r in rs if r.get("live_noise")]
+        noise_cell = "; ".join(
+            f"{n['std_over_sigma']:.3f} [{n['std_over_sigma_bootstrap_ci95'][0]:.3f}, {n['std_over_sigma_bootstrap_ci95'][1]:.3f}], "
+            f"{n['skewness']:+.2f}, {n['excess_kurtosis']:+.2f}" for n in noise) or "–"
+        out.append(
+            f"| {sigma:g} | {fmt(avg(lambda r: r['live_beyond_pushed_link_pct']))} | "
+            f"{fmt(avg(lambda r: (r['live_force_error_n_beyond_pushed_link'] or {}).get('mean')))} / "
+            f"{fmt(avg(lambda r: (r['live_force_error_n_up_to_pushed_link'] or {}).get('mean')))} | "
+            f"{fmt(avg(lambda r: r['independent_vs_truth']['force_error_n']['mean']))} | {noise_cell} |")
     return "\n".join(out) + "\n"
 
 
