@@ -231,6 +231,29 @@ mod tests {
         );
     }
 
+    /// The held-out table of docs/tracked.md is the tool's output on the shipped per-run
+    /// outcomes (docs/tracked/passability-held-out-runs.csv, one row per run of the sweep).
+    #[test]
+    fn the_shipped_held_out_table_is_the_shipped_runs_pooled() {
+        let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/tracked");
+        let runs = std::fs::read_to_string(docs.join("passability-held-out-runs.csv")).unwrap();
+        let mut cells = Vec::new();
+        for line in runs.lines().skip(1) {
+            let f: Vec<&str> = line.split(',').collect();
+            let seed: u32 = f[2].parse().unwrap();
+            let mut c = cell(f[0], f[1], seed, f[3]);
+            if !f[4].is_empty() {
+                let belly = usize::from(f[4] == "true");
+                c["flags"]["tracked.high_centred"] = json!({"successes": belly, "n": 1});
+            }
+            cells.push(c);
+        }
+        assert_eq!(cells.len(), 320);
+        let md = table(&pool(&json!({ "cells": cells })).unwrap());
+        let shipped = std::fs::read_to_string(docs.join("passability-held-out.md")).unwrap();
+        assert_eq!(md.trim(), shipped.trim());
+    }
+
     #[test]
     fn a_summary_without_the_axes_is_an_error() {
         let e = pool(&json!({"cells": [{"id": "all", "values": {}}]})).unwrap_err();
