@@ -132,7 +132,7 @@ mod tests {
             .map(|k| k * period * MS)
             .filter_map(|now| {
                 let due = t.step(now, |trigger| held(trigger, now));
-                (!due.is_empty()).then(|| (now / MS, due))
+                (!due.is_empty()).then_some((now / MS, due))
             })
             .collect()
     }
