@@ -40,6 +40,34 @@ pub fn parse_params<P: DeserializeOwned>(
     Ok(params)
 }
 
+/// The command-line flag with which every Caravan process prints a description of its params
+/// instead of running: `caravan-physics --describe-params`. [`crate::node_main`] and the report
+/// plugins' `main` handle it; docs/processes.md's params tables are generated from it
+/// (`caravan docs params`).
+pub const DESCRIBE_PARAMS_FLAG: &str = "--describe-params";
+
+/// Whether the process was started as `PROGRAM --describe-params`.
+pub fn describe_params_requested() -> bool {
+    std::env::args().nth(1).as_deref() == Some(DESCRIBE_PARAMS_FLAG)
+}
+
+/// The params `P` as a JSON Schema (draft 2020-12, subschemas inlined): each key with its
+/// type, its default (when `P` has one and the value serialises) and its doc comment as
+/// `description`, where the code's convention puts the unit and range ("m/s, > 0").
+pub fn describe_params<P: schemars::JsonSchema>() -> serde_json::Value {
+    let generator = schemars::generate::SchemaSettings::draft2020_12()
+        .with(|s| s.inline_subschemas = true)
+        .into_generator();
+    generator.into_root_schema_for::<P>().to_value()
+}
+
+/// Prints [`describe_params`] of `P` to stdout as pretty JSON.
+pub fn print_params_description<P: schemars::JsonSchema>() {
+    let text = serde_json::to_string_pretty(&describe_params::<P>())
+        .expect("a JSON value always serialises");
+    println!("{text}");
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,32 +118,4 @@ mod tests {
             "{text}"
         );
     }
-}
-
-/// The command-line flag with which every Caravan process prints a description of its params
-/// instead of running: `caravan-physics --describe-params`. [`crate::node_main`] and the report
-/// plugins' `main` handle it; docs/processes.md's params tables are generated from it
-/// (`caravan docs params`).
-pub const DESCRIBE_PARAMS_FLAG: &str = "--describe-params";
-
-/// Whether the process was started as `PROGRAM --describe-params`.
-pub fn describe_params_requested() -> bool {
-    std::env::args().nth(1).as_deref() == Some(DESCRIBE_PARAMS_FLAG)
-}
-
-/// The params `P` as a JSON Schema (draft 2020-12, subschemas inlined): each key with its
-/// type, its default (when `P` has one and the value serialises) and its doc comment as
-/// `description`, where the code's convention puts the unit and range ("m/s, > 0").
-pub fn describe_params<P: schemars::JsonSchema>() -> serde_json::Value {
-    let generator = schemars::generate::SchemaSettings::draft2020_12()
-        .with(|s| s.inline_subschemas = true)
-        .into_generator();
-    generator.into_root_schema_for::<P>().to_value()
-}
-
-/// Prints [`describe_params`] of `P` to stdout as pretty JSON.
-pub fn print_params_description<P: schemars::JsonSchema>() {
-    let text = serde_json::to_string_pretty(&describe_params::<P>())
-        .expect("a JSON value always serialises");
-    println!("{text}");
 }

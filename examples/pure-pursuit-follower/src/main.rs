@@ -9,11 +9,17 @@ use serde::Deserialize;
 #[derive(Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 struct Params {
-    robot: usize,     // this robot's index; it follows robot - 1
-    lookahead_m: f64, // how far ahead on the path to aim
-    speed: f64,       // cruise speed, m/s
-    keep_back_m: f64, // centre distance to the predecessor at which to stop
-    urdf: String,     // the robot's URDF: wheel radius and separation
+    /// This robot's index; it follows `robot − 1` (0 is not rejected).
+    robot: usize,
+    /// How far ahead on the path to aim, m.
+    lookahead_m: f64,
+    /// Cruise speed, m/s.
+    speed: f64,
+    /// Centre distance to the predecessor at which it stops, m.
+    keep_back_m: f64,
+    /// The robot's URDF, relative to the launch file: wheel radius and separation (the
+    /// default `""` fails to load, so in effect required).
+    urdf: String,
 }
 
 impl Default for Params {

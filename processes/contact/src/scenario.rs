@@ -162,10 +162,10 @@ pub struct PushParams {
     /// First push, s, 0 to 86 400 (the arm settles into its pose before).
     #[serde(default = "start")]
     pub start_s: f64,
-    /// How long each push lasts and the pause after it, s: from one step of the driver to
-    /// 86 400.
+    /// How long each push lasts, s: from one step of the driver to 86 400.
     #[serde(default = "push_s")]
     pub push_s: f64,
+    /// The pause after each push, s: from one step of the driver to 86 400.
     #[serde(default = "gap_s")]
     pub gap_s: f64,
 }

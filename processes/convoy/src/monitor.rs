@@ -31,9 +31,9 @@ pub const MAX_ROBOTS: usize = MAX_METRICS.div_ceil(2);
 #[derive(Debug, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Robots in the convoy, 2 … [`MAX_ROBOTS`]; robot 0 leads.
+    /// Robots in the convoy, 2 … [`MAX_ROBOTS`] (16); robot 0 leads.
     pub count: usize,
-    /// The robots' description, for their footprint.
+    /// The robots' description, relative to the launch file, for their footprint.
     pub urdf: String,
 }
 

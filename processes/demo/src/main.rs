@@ -19,7 +19,9 @@ use serde::Deserialize;
 #[derive(Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 struct Params {
+    /// `pong`: factor applied to each value.
     gain: f64,
+    /// `crash`: steps before exiting (0 behaves as 1).
     steps: u64,
     /// `source`, `sink`: the topic.
     topic: String,

@@ -39,6 +39,8 @@ pub const REST_FROM_S: f64 = 0.5;
 #[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "scenario", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Scenario {
+    /// Static tilt: a platform turned about x from level to `angle_deg` at `rate_deg_s`, then
+    /// held.
     Tilt {
         /// Tilt rate, °/s, 0.01 to 2000 (the ranges and why: [`crate::range`]).
         #[serde(default = "tilt_rate")]
@@ -53,6 +55,8 @@ pub enum Scenario {
         #[serde(default = "tilt_hold")]
         hold_s: f64,
     },
+    /// Lift and free fall: a cube at rest, pushed up by `force_n` from `push_from_s` to
+    /// `push_to_s` (optionally braked), then released.
     Lift {
         /// The cube's description, for its mass (relative to the launch file).
         #[serde(default = "lift_urdf")]
@@ -63,6 +67,7 @@ pub enum Scenario {
         /// Push interval, s: 0 < from < to ≤ 86 400.
         #[serde(default = "lift_from")]
         push_from_s: f64,
+        /// End of the push, s, after `push_from_s`, ≤ 86 400.
         #[serde(default = "lift_to")]
         push_to_s: f64,
         /// A braking phase after the push (none by default, as in the reference's lift).
@@ -73,6 +78,7 @@ pub enum Scenario {
         #[serde(default = "lift_fall_end")]
         fall_end_s: f64,
     },
+    /// Constant rotation: the IMU `radius_m` from a vertical axis turning at `rate_rad_s`.
     Rotation {
         /// Turn rate, rad/s, 1e-4 to 34.9 (2000 °/s) either way.
         #[serde(default = "rotation_rate")]
@@ -84,16 +90,21 @@ pub enum Scenario {
         /// Scored from this time to `end_s`, s: 0 ≤ from < end ≤ 86 400.
         #[serde(default = "rotation_from")]
         from_s: f64,
+        /// End of the scored interval, s, after `from_s`, ≤ 86 400.
         #[serde(default = "rotation_end")]
         end_s: f64,
     },
     /// An IMU on the forearm of a two-link arm turned about its shoulder (see [`crate::arm`]).
     Arm(crate::arm::Arm),
+    /// A still platform with the IMU's error model on: the report reads the noise density and
+    /// bias instability back off the Allan deviation.
     Allan {
         /// The sensor's error model, as its `imu_errors` param (the configured values the
         /// report recovers); each term at most its triad's full scale (16 g, 2000 °/s).
         imu_errors: caravan_sensor::imu_errors::ImuErrors,
     },
+    /// Spin-up: a bar driven to ω by a motor of maximum torque M, one row of the reference's
+    /// table.
     SpinUp {
         /// The bar and its motor, one row of the reference's table: the joint's
         /// `<limit effort>` is the motor's maximum torque M, its `<limit velocity>` the rate

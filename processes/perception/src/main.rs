@@ -39,26 +39,37 @@ enum Localisation {
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
+    /// What the node does: `slam` (the leader's laser SLAM) or `odometry` (a follower's wheel
+    /// dead reckoning).
     mode: Mode,
+    /// Index of the robot (topics `robot/<i>/…`); without `initial_pose`, one of the `world`
+    /// file's robots (< its `[[start]]` poses).
     robot: usize,
-    /// The robot's start pose [x, y, θ] in the map frame: SLAM's map origin is laid so that
-    /// map and world frames agree, and odometry counts from it. Default: the `world` file's
-    /// `[[start]]` pose of `robot`.
+    /// The robot's start pose [x, y, θ] in the map frame, m, m, rad, finite: SLAM's map origin
+    /// is laid so that map and world frames agree, and odometry counts from it. Default: the
+    /// `world` file's `[[start]]` pose of `robot`.
     initial_pose: Option<[f64; 3]>,
-    /// The world file, relative to the launch file, when `initial_pose` is not given.
+    /// The world file, relative to the launch file, whose `[[start]]` poses give `initial_pose`
+    /// when it is not set (one of the two is required).
     world: Option<String>,
+    /// `estimated`, or `ideal`: publish the true pose on `robot/<i>/pose` instead of the
+    /// estimate (SLAM still builds its map, from the true poses; odometry still publishes its
+    /// own estimate on `robot/<i>/odometry`).
     #[serde(default)]
     localisation: Localisation,
+    /// Slam mode's parameters; checked only in slam mode.
     #[serde(default)]
     slam: SlamParams,
-    /// How often SLAM publishes the map, Hz.
+    /// Slam: how often the map is published, Hz, > 0.
     #[serde(default = "default_map_rate")]
     map_rate_hz: f64,
-    /// Base name of the map saved in the run directory on exit; empty saves nothing.
+    /// Slam: base name (a plain file name, no `/`) of the map saved in the run directory on
+    /// exit (`<name>.yaml`, `<name>.pgm`); `""` saves nothing. Nothing is saved outside
+    /// `caravan launch`. The report reads only `map.yaml`.
     #[serde(default = "default_save_map")]
     save_map: String,
     /// The robot's URDF, relative to the launch file: odometry's wheel radius and separation.
-    /// Required in odometry mode.
+    /// Required in odometry mode; in slam mode optional, but loaded and checked if given.
     urdf: Option<String>,
 }
 

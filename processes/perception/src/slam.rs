@@ -41,44 +41,52 @@ pub const MIN_POINTS: usize = 20;
 #[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SlamParams {
-    /// Cell side of the finest map level, m (Hector's default, the reference's choice).
+    /// Cell side of the finest map level, m, 0.001 to 10 (Hector's default, the reference's
+    /// choice).
     pub resolution: f64,
-    /// Map levels, each with cells twice the size of the one below (Hector uses 3).
+    /// Map levels, 1 … 5, each with cells twice as large as the one below (Hector uses 3).
     pub levels: usize,
-    /// Side of the finest level in cells (512 × 0.025 m = 12.8 m); at most
-    /// [`MAP_MAX_SIDE`] and a multiple of 2^(levels − 1).
+    /// Side of the finest level in cells (512 × 0.025 m = 12.8 m): a multiple of 2^(levels −
+    /// 1), from 4·2^(levels − 1) to [`MAP_MAX_SIDE`] (1024).
     pub map_size: usize,
-    /// Centre of the map, m; the initial pose's position if absent.
+    /// Centre of the map, m, finite; the initial pose's position if absent.
     pub map_center: Option<[f64; 2]>,
-    /// Move at least this far (m) or turn at least this much (rad) between map updates.
-    /// 0.1 m is half a second at the leader's top speed: the map in front of the leader, which
-    /// the planner needs, is refreshed at 2 Hz, while a standing robot never feeds its own
-    /// pose error back into the map. Hector's own default (0.4 m) is for fast robots with
-    /// 30 m scanners. 0.06 rad is the Hector tutorial's value: turning moves a beam's end at
-    /// 2 m by 0.12 m, about as far as the distance threshold.
+    /// Add the scan to the map once the robot moved more than this since the last update (or
+    /// turned more than `map_update_angle_rad`), m, > 0. 0.1 m is half a second at the leader's
+    /// top speed: the map in front of the leader, which the planner needs, is refreshed at 2
+    /// Hz, while a standing robot never feeds its own pose error back into the map. Hector's
+    /// own default (0.4 m) is for fast robots with 30 m scanners.
     pub map_update_distance_m: f64,
+    /// …or once it turned more than this, rad, > 0. 0.06 rad is the Hector tutorial's value:
+    /// turning moves a beam's end at 2 m by 0.12 m, about as far as the distance threshold.
     pub map_update_angle_rad: f64,
-    /// Scanner position ahead of base_link, m (the sensor node's `laser_x_offset`).
+    /// Scanner position ahead of base_link, m (not checked): the sensor node's
+    /// `laser_x_offset`.
     pub laser_x_offset_m: f64,
-    /// Gauss–Newton iterations on each coarse level and on the finest one (Hector: 3 and 5).
+    /// Gauss–Newton iterations on each coarse level, ≥ 0 (not checked; Hector: 3).
     pub iterations_coarse: usize,
+    /// Gauss–Newton iterations on the finest level, ≥ 1 (Hector: 5).
     pub iterations_fine: usize,
-    /// Readings used, m, within the scan's own valid interval. The lower bound keeps parts of
-    /// the robot or a follower right beside it out of the map.
+    /// Readings shorter than this are not used, m, in [0, `max_range_m`). It keeps parts of the
+    /// robot or a follower right beside it out of the map.
     pub min_range_m: f64,
+    /// Readings longer than this are not used, m, > 0 (readings outside the scan's own valid
+    /// range never are).
     pub max_range_m: f64,
-    /// Hector's `update_factor_occupied` / `update_factor_free` and the log-odds bound (see
-    /// [`crate::grid`]).
+    /// Hector's `update_factor_occupied`, in (0.5, 1) (see [`crate::grid`]).
     pub update_factor_occupied: f64,
+    /// Hector's `update_factor_free`, in (0, 0.5).
     pub update_factor_free: f64,
+    /// Log-odds are clamped to ± this, > 0.
     pub log_odds_limit: f32,
-    /// The map field scans are matched to (see [`MatchField`]); `occupancy` is Hector's.
+    /// The map field scans are matched to (see [`MatchField`]): `reflection`, or `occupancy`,
+    /// Hector's, which pulls the pose toward walls in view with a 240° scanner.
     pub match_field: MatchField,
-    /// How far past a beam's end the cells count as exposed, for the reflection field, m:
+    /// How far past a beam's end the cells count as exposed, for the reflection field, m, ≥ 0:
     /// about twice the range noise at the longest ranges (1 % of 5 m).
     pub reflection_margin_m: f64,
-    /// Reflection rate at which the matched field reads 1 (0 < s ≤ 1; 0.25–1 all did about
-    /// as well on the synthetic room).
+    /// Reflection rate at which the matched field reads 1, in (0, 1] (0.25–1 all did about as
+    /// well on the synthetic room).
     pub reflection_saturation: f32,
 }
 

@@ -55,12 +55,15 @@ pub struct Params {
     /// Robot description (URDF) of the one-kind form, relative to the launch file's
     /// directory. Required with any other top-level robot key.
     pub urdf: Option<String>,
-    /// Number of robots of the one-kind form. Required with `urdf`.
+    /// Number of robots of the one-kind form, 1 … 170 (170 = the lockstep protocol's 512 topics
+    /// per step ÷ 3). Required with `urdf`.
     pub count: Option<usize>,
-    /// Start pose `[x, y, theta]` (m, m, rad) of each robot in the map frame, one per robot;
-    /// empty: the world file's `[[start]]` poses.
+    /// Start pose `[x, y, theta]` (m, m, rad; finite) of each robot in the map frame; if given,
+    /// exactly `count` entries. Empty: the world file's `[[start]]` poses, the first `count` of
+    /// them (the world must have at least `count`).
     pub poses: Vec<[f64; 3]>,
-    /// Physics steps per node step (100 Hz node × 5 = 500 Hz physics by default).
+    /// Physics steps per node step, 1 … 100, and at most the node period in ns (100 Hz node × 5
+    /// = 500 Hz physics by default).
     pub substeps: u32,
     /// rapier's solver iterations (substeps of its TGS solver) per physics step, 1–64.
     /// The default 8 suits the convoy's light wheels on impulse joints; a multibody robot
@@ -68,17 +71,21 @@ pub struct Params {
     pub solver_iterations: usize,
     /// Hold every chassis in the air so the wheels spin freely: the motor bench test.
     pub lifted: bool,
-    /// Friction coefficient between wheels and floor (default 1).
+    /// Coulomb friction coefficient between tyre and floor, > 0, ≤ 100 (default 1).
     pub wheel_friction: Option<f64>,
     /// The one-kind form's motor and firmware: the `dc_motor` actuator's keys, whose
     /// defaults are the measured motor and firmware of the convoy robot.
     pub motor: Option<MotorParams>,
+    /// The one-kind form's wheel firmware: the `dc_motor` actuator's `pid` keys, whose defaults
+    /// are the convoy robot's firmware.
     pub pid: Option<FirmwareParams>,
     /// Robots of any kind, instead of the one-kind form (never empty).
     #[serde(deserialize_with = "non_empty_robots")]
     pub robots: Option<Vec<RobotSpec>>,
-    /// Gravitational acceleration, m/s², along −z.
+    /// Gravitational acceleration along −z, m/s², 0 to 1000.
     pub gravity: f64,
+    /// Number type of the physics engine: `f32` (rapier3d) or `f64` (rapier3d-f64 with
+    /// parry3d-f64, for experiments whose accuracy needs it).
     pub precision: Precision,
 }
 

@@ -72,6 +72,7 @@ pub enum ActuatorSpec {
     /// at `pid.rate_hz`, [`crate::firmware`]); takes velocity targets. The keys left out keep
     /// the measured motor and firmware of the convoy robot ([`crate::step_response`]).
     DcMotor {
+        /// The joints it drives, by name, or `["*"]` for every movable joint.
         joints: Vec<String>,
         #[serde(default)]
         motor: MotorParams,
@@ -80,6 +81,7 @@ pub enum ActuatorSpec {
     },
     /// A speed loop: τ = kp·(ω* − ω) + ki·∫(ω* − ω)dt, every physics step.
     Velocity {
+        /// The joints it drives, by name, or `["*"]` for every movable joint.
         joints: Vec<String>,
         /// N·m·s/rad (N·s/m for prismatic joints), ≥ 0.
         #[serde(default = "default_velocity_kp")]
@@ -91,6 +93,7 @@ pub enum ActuatorSpec {
     /// A position loop as ros2_control's effort-interface PID:
     /// τ = kp·e + ki·∫e dt + kd·(ω* − ω) + τ_ff, every physics step.
     Position {
+        /// The joints it drives, by name, or `["*"]` for every movable joint.
         joints: Vec<String>,
         /// N·m/rad (N/m), ≥ 0.
         #[serde(default = "default_position_kp")]
@@ -108,6 +111,7 @@ pub enum ActuatorSpec {
     /// targets. Its `effort` reads 0 on multibody joints: rapier does not report the impulses
     /// of a multibody's internal constraints.
     Motor {
+        /// The joints it drives, by name, or `["*"]` for every movable joint.
         joints: Vec<String>,
         /// rapier's motor damping (acceleration-based), 1/s, > 0: how hard the speed error
         /// is corrected; large is stiff.
@@ -123,6 +127,7 @@ pub enum ActuatorSpec {
     /// with the contacts; on multibody joints rapier's implicit joint spring and damper (the
     /// damper unbounded), which reads its effort.
     Servo {
+        /// The joints it drives, by name, or `["*"]` for every movable joint.
         joints: Vec<String>,
         /// N·m/rad (N/m), > 0.
         #[serde(default = "default_servo_stiffness")]
@@ -235,46 +240,53 @@ impl ActuatorSpec {
 pub struct RobotSpec {
     /// Robot description (URDF), relative to the launch file's directory.
     pub urdf: String,
-    /// Number of robots of this kind.
+    /// Number of robots of this kind (default 1).
     #[serde(default = "one")]
     pub count: usize,
-    /// Start pose of each: `[x, y, yaw]` (m, m, rad; a floating base then stands on the
-    /// floor, a fixed one sits at z = 0) or `[x, y, z, roll, pitch, yaw]`. Empty: the world
-    /// file's `[[start]]` poses.
+    /// Start pose of each robot of this kind, base link in the map frame: `[x, y, yaw]` (m, m,
+    /// rad; a floating base then stands on the floor, on its wheels if it has any, else on its
+    /// lowest point; a fixed one sits at z = 0) or `[x, y, z, roll, pitch, yaw]`. Empty: the
+    /// world file's `[[start]]` poses, in robot order.
     #[serde(default)]
     pub poses: Vec<Vec<f64>>,
+    /// How the robot's root link is held.
     #[serde(default)]
     pub base: Base,
     /// Hold the base fixed 0.1 m above its standing height so wheels spin freely (the
     /// motor bench test).
     #[serde(default)]
     pub lifted: bool,
+    /// The joint solver (docs/robots.md).
     #[serde(default)]
     pub joints: JointModel,
+    /// The actuators and the joints they drive, each entry naming `joints` (names or `"*"`); a
+    /// later entry overrides an earlier one for the same joint. None: every joint passive. See
+    /// docs/robots.md.
     #[serde(default)]
     pub actuators: Vec<ActuatorSpec>,
     /// `"diff"`: the robot is a differential drive; its two wheel joints follow
     /// `robot/i/wheel_setpoint` and report on `robot/i/wheel_state`.
     #[serde(default)]
     pub drive: Option<Drive>,
-    /// Friction coefficient of wheels (cylinders on continuous joints) on the floor.
+    /// Tyre–floor friction coefficient of the wheels (cylinders on continuous joints).
     #[serde(default = "default_wheel_friction")]
     pub wheel_friction: f64,
-    /// Frame of `robot/i/cmd_vel` for a kinematic base.
+    /// Frame of `robot/i/cmd_vel` for a kinematic base (`base = "kinematic"`).
     #[serde(default)]
     pub cmd_vel_frame: CmdVelFrame,
     /// Publish `robot/i/joint_states` and take `robot/i/joint_command`. Default: when the
     /// robot has a movable joint.
     #[serde(default)]
     pub joint_states: Option<bool>,
-    /// Fixed joints that carry a force–torque sensor: their child is not welded to the
-    /// parent but held by a fixed joint whose force and torque are published on
-    /// `robot/i/force_torque`.
+    /// Fixed joints that carry a force–torque sensor: their child is not welded to the parent
+    /// but held by a fixed (impulse) joint whose constraint force and torque are published on
+    /// `robot/i/force_torque`. A moving or missing joint is refused.
     #[serde(default)]
     pub force_torque: Vec<String>,
-    /// rapier's joint softness for the `force_torque` joints. Default: rigid (rapier's joint
-    /// defaults). Soft, the joint is solved as ODE's and Bullet's soft constraints
-    /// (ERP/CFM) solve every joint, and the force read lags each change of load.
+    /// rapier's joint softness for the `force_torque` joints (needs `force_torque`). Default:
+    /// rigid (rapier's joint defaults). Soft, the joint is solved as ODE's and Bullet's soft
+    /// constraints (ERP/CFM) solve every joint, and the force read lags each change of load (10
+    /// Hz, 0.3: 63 % after about 20 ms).
     #[serde(default)]
     pub force_torque_softness: Option<Softness>,
     /// Let the robot's links touch each other (those not joined by a joint). Default: no,

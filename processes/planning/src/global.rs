@@ -26,16 +26,16 @@ use std::collections::BinaryHeap;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct GlobalParams {
-    /// How much a costly cell lengthens a step: `length × (1 + cost_weight · cost / 252)`.
-    /// navfn's `COST_FACTOR` and `COST_NEUTRAL` amount to about 4.
+    /// How much a costly cell lengthens a step, ≥ 0: a step costs `length × (1 + cost_weight ·
+    /// cost / 252)`. navfn's `COST_FACTOR` and `COST_NEUTRAL` amount to about 4.
     pub cost_weight: f64,
     /// If the robot stands on an inflated cell (close to a wall), plan from the nearest free
-    /// cell within this distance instead of failing, metres.
+    /// cell within this distance instead of failing, m, ≥ 0.
     pub start_escape_radius: f64,
-    /// Search this far beyond the known part of the map (and the start and goal), metres.
-    /// Beyond it the map is uniformly unknown, so a detour further out never pays.
+    /// Search this far beyond the known part of the map (and the start and goal), m, 0 to
+    /// 10000. Beyond it the map is uniformly unknown, so a detour further out never pays.
     pub search_margin: f64,
-    /// Largest distance between consecutive poses of the returned path, metres.
+    /// Largest distance between consecutive poses of the returned path, m, > 0.
     pub path_spacing: f64,
     /// Replace runs of grid cells by straight segments where that costs no more.
     pub shortcut: bool,

@@ -35,40 +35,43 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct LocalParams {
-    /// Slowest forward speed, m/s (the leader cannot stand still while driving).
+    /// Slowest forward speed, m/s, finite, ≤ `v_max` (the leader never turns in place).
     pub v_min: f64,
-    /// Fastest forward speed, m/s.
+    /// Fastest forward speed, m/s, finite.
     pub v_max: f64,
-    /// Most negative (clockwise) turn rate, rad/s.
+    /// Most negative (clockwise) turn rate, rad/s, finite, ≤ `omega_max`.
     pub omega_min: f64,
-    /// Most positive (counter-clockwise) turn rate, rad/s.
+    /// Most positive (counter-clockwise) turn rate, rad/s, finite.
     pub omega_max: f64,
-    /// Largest rate of change of the commanded speed, m/s². Keep it within what the wheel
+    /// Largest rate of change of the commanded speed, m/s², > 0. Keep it within what the wheel
     /// speed loop can follow. The default is an estimate: a second-order step response that
     /// settles (5 %) in 2.5 s with ~20 % overshoot rises at most ~1.6 × its step per second,
     /// i.e. ~0.3 m/s² for a 0.2 m/s step and ~3 rad/s² for a 2 rad/s step. Refit it to the
     /// motor model.
     pub acc_lim_v: f64,
-    /// Largest rate of change of the commanded turn rate, rad/s².
+    /// Largest rate of change of the commanded turn rate, rad/s², > 0.
     pub acc_lim_omega: f64,
-    /// How often [`LocalPlanner::command`] is called, s (the command is held in between).
+    /// Period between commands as the rollouts model it, s, > 0: how often
+    /// [`LocalPlanner::command`] is called (the command is held in between). Keep it equal to
+    /// the node's period; nothing checks that.
     pub control_period: f64,
-    /// How far ahead each trajectory is simulated, s.
+    /// How far ahead each rollout is simulated, s, > 0.
     pub sim_time: f64,
-    /// Integration step of the rollout, s (at 0.2 m/s, 0.05 s is 1 cm: finer than a cell).
+    /// Integration step of the rollout, s, > 0, ≤ `sim_time` (at 0.2 m/s, 0.05 s is 1 cm: finer
+    /// than a cell).
     pub sim_step: f64,
-    /// Number of target speeds sampled across the window.
+    /// Number of target speeds sampled across the window, 1 to 1000.
     pub v_samples: usize,
-    /// Number of target turn rates sampled across the window (ω = 0 is always added).
+    /// Number of target turn rates sampled across the window, ≥ 1 (ω = 0 is always added).
     pub omega_samples: usize,
-    /// Weight of the end point's distance from the global path, per metre.
+    /// Weight of the end point's distance from the global path, per m, ≥ 0.
     pub path_distance_bias: f64,
-    /// Weight of the end point's distance from the local goal, per metre.
+    /// Weight of the end point's distance from the local goal, per m, ≥ 0.
     pub goal_distance_bias: f64,
-    /// Weight of the highest cell cost along the trajectory, per 252 cost units.
+    /// Weight of the highest cell cost along the rollout, per 252 cost units, ≥ 0.
     pub occdist_scale: f64,
-    /// Distance along the global path from the robot to the local goal, metres. Keep it
-    /// longer than `v_max × sim_time` so that the goal keeps pulling the robot forward.
+    /// Distance along the global path from the robot to the local goal, m, > 0. Keep it above
+    /// `v_max × sim_time` so that the goal keeps pulling the robot forward.
     pub lookahead: f64,
 }
 

@@ -22,9 +22,10 @@ use std::process::ExitCode;
 struct Params {
     /// The robot that plans (the leader).
     robot: usize,
-    /// The robot's URDF, relative to the launch file: its footprint for the costmap (required).
+    /// The robot's URDF, relative to the launch file: its chassis box is the footprint for the
+    /// costmap (required).
     urdf: String,
-    /// Re-plan at least this often while the map keeps changing, s.
+    /// Re-plan at least this often while the map keeps changing, s, > 0.
     replan_period_s: f64,
     costmap: CostmapParams,
     global: GlobalParams,

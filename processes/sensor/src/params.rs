@@ -15,75 +15,86 @@ use serde::Deserialize;
 /// Unknown keys are rejected by `caravan::parse_params`, which names them.
 #[derive(Debug, Clone, PartialEq, Deserialize, schemars::JsonSchema)]
 pub struct Params {
-    /// Index i of the robot this instance belongs to (topics `robot/i/...`).
+    /// Index i of the robot this instance belongs to (topics `robot/i/...`), < `count`; with a
+    /// `world` that lists `[[start]]` poses, one of its robots (< their number).
     pub robot: usize,
-    /// Robots in the group; the laser sees the chassis of robots 0..count other than i.
+    /// Robots in the group, ≥ 1; the laser sees the chassis of robots 0 … count−1 other than
+    /// `robot`. Keep it equal to physics' `count`.
     pub count: usize,
-    /// World file (walls, boxes, cylinders), relative to the launch file.
+    /// World file (walls, boxes, cylinders), relative to the launch file; non-empty.
     pub world: String,
-    /// Robot description, for the chassis boxes of the other robots and base_link's height.
+    /// Robot description, for the chassis boxes of the other robots and base_link's height;
+    /// non-empty.
     #[serde(default = "default_urdf")]
     pub urdf: String,
-    /// The link the laser and the IMU ride on, read from `robot/i/link_states` (give
-    /// physics `link_states = true` for this robot). Default: the base, from
-    /// `robot/i/pose_true` and `robot/i/twist_true`. The IMU reads once per `link_states`
-    /// message, so at the physics node's rate: for a reading every physics step, run
-    /// physics with `substeps = 1` at the rate wanted.
+    /// The link the laser and the IMU ride on, a link of `urdf`, read from
+    /// `robot/i/link_states` (give physics `link_states = true` for this robot). Default: the
+    /// base, from `robot/i/pose_true` and `robot/i/twist_true`. A link the URDF lacks is
+    /// refused (exit 2) naming the links it has, and no state of the link within 1 s is warned
+    /// about on stderr. On a link of a robot that is not a wheeled robot the laser sees the
+    /// world but no other robots. The IMU reads once per `link_states` message, so at the
+    /// physics node's rate: for a reading every physics step, run physics with `substeps = 1`
+    /// at the rate wanted.
     #[serde(default)]
     pub link: Option<String>,
 
     /// Whether this robot carries the laser scanner (the leader does).
     #[serde(default)]
     pub laser: bool,
-    /// Scans per second.
+    /// Scans per second, Hz, > 0, dividing the node rate.
     #[serde(default = "default_laser_rate")]
     pub laser_rate_hz: f64,
-    /// Field of view, degrees, centred on the robot's x axis.
+    /// Field of view, degrees (the code's one non-SI unit), (0, 360], centred on the robot's x
+    /// axis.
     #[serde(default = "default_laser_fov")]
     pub laser_fov_deg: f64,
-    /// Readings per scan, spread evenly over the field from its first to its last edge:
-    /// 682 over 240° gives the datasheet's 0.352° step.
+    /// Readings per scan, 2 … 1081, spread evenly over the field from its first to its last
+    /// edge: 682 over 240° gives the datasheet's 0.352° step.
     #[serde(default = "default_laser_beams")]
     pub laser_beams: usize,
-    /// Valid range interval, m.
+    /// Lower end of the valid range, m, ≥ 0.
     #[serde(default = "default_laser_range_min")]
     pub laser_range_min: f64,
+    /// Upper end of the valid range, m, > `laser_range_min`.
     #[serde(default = "default_laser_range_max")]
     pub laser_range_max: f64,
-    /// Scanner position ahead of its link's origin (base_link by default), m, along the
-    /// link's x axis.
+    /// Scanner position ahead of its link's origin (base_link by default), m, finite, along the
+    /// link's x axis; give the SLAM node the same value as `slam.laser_x_offset_m`.
     #[serde(default)]
     pub laser_x_offset: f64,
-    /// Scanner height above its link's origin, m. Obstacles lower than the scan plane are
-    /// not seen, as with a real planar scanner.
+    /// Scanner height above its link's origin, m, finite. Obstacles lower than the scan plane
+    /// are not seen, as with a real planar scanner.
     #[serde(default)]
     pub laser_z_offset: f64,
     /// Range noise on the laser (datasheet accuracy, see `laser.rs`).
     #[serde(default = "yes")]
     pub noise: bool,
 
-    /// Encoder resolution, ticks per wheel revolution.
+    /// Encoder resolution, ticks per wheel revolution, ≥ 1.
     #[serde(default = "default_ticks")]
     pub ticks_per_rev: u32,
-    /// Encoder readings per second (the Arduino's 50 Hz loop).
+    /// Encoder readings per second, Hz, > 0, dividing the node rate (the Arduino's 50 Hz loop).
     #[serde(default = "default_encoder_rate")]
     pub encoder_rate_hz: f64,
 
     /// Whether this robot publishes an IMU.
     #[serde(default = "yes")]
     pub imu: bool,
-    /// IMU position in the link it rides on (base_link by default), m.
+    /// IMU position in the link it rides on (base_link by default), m, finite.
     #[serde(default)]
     pub imu_offset: [f64; 3],
     /// White noise on the IMU readings (off: ideal readings, as in the reference study).
     #[serde(default)]
     pub imu_noise: bool,
-    /// 1-σ noise, also reported as the message covariances. Defaults are an MPU-6050-class
-    /// part at 100 Hz: accelerometer ≈ 400 µg/√Hz, gyroscope ≈ 0.005 °/s/√Hz over 50 Hz.
+    /// 1-σ accelerometer noise per axis, m/s², ≥ 0, also reported as the message covariance.
+    /// The defaults of the three are an MPU-6050-class part at 100 Hz: accelerometer ≈ 400
+    /// µg/√Hz, gyroscope ≈ 0.005 °/s/√Hz over 50 Hz.
     #[serde(default = "default_accel_stddev")]
     pub imu_accel_stddev: f64,
+    /// 1-σ gyroscope noise per axis, rad/s, ≥ 0.
     #[serde(default = "default_gyro_stddev")]
     pub imu_gyro_stddev: f64,
+    /// 1-σ orientation noise per axis, rad, ≥ 0.
     #[serde(default = "default_orientation_stddev")]
     pub imu_orientation_stddev: f64,
     /// A datasheet error model on top of the white noise: per triad (`accel`, `gyro`) noise
@@ -98,9 +109,11 @@ pub struct Params {
     /// `force_torque = [that joint]`, and `link` the test mass's link), a = F/m.
     #[serde(default)]
     pub imu_accelerometer: Accelerometer,
+    /// The fixed joint of `urdf` whose force–torque sensor holds the test mass
+    /// (`imu_accelerometer = "force_sensor"`).
     #[serde(default = "default_force_joint")]
     pub imu_force_joint: String,
-    /// kg, > 0.
+    /// The test mass of the force-sensor accelerometer, kg, > 0.
     #[serde(default = "default_test_mass")]
     pub imu_test_mass_kg: f64,
 }

@@ -22,6 +22,7 @@ pub struct Params {
     /// A label for the policy in the table.
     #[serde(default)]
     pub policy: String,
+    /// A label for the scenario in the table.
     #[serde(default)]
     pub scenario: String,
 }

@@ -10,6 +10,7 @@ use serde::Deserialize;
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Frame {
+    /// The encounter's origin (x, y) in the world, m, each within ±10 000; z is the world's.
     pub origin: [f64; 2],
 }
 

@@ -1,5 +1,6 @@
 //! The `caravan` command.
 
+mod docs;
 mod export;
 mod info;
 mod inspect;
@@ -61,6 +62,10 @@ enum Command {
     Bench(caravan_bench::BenchCommand),
     /// Message layouts for other languages: a Python module (--python) or JSON (--layout)
     Schemas(schemas_py::SchemasArgs),
+    /// Documentation generated from the code: `caravan docs params` writes the params tables
+    /// of docs/ from every process's `--describe-params`
+    #[command(subcommand)]
+    Docs(docs::DocsCommand),
     /// Print a shell completion script: `source <(caravan completions bash)`
     Completions { shell: clap_complete::Shell },
 }
@@ -107,6 +112,7 @@ fn main() -> ExitCode {
         Command::Play(args) => play::play(&args).map(|_| ExitCode::SUCCESS),
         Command::Resim(args) => resim::resim(&args).map(ExitCode::from),
         Command::Top(args) => top::top(&args).map(|_| ExitCode::SUCCESS),
+        Command::Docs(cmd) => docs::run(&cmd).map(ExitCode::from),
         Command::Completions { shell } => {
             use clap::CommandFactory;
             clap_complete::generate(

@@ -38,29 +38,35 @@ use serde::Deserialize;
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct FollowerParams {
+    /// Gain on the x error, 1/s, above 0, at most 20 (one over the tick).
     pub k1: f64,
+    /// Gain on the y error, 1/s, above 0, at most 20.
     pub k2: f64,
+    /// Heading gain, 1/s, above 0, at most 20.
     pub k3: f64,
-    /// Delay τ, s.
+    /// Delay τ: track the predecessor's pose τ ago, s, 0 to 60.
     pub tau_s: f64,
+    /// Smallest gap between the two footprints, m, 0 to 10.
     pub safety_distance_m: f64,
-    /// Extra gap kept at a standstill, m: pose errors and the last step's travel.
+    /// Extra gap kept at a standstill, m, 0 to 10: pose errors and the last step's travel.
     pub stop_margin_m: f64,
-    /// How long the follower's own speed may still carry it after a zero set-point, s: above
-    /// every roll-out measured over 706 stops (0.33·v median, 0.40·v p95, 0.44·v most, while
-    /// turning). A robot still speeding up rolls further; the margin absorbs that.
+    /// Upper bound on how long the follower's own speed may still carry it after a zero
+    /// set-point, s, 0 to 10: above every roll-out measured over 706 stops (0.33·v median,
+    /// 0.40·v p95, 0.44·v most, while turning). A robot still speeding up rolls further; the
+    /// margin absorbs that.
     pub brake_time_s: f64,
-    /// How long the predecessor's speed carries it at least after a zero set-point, s: a
-    /// lower bound (0.30·v p10 in the same stops).
+    /// Lower bound on how long the predecessor's speed carries it after a zero set-point, s, 0
+    /// to 10 (0.30·v p10 in the same stops).
     pub coast_time_s: f64,
-    /// A robot that stopped from speed V rolls back up to V times this, s: the wheel loop's
-    /// undershoot below zero (at most 0.18·V measured).
+    /// A robot that stopped from speed V rolls back up to V times this, s, 0 to 10: the wheel
+    /// loop's undershoot below zero (at most 0.18·V measured).
     pub rollback_time_s: f64,
-    /// How far back the predecessor's peak speed is looked for, s.
+    /// How far back the predecessor's highest speed is looked for, s, 0 to 1.
     pub rollback_window_s: f64,
-    /// Window over which both speeds are measured from the pose histories, s.
+    /// Window over which both speeds are measured from the pose histories, s, 0.01 to 1.
     pub speed_window_s: f64,
-    /// Speed allowed per metre of gap beyond safety distance and margin, s⁻¹.
+    /// Speed allowed per metre of gap beyond safety distance and margin, 1/s, above 0, at most
+    /// 20.
     pub k_gap: f64,
     /// Footprint half extents (x, y) and its centre's offset ahead of base_link, m: the URDF's
     /// chassis box (set by the node from the robot description, not a launch-file key).
@@ -68,7 +74,9 @@ pub struct FollowerParams {
     pub footprint_half_m: [f64; 2],
     #[serde(skip)]
     pub footprint_offset_m: f64,
+    /// Top speed, m/s, above 0, at most 2.5 (v ≥ 0 always).
     pub v_max: f64,
+    /// Turn-rate limit, ±, rad/s, above 0, at most 20.
     pub omega_max: f64,
 }
 

@@ -11,14 +11,21 @@ use serde::Deserialize;
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct LeaderParams {
-    /// Goals A, B, C, D… as [x, y] in the map frame.
+    /// Goals A, B, C, D… in order, as [x, y] in the map frame, m, each coordinate within ±10
+    /// 000. Empty: the `world` file's `[[goal]]`s; a leader needs at least one.
     pub goals: Vec<[f64; 2]>,
+    /// A goal is reached within this distance, m, above 0, at most 10.
     pub tolerance_m: f64,
+    /// Slowest forward speed while driving, m/s, 0 to `leader.v_max` (planner commands are
+    /// clamped up to it).
     pub v_min: f64,
+    /// Fastest forward speed, m/s, above 0, at most 2.5.
     pub v_max: f64,
+    /// Most clockwise turn rate, rad/s, −20 to 0.
     pub omega_min: f64,
+    /// Most counter-clockwise turn rate, rad/s, above 0, at most 20.
     pub omega_max: f64,
-    /// Heading gain, s⁻¹.
+    /// Heading gain of the straight-to-goal driver, 1/s, above 0, at most 20.
     pub k_heading: f64,
 }
 

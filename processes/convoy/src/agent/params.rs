@@ -20,8 +20,10 @@ pub enum Mode {
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct Params {
-    /// This robot's index: 0 is the leader, i follows i − 1.
+    /// This robot's index: 0 is the leader, i follows i − 1 by default. A leader reading its
+    /// goals from a `world` that lists `[[start]]` poses: one of its robots.
     pub robot: usize,
+    /// Which controller runs: `leader`, `follower` or `drive`.
     pub mode: Mode,
     /// Where the robot learns its own pose (Pose2D); default `robot/<i>/pose_true`.
     pub pose_topic: Option<String>,
@@ -30,13 +32,19 @@ pub struct Params {
     /// Leader: drive the planner's velocity commands (Twist) from this topic instead of
     /// straight at the goals, e.g. `robot/0/cmd_vel`. Drive: the commands to drive.
     pub cmd_vel_topic: Option<String>,
-    /// Leader and drive: a command older than this is stale and the robot stops, s.
+    /// Leader with a planner, and drive: a command older than this is stale and the robot
+    /// stops, s, 0.05 (one tick) to 10.
     pub cmd_vel_timeout_s: f64,
-    /// The robot's URDF, relative to the launch file: wheel radius and separation (required).
+    /// The robot's URDF, relative to the launch file: wheel radius and separation, and the
+    /// chassis footprint the follower keeps its distance with (required: the default `""` is
+    /// rejected).
     pub urdf: String,
     /// Leader: the world file whose `[[goal]]`s are the goals when `leader.goals` is empty.
     pub world: Option<String>,
+    /// The follower's law (`mode = "follower"`).
     pub follower: FollowerParams,
+    /// The leader's goals and limits (`mode = "leader"`; the limits also clamp `mode =
+    /// "drive"`).
     pub leader: LeaderParams,
 }
 

@@ -34,7 +34,7 @@ pub const LETHAL: u8 = 254;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct CostmapParams {
-    /// Occupancy (percent) at or above which a cell is an obstacle (costmap_2d's
+    /// Occupancy at or above which a cell is an obstacle, percent, 1 … 100 (costmap_2d's
     /// `occupied_thresh` 0.65).
     pub occupied_threshold: i8,
     /// Robot footprint along its heading, metres: the URDF's chassis box (the node sets it
@@ -44,14 +44,15 @@ pub struct CostmapParams {
     /// Robot footprint across its heading, metres (from the URDF, as the length).
     #[serde(skip)]
     pub footprint_width: f64,
-    /// Added to the footprint's circumscribed radius (costmap_2d's `footprint_padding`); it
-    /// also absorbs the cell discretisation of the distance.
+    /// Added to the footprint's circumscribed radius, m, ≥ 0 (costmap_2d's
+    /// `footprint_padding`); it also absorbs the cell discretisation of the distance. Robot
+    /// radius = ½·hypot(length, width) + padding = 0.1445 m by default.
     pub footprint_padding: f64,
-    /// Distance from obstacles beyond which cells cost nothing, metres.
+    /// Distance from obstacles beyond which cells cost nothing, m, ≥ the robot radius.
     pub inflation_radius: f64,
-    /// Decay rate `k` of the inflated cost, 1/m.
+    /// Decay rate k of the inflated cost 252·exp(−k·(d − r)), 1/m, > 0.
     pub cost_scaling_factor: f64,
-    /// Cost of an unknown cell (0 … 252).
+    /// Cost of an unknown cell, 0 … 252.
     pub unknown_cost: u8,
 }
 

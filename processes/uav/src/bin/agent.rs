@@ -18,9 +18,12 @@ fn main() -> ExitCode {
 #[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct Params {
+    /// The policy: `do_nothing`, `side_step`, or `mlp` (a trained actor from `weights`).
     policy: String,
+    /// The actor's weights file (JSON), relative to the launch file; needed by `mlp`.
     #[serde(default)]
     weights: Option<String>,
+    /// The encounter's constants; keep them equal to the environment's.
     #[serde(default)]
     encounter: Encounter,
 }
