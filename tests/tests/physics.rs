@@ -3,6 +3,9 @@
 //! resting on the floor reports contacts carrying its weight, and a kinematic box flies at
 //! its commanded velocity. Commands come from `caravan-testnode arm-commands`.
 
+#[path = "physics/initial.rs"]
+mod initial;
+
 use caravan_tests::{Scenario, workspace_root};
 use serde_json::Value;
 

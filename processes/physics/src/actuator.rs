@@ -24,7 +24,7 @@
 
 use crate::firmware::{FirmwareParams, SpeedPid};
 use crate::motor::{self, MotorOutput, MotorParams};
-use crate::spec::ActuatorSpec;
+use crate::spec::{ActuatorSpec, JointStart};
 use caravan_world::description::Limits;
 
 /// A joint's state as the actuator sees it.
@@ -199,6 +199,22 @@ impl Actuator {
             target: Target::default(),
             effort: 0.0,
         })
+    }
+
+    /// Starts the targets at the joint's initial state, where given: a loop holding a
+    /// position (`position`, `servo`) holds the initial position, one following a velocity
+    /// keeps the initial velocity.
+    pub fn start_at(&mut self, start: JointStart) {
+        let (target, given) = match self.control {
+            Control::Position { .. } | Control::Servo { .. } => {
+                (&mut self.target.position, start.position)
+            }
+            Control::Effort => return,
+            _ => (&mut self.target.velocity, start.velocity),
+        };
+        if let Some(v) = given {
+            *target = v;
+        }
     }
 
     /// The inertia this actuator adds about its joint axis (a motor's rotor through its gear).

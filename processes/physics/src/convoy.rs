@@ -67,6 +67,7 @@ pub fn simulation(
                 reflected_inertia: reflected.clone(),
                 kinematic: Vec::new(),
                 sensed: Vec::new(),
+                initial: Vec::new(),
             },
             actuators: actuators.clone(),
             drive: Some(drive),

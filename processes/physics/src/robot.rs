@@ -3,7 +3,7 @@
 
 use crate::actuator::{Actuator, Kinematic};
 use crate::params::Precision;
-use crate::spec::RobotSpec;
+use crate::spec::{JointStart, RobotSpec};
 use caravan_world::ObstacleKind;
 use caravan_world::description::{JointKind, RobotDescription};
 use nalgebra::Isometry3;
@@ -109,6 +109,8 @@ pub struct RobotSetup<'a> {
     /// Fixed joints that carry a force–torque sensor (description indices), from
     /// [`RobotSpec::sensed_joints`]: not welded.
     pub sensed: Vec<usize>,
+    /// Each joint's initial state ([`RobotSpec::initial_joints`]); empty: all at 0, at rest.
+    pub initial: Vec<JointStart>,
 }
 
 /// Where a robot starts.
@@ -131,6 +133,24 @@ impl RobotSetup<'_> {
         let joint = &self.description.joints[j];
         let extra = self.reflected_inertia.get(j).copied().unwrap_or(0.0);
         (joint.kind != JointKind::Fixed && extra > 0.0).then_some((joint.axis, extra))
+    }
+
+    /// Joint `j`'s initial position (rad or m) and speed (rad/s or m/s): 0 unless given.
+    pub(crate) fn start_of(&self, j: usize) -> (f64, f64) {
+        let s = self.initial.get(j).copied().unwrap_or_default();
+        (s.position.unwrap_or(0.0), s.velocity.unwrap_or(0.0))
+    }
+
+    /// Joint `j`'s child frame in its parent body at the joint's initial position: `frame`,
+    /// the frame at 0, moved along or turned about the joint's axis.
+    pub(crate) fn start_frame(&self, j: usize, frame: &Isometry3<f64>) -> Isometry3<f64> {
+        let (q, joint) = (self.start_of(j).0, &self.description.joints[j]);
+        let axis = nalgebra::Unit::new_normalize(joint.axis);
+        match joint.kind {
+            _ if q == 0.0 => *frame,
+            JointKind::Prismatic => frame * nalgebra::Translation3::from(axis.into_inner() * q),
+            _ => frame * nalgebra::UnitQuaternion::from_axis_angle(&axis, q),
+        }
     }
 
     /// Whether joint `j` is moved kinematically by rapier's kinematic joint.

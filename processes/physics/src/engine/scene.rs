@@ -306,7 +306,7 @@ fn add_robot(
                 (base, builder)
             }
             Some(j) => (
-                world_poses[j.parent_body] * shapes::pose(&j.frame),
+                world_poses[j.parent_body] * shapes::pose(&r.start_frame(j.joint, &j.frame)),
                 RigidBodyBuilder::dynamic(),
             ),
         };
@@ -417,7 +417,7 @@ fn add_robot(
             // A rim is welded to its parent; the simulation turns the weld's frame.
             let mut generic = if r.is_rim(j.joint) {
                 FixedJointBuilder::new()
-                    .local_frame1(shapes::pose(&j.frame))
+                    .local_frame1(shapes::pose(&r.start_frame(j.joint, &j.frame)))
                     .contacts_enabled(false)
                     .into()
             } else {
@@ -468,6 +468,7 @@ fn add_robot(
             mb.damping_mut().fill(0.0);
         }
     }
+    start_joints(physics, r, &plan, &bodies, &joints, &world_poses);
     Ok(RobotBodies {
         plan,
         bodies,
@@ -476,6 +477,57 @@ fn add_robot(
         tyres,
         root_link: d.root,
     })
+}
+
+/// Gives each joint its initial state (`initial_positions`, `initial_velocities`). The bodies
+/// already stand at the initial positions; a multibody's generalized coordinates and speeds
+/// are set to match (a rim's weld frame was turned instead). An impulse-joint robot's bodies
+/// get the velocities the joints' speeds give them, carried out from its resting root.
+fn start_joints(
+    physics: &mut PhysicsWorld,
+    r: &RobotSetup,
+    plan: &RobotPlan,
+    bodies: &[RigidBodyHandle],
+    joints: &[Option<JointHandle>],
+    world_poses: &[Pose],
+) {
+    let mut impulse_speeds = false;
+    for (j, handle) in joints.iter().enumerate() {
+        let (q, v) = r.start_of(j);
+        match handle {
+            Some(JointHandle::Multibody(h)) if (q, v) != (0.0, 0.0) && !r.is_rim(j) => {
+                let (mb, id) = physics.multibody_joints.get_mut(*h).expect("inserted");
+                let dof = mb.link(id).expect("inserted").assembly_id();
+                let mut displacement = vec![0.0; mb.ndofs()];
+                displacement[dof] = q as Real;
+                mb.apply_displacements(&displacement);
+                mb.generalized_velocity_mut()[dof] = v as Real;
+            }
+            Some(JointHandle::Impulse(_)) => impulse_speeds |= v != 0.0,
+            _ => {}
+        }
+    }
+    if !impulse_speeds {
+        return;
+    }
+    let d = r.description;
+    let poses: Vec<_> = (plan.link_body.iter())
+        .map(|(b, in_body)| shapes::isometry(&world_poses[*b]) * in_body)
+        .collect();
+    let twists =
+        crate::link_twists::link_twists(d, &poses, Default::default(), |j| r.start_of(j).1);
+    for (b, body_plan) in plan.bodies.iter().enumerate().skip(1) {
+        let (link, body) = (body_plan.links[0].0, &mut physics.bodies[bodies[b]]);
+        body.recompute_mass_properties_from_colliders(&physics.colliders);
+        let com = shapes::isometry(body.position())
+            * nalgebra::Point3::from(shapes::vector_f64(body.local_center_of_mass()));
+        let t = twists[link];
+        let v = t.linear
+            + t.angular
+                .cross(&(com.coords - poses[link].translation.vector));
+        body.set_linvel(shapes::vector(&v), true);
+        body.set_angvel(shapes::vector(&t.angular), true);
+    }
 }
 
 /// The first robot that, at its start pose, overlaps an obstacle or another robot (floor

@@ -31,6 +31,7 @@ pub fn build(
                     reflected_inertia: reflected_inertia.clone(),
                     kinematic: kinematic.clone(),
                     sensed: kind.sensed.clone(),
+                    initial: kind.initial.clone(),
                 },
                 actuators: kind.actuators.clone(),
                 drive: kind.drive,

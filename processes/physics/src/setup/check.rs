@@ -6,7 +6,7 @@ use super::SetupError;
 use crate::actuator::Actuator;
 use crate::params::Params;
 use crate::robot::Outputs;
-use crate::spec::{Drive, RobotSpec};
+use crate::spec::{Drive, JointStart, RobotSpec};
 use caravan_world::description::{JointKind, RobotDescription, load_description};
 use caravan_world::{RobotModel, World, load_world};
 use std::path::{Path, PathBuf};
@@ -31,6 +31,8 @@ pub struct Kind {
     pub actuators: Vec<Option<Actuator>>,
     /// The left and right wheel joints of a differential drive.
     pub drive: Option<[usize; 2]>,
+    /// Each joint's initial state.
+    pub initial: Vec<JointStart>,
 }
 
 impl Checked {
@@ -97,7 +99,11 @@ fn kind(key: String, spec: RobotSpec, launch_dir: &Path) -> Result<Kind, SetupEr
     if spec.joint_states != Some(false) || spec.link_states || spec.contacts {
         crate::messages::check_fits(&d, spec.link_states).map_err(in_file)?;
     }
-    let actuators = actuators(&spec, &d).map_err(below)?;
+    let mut actuators = actuators(&spec, &d).map_err(below)?;
+    let initial = spec.initial_joints(&d).map_err(below)?;
+    for (a, start) in actuators.iter_mut().zip(&initial) {
+        a.iter_mut().for_each(|a| a.start_at(*start));
+    }
     let drive = match spec.drive {
         Some(Drive::Diff) => Some(diff_drive(&d).map_err(|e| {
             SetupError(format!(
@@ -114,6 +120,7 @@ fn kind(key: String, spec: RobotSpec, launch_dir: &Path) -> Result<Kind, SetupEr
         sensed,
         actuators,
         drive,
+        initial,
     })
 }
 

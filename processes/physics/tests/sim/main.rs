@@ -10,6 +10,7 @@ mod driving;
 mod force_torque;
 mod lab;
 mod link_twists;
+mod params;
 mod precision;
 mod step_response;
 mod tracks;
