@@ -443,3 +443,6 @@ mod recording_and_report;
 
 #[path = "python/plugin.rs"]
 mod plugin_protocol;
+
+#[path = "python/outside.rs"]
+mod outside;

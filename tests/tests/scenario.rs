@@ -69,8 +69,7 @@ fn a_scenario_report_plugin_adds_its_section() {
 #[test]
 fn bad_plugin_params_start_nothing() {
     workspace_bin("caravan-count-report");
-    let text = tiny(r#"{ topic = "demo/ping", feild = "x" }"#);
-    let s = Scenario::new("tiny-bad", &text);
+    let s = Scenario::new("tiny-bad", &tiny(r#"{ topic = "demo/ping", feild = "x" }"#));
     let out = s.run(&FIVE_SECONDS);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     let err = stderr(&out);
@@ -79,10 +78,13 @@ fn bad_plugin_params_start_nothing() {
         "{err}"
     );
     // Named at the params' line of the file, as a process's bad param is.
-    let line = 1 + text
+    let written = std::fs::read_to_string(&s.file).unwrap();
+    let line = 1 + written
         .lines()
         .position(|l| l.starts_with("params = { topic"))
         .unwrap();
+    // Said once: not "caravan-count-report: params of report 'caravan-count-report': …".
+    assert_eq!(err.matches("caravan-count-report").count(), 1, "{err}");
     assert!(
         err.contains(&format!(".toml:{line}:")),
         "line {line}: {err}"

@@ -113,7 +113,10 @@ fn a_gymnasium_script_declaring_its_params_is_refused_before_the_start_on_a_key_
     );
     let (code, err) = launch_with_sets("uav/gym.toml", "100000s", &[&exec]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("policy") && !err.contains("Traceback"), "{err}");
+    assert!(
+        err.contains("policy") && !err.contains("Traceback"),
+        "{err}"
+    );
     let run = run_scenario(
         "uav",
         "gym.toml",

@@ -4,8 +4,8 @@
 use crate::report;
 use crate::run::{self, output::Console};
 use anyhow::{Context, Result};
-use caravan_launch::model::{EntryProblem, Exec, LaunchFile};
 use caravan_launch::LaunchError;
+use caravan_launch::model::{EntryProblem, Exec, LaunchFile};
 use caravan_report::ReportEntry;
 use clap::Args;
 use std::path::{Path, PathBuf};

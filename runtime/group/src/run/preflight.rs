@@ -238,6 +238,16 @@ pub fn report_problem(
     params: &serde_json::Value,
     text: &str,
 ) -> EntryProblem {
+    // Without what the launcher says anyway: "PROGRAM: params of report 'PROGRAM': ".
+    let program = exec.split_whitespace().next().unwrap_or(exec);
+    let file = Path::new(program)
+        .file_name()
+        .and_then(|f| f.to_str())
+        .unwrap_or(program);
+    let text = text.strip_prefix(&format!("{file}: ")).unwrap_or(text);
+    let text = text
+        .strip_prefix(&format!("params of report '{file}': "))
+        .unwrap_or(text);
     let named = named_key(text);
     let found = named
         .is_none()
