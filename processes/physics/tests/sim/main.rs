@@ -8,6 +8,7 @@ mod common;
 mod determinism;
 mod driving;
 mod force_torque;
+mod initial;
 mod lab;
 mod link_twists;
 mod params;
