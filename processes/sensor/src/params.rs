@@ -80,7 +80,9 @@ pub struct Params {
     /// Whether this robot publishes an IMU.
     #[serde(default = "yes")]
     pub imu: bool,
-    /// IMU position in the link it rides on (base_link by default), m, finite.
+    /// IMU position in the link it rides on (base_link by default), m, finite. The sensor's
+    /// axes are that link's; for a turned sensor, ride on a fixed child link whose joint's
+    /// `rpy` turns it (`imu_link`), which physics' `link_states` reports in its own frame.
     #[serde(default)]
     pub imu_offset: [f64; 3],
     /// White noise on the IMU readings (off: ideal readings, as in the reference study).
