@@ -1,6 +1,26 @@
 //! Name patterns, as launch files use them for topics (`record`) and hosts (`links`): `*`
 //! matches within one `/`-separated segment, `**` matches anything.
 
+/// Checks one topic's name (not a pattern): segments of letters, digits, '_', '-' and '.'
+/// between single slashes, as iceoryx2 takes service names. The launcher's `on` and
+/// `caravan-script`'s topics are checked with it.
+pub fn check_topic_name(topic: &str) -> Result<(), String> {
+    let segment_ok = |seg: &str| {
+        !seg.is_empty()
+            && seg
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+    };
+    if topic.split('/').all(segment_ok) {
+        Ok(())
+    } else {
+        Err(format!(
+            "'{topic}' is not a topic name (segments of letters, digits, '_', '-' and '.' \
+             between single '/')"
+        ))
+    }
+}
+
 /// Matches topic or host names against a pattern: `*` matches within one `/`-separated
 /// segment, `**` matches anything (and `a/**/b` also matches `a/b`).
 pub fn glob_match(pattern: &str, text: &str) -> bool {

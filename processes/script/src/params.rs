@@ -126,18 +126,7 @@ fn nanos(key: &str, s: f64) -> Result<u64, String> {
 
 /// Checks a topic name as the launcher checks `on`, and as iceoryx2 takes service names.
 pub fn check_topic(key: &str, topic: &str) -> Result<(), String> {
-    let segment_ok = |seg: &str| {
-        !seg.is_empty()
-            && seg
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
-    };
-    if !topic.split('/').all(segment_ok) {
-        return Err(format!(
-            "key '{key}': '{topic}' is not a topic name (segments of letters, digits, '_', '-' \
-             and '.' between single '/')"
-        ));
-    }
+    caravan::pattern::check_topic_name(topic).map_err(|e| format!("key '{key}': {e}"))?;
     if topic == "caravan" || topic.starts_with("caravan/") {
         return Err(format!(
             "key '{key}': '{topic}' is one of the group's own topics (caravan/…)"

@@ -379,20 +379,8 @@ impl Checker<'_> {
         });
         let on = self.get(s, "on", |i| {
             let topic = string(i)?;
-            // One topic, by its name: segments of letters, digits, '_', '-' and '.' between
-            // single slashes (a pattern such as `demo/*` steps nothing).
-            let segment_ok = |seg: &str| {
-                !seg.is_empty()
-                    && seg
-                        .chars()
-                        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
-            };
-            if !topic.split('/').all(segment_ok) {
-                return Err(format!(
-                    "'{topic}' is not a topic name (segments of letters, digits, '_', '-' and \
-                     '.' between single '/')"
-                ));
-            }
+            // One topic, by its name (a pattern such as `demo/*` steps nothing).
+            caravan::pattern::check_topic_name(&topic)?;
             Ok(topic)
         });
         if s.get("rate").is_some() && s.get("on").is_some() {
