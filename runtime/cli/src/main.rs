@@ -4,6 +4,7 @@ mod docs;
 mod export;
 mod info;
 mod inspect;
+mod params_table;
 mod record;
 mod schemas_py;
 mod top;

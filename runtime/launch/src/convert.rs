@@ -185,6 +185,14 @@ pub fn params(item: &Item) -> Result<serde_json::Value, ParamsError> {
     Ok(value)
 }
 
+/// A `--set` value as the file would hold it, in JSON: `3` a number, `[1, 2]` a list, `hall`
+/// a string (as [`super::overrides::parse_value`] reads it). A value JSON cannot hold (`nan`)
+/// stays its text.
+pub fn value_json(raw: &str) -> serde_json::Value {
+    to_json(&Item::Value(super::overrides::parse_value(raw)), "value")
+        .unwrap_or_else(|_| serde_json::Value::String(raw.trim().to_string()))
+}
+
 /// Params are handed to nodes as JSON; TOML datetimes become strings.
 pub fn to_json(item: &Item, at: &str) -> Result<serde_json::Value, ParamsError> {
     use serde_json::Value as J;

@@ -14,6 +14,7 @@ pub mod source;
 pub mod suggest;
 mod template;
 
+pub use convert::value_json;
 pub use load::{load_checked, load_source};
 pub use model::LaunchFile;
 pub use problem::{LaunchError, Problem};

@@ -70,13 +70,6 @@ pub fn parse_value(raw: &str) -> Value {
         .unwrap_or_else(|_| Value::from(raw.trim()))
 }
 
-/// A `--set` value as the file would hold it, in JSON: `3` a number, `[1, 2]` a list, `hall`
-/// a string (as [`parse_value`] reads it). A value JSON cannot hold (`nan`) stays its text.
-pub fn value_json(raw: &str) -> serde_json::Value {
-    super::convert::to_json(&toml_edit::Item::Value(parse_value(raw)), "value")
-        .unwrap_or_else(|_| serde_json::Value::String(raw.trim().to_string()))
-}
-
 /// Whether an override sets an argument (`args.NAME=…`): those apply before substitution.
 pub fn targets_args(text: &str) -> bool {
     let key = text.split_once('=').map_or(text, |(k, _)| k);

@@ -3,7 +3,7 @@
 
 use super::grid::{Axis, Cell};
 use anyhow::{Context, Result};
-use caravan_launch::overrides::value_json;
+use caravan_launch::value_json;
 use caravan_report::stats::describe;
 use caravan_report::wilson::wilson95;
 use serde_json::{Map, Value, json};
