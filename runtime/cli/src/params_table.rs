@@ -1,6 +1,6 @@
 //! A params table from a process's JSON Schema (`PROGRAM --describe-params`): one row per
 //! key, nested tables flattened, tagged variants spelled out, and the rows compared with a
-//! page's (see [`crate::docs`]).
+//! page's (`caravan docs params`).
 
 use serde_json::{Map, Value};
 use std::collections::BTreeMap;
