@@ -197,6 +197,29 @@ fast = ["process.ping.rate=20Hz", "process.pong.params.gain=4"]
     let expected = format!("{}:3: [sweep] key 'seed': unknown key", bad_file.display());
     assert!(stderr(&bad).contains(&expected), "{}", stderr(&bad));
     assert!(!bad_out.exists());
+
+    // A value the launch file refuses is named by its --set and by the sweep file's line.
+    let bad_value = tmp.0.join("bad-value.toml");
+    std::fs::write(
+        &bad_value,
+        format!(
+            "[sweep]\nlaunch = \"{}\"\n\n[[sweep.axis]]\nkey = \"process.ping.rate\"\nvalues = [\"10Hz\",\n  \"fast\"]\n\n[[sweep.axis]]\nname = \"gain\"\n[sweep.axis.values]\nlow = [\"process.pong.params.gain=1\"]\nnone = [\"process.pong.params.gain=none\"]\n",
+            launch.display()
+        ),
+    )
+    .unwrap();
+    let out = sweep(&[bad_value.to_str().unwrap()], &tmp.0.join("bad-value-out"));
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let err = stderr(&out);
+    let at = |line: usize| format!("({}:{line})", bad_value.display());
+    assert!(
+        err.contains(&format!("--set process.ping.rate=fast {}", at(7))),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("--set process.pong.params.gain=none {}", at(13))),
+        "{err}"
+    );
 }
 
 /// A grid past the cell cap is refused at once; a big one says that it is checking its cells

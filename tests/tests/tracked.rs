@@ -227,7 +227,7 @@ fn hills_world(seed: u64) -> (std::path::PathBuf, std::path::PathBuf) {
 #[test]
 fn gear_wheels_climb_a_hill_where_round_wheels_stop_at_its_first_stair() {
     // The shipped hills spec at seed 21: the lane meets a hill's 10 cm stairs at the field's
-    // start, one track before the other (docs/tracked.md, passability). v4 climbs over it
+    // start, one track before the other (docs/tracked-passability.md). v4 climbs over it
     // since the chassis' nose is bevelled (with the square nose it stuck there); v1 stops.
     let (dir, world) = hills_world(21);
     let extra = ["--set", "args.contacts=true"];
@@ -250,7 +250,7 @@ fn gear_wheels_climb_a_hill_where_round_wheels_stop_at_its_first_stair() {
 fn a_gear_robot_stuck_on_a_hill_rests_on_its_chassis() {
     // The shipped hills spec at seed 6, v4 with its flippers at 15° (the passability
     // protocol's angle): it stops on a hill's flank high-centred, its belly on a stair's edge
-    // bearing two fifths of the contact force (docs/tracked.md, where the gears stop).
+    // bearing two fifths of the contact force (docs/tracked-passability.md, where the gears stop).
     let (dir, world) = hills_world(6);
     let extra = [
         "--set",

@@ -406,7 +406,7 @@ mod tests {
     #[test]
     fn a_gears_teeth_are_bars_across_the_wheels_width() {
         // A grouser runs across the track: an edge met under a wheel's outer part must meet a
-        // tooth too (radial pins in the mid-plane missed it; docs/tracked.md, the teeth).
+        // tooth too (radial pins in the mid-plane missed it; docs/tracked-passability.md, the teeth).
         for v in [Variant::V2, Variant::V4] {
             let d = parse(v);
             for w in running_gear::wheels(v) {

@@ -83,6 +83,12 @@ impl Parser<'_> {
         key.span().or_else(|| item.span()).map_or(0, |s| s.start)
     }
 
+    /// `file:line` of `offset`.
+    fn at(&self, offset: usize) -> String {
+        let line = caravan_launch::source::line_at(self.text, offset);
+        format!("{}:{line}", self.path.display())
+    }
+
     fn problem(&mut self, offset: usize, message: String) {
         let line = caravan_launch::source::line_at(self.text, offset);
         self.problems
@@ -248,6 +254,7 @@ impl Parser<'_> {
                 // Labels show strings without quotes; the sets keep their TOML type.
                 for (v, item) in axis.values.iter_mut().zip(list.iter()) {
                     v.label = item.as_str().map_or_else(|| bare(item), str::to_string);
+                    v.origin = Some(self.at(item.span().map_or(voff, |s| s.start)));
                 }
                 Some(axis)
             }
@@ -273,6 +280,7 @@ impl Parser<'_> {
                     out.push(AxisValue {
                         label: label.to_string(),
                         sets,
+                        origin: Some(self.at(off)),
                     });
                 }
                 let labels: Vec<String> = out.iter().map(|v| v.label.clone()).collect();

@@ -8,6 +8,11 @@ use std::collections::BTreeSet;
 pub struct AxisValue {
     pub label: String,
     pub sets: Vec<String>,
+    /// Where a sweep file wrote the value (`sweep.toml:7`), so that a problem with it names
+    /// the line; `None` for `--grid` values. Not in shard manifests: only the check before
+    /// the start reports it.
+    #[serde(skip)]
+    pub origin: Option<String>,
 }
 
 /// An axis: over one `--set` key (`key` is `Some`), or named, with bundles of sets as values.
@@ -31,6 +36,7 @@ impl Axis {
                 .map(|v| AxisValue {
                     sets: vec![format!("{key}={v}")],
                     label: v,
+                    origin: None,
                 })
                 .collect(),
         }
@@ -239,6 +245,7 @@ mod tests {
                     AxisValue {
                         label: "no-delay".into(),
                         sets: vec![],
+                        origin: None,
                     },
                     AxisValue {
                         label: "bad-wlan".into(),
@@ -246,6 +253,7 @@ mod tests {
                             "args.wlan_latency=50ms".into(),
                             "args.wlan_loss=0.05".into(),
                         ],
+                        origin: None,
                     },
                 ],
             },

@@ -230,6 +230,28 @@ pub fn plan(args: &SweepArgs) -> Result<Plan, Vec<String>> {
     }
 }
 
+/// `text` with each `--set` that a sweep file's axis value wrote followed by where the file
+/// wrote it: `--set process.ping.rate=fast (sweep.toml:7)`.
+fn with_origins(mut text: String, axes: &[Axis], cell: &Cell) -> String {
+    for (axis, label) in &cell.values {
+        let value = axes
+            .iter()
+            .find(|a| &a.label == axis)
+            .and_then(|a| a.values.iter().find(|v| &v.label == label));
+        let Some(value) = value else { continue };
+        let Some(origin) = &value.origin else {
+            continue;
+        };
+        for set in &value.sets {
+            let said = format!("--set {set}");
+            if let Some(at) = text.find(&said) {
+                text.insert_str(at + said.len(), &format!(" ({origin})"));
+            }
+        }
+    }
+    text
+}
+
 /// Loads the launch file with every cell's overrides, as `caravan launch` would, without
 /// starting anything. A problem shared by several cells is reported once, naming them. A shard
 /// checks only the cells it runs (the submitting `--slurm` checked them all).
@@ -280,7 +302,7 @@ fn validate(plan: &Plan, quiet: bool) -> Vec<String> {
             Err(e @ LaunchError::Read { .. }) => return vec![e.to_string()],
             Err(LaunchError::Invalid(list)) => {
                 for p in list {
-                    let text = p.to_string();
+                    let text = with_origins(p.to_string(), &plan.axes, cell);
                     match problems.iter_mut().find(|(t, _)| *t == text) {
                         Some((_, cells)) => cells.push(&cell.id),
                         None => problems.push((text, vec![&cell.id])),
