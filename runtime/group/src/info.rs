@@ -69,7 +69,11 @@ pub fn describe(bytes: &[u8]) -> Result<Value> {
     if rows.is_empty() {
         start = 0;
     }
-    let total: u64 = rows.values().map(|r| r.3).sum();
+    // A damaged summary may claim counts whose sum does not fit: that is bad input, not a panic.
+    let total = rows
+        .values()
+        .try_fold(0u64, |sum, r| sum.checked_add(r.3))
+        .context("the summary's message counts overflow: the file is damaged")?;
     if indexed {
         let mut read = 0u64;
         for m in messages(bytes)? {

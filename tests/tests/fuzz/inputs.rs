@@ -383,6 +383,19 @@ fn read_as_the_commands_do(bytes: &[u8], file: &Path) {
     }
 }
 
+/// An input the fuzzing found: a summary whose channel counts overflow a u64 when summed
+/// (`caravan info` added them unchecked and panicked).
+#[test]
+fn a_recording_whose_summary_counts_overflow_is_bad_input_to_info() {
+    let seeds = recordings();
+    let pick: usize = 15241006544738682866;
+    let bytes = mutate_recording(&seeds[pick % seeds.len()], 16685454973526671123);
+    let file = TempFile(
+        std::env::temp_dir().join(format!("caravan-fuzz-overflow-{}.mcap", std::process::id())),
+    );
+    read_as_the_commands_do(&bytes, &file.0);
+}
+
 proptest! {
     // About 3 ms an input in a debug build, after a 1 s recording is made.
     #![proptest_config(config(4000))]
