@@ -40,6 +40,15 @@ pub fn describe(bytes: &[u8]) -> Result<Value> {
                 );
             }
             for index in &s.metadata_indexes {
+                // The mcap crate adds offset and length unchecked (a panic in a debug build):
+                // an index past the file is a damaged file.
+                let inside = index
+                    .offset
+                    .checked_add(index.length)
+                    .is_some_and(|end| end <= bytes.len() as u64);
+                if !inside {
+                    bail!("a metadata index points outside the file: the file is damaged");
+                }
                 let m = mcap::read::metadata(bytes, index)?;
                 metadata.insert(m.name, m.metadata);
             }

@@ -383,17 +383,22 @@ fn read_as_the_commands_do(bytes: &[u8], file: &Path) {
     }
 }
 
-/// An input the fuzzing found: a summary whose channel counts overflow a u64 when summed
-/// (`caravan info` added them unchecked and panicked).
+/// Inputs the fuzzing found: a summary whose channel counts overflow a u64 when summed
+/// (`caravan info` added them unchecked), and a metadata index whose offset and length
+/// overflow (the mcap crate adds them unchecked); both panicked.
 #[test]
-fn a_recording_whose_summary_counts_overflow_is_bad_input_to_info() {
+fn recordings_whose_summary_numbers_overflow_are_bad_input_to_info() {
     let seeds = recordings();
-    let pick: usize = 15241006544738682866;
-    let bytes = mutate_recording(&seeds[pick % seeds.len()], 16685454973526671123);
     let file = TempFile(
         std::env::temp_dir().join(format!("caravan-fuzz-overflow-{}.mcap", std::process::id())),
     );
-    read_as_the_commands_do(&bytes, &file.0);
+    for (pick, seed) in [
+        (15241006544738682866usize, 16685454973526671123u64),
+        (8940219213943492806, 9647165503881495367),
+    ] {
+        let bytes = mutate_recording(&seeds[pick % seeds.len()], seed);
+        read_as_the_commands_do(&bytes, &file.0);
+    }
 }
 
 proptest! {
