@@ -812,7 +812,7 @@ class Hello(Message):
         ("outputs_len", ctypes.c_uint32),
         ("outputs", ctypes.c_uint64 * 512),
         ("declared", ctypes.c_uint32),
-        ("_reserved", ctypes.c_uint32),
+        ("quiet", ctypes.c_uint32),
     ]
     SIZE = 12400
     ALIGN = 8
@@ -827,7 +827,7 @@ class Hello(Message):
         "outputs_len": 8288,
         "outputs": 8296,
         "declared": 12392,
-        "_reserved": 12396,
+        "quiet": 12396,
     }
 
     @classmethod
@@ -843,11 +843,11 @@ class Grant(Message):
         ("now_ns", ctypes.c_uint64),
         ("tick_ns", ctypes.c_uint64),
         ("stop", ctypes.c_uint32),
-        ("_reserved", ctypes.c_uint32),
+        ("quiet", ctypes.c_uint32),
     ]
     SIZE = 24
     ALIGN = 8
-    OFFSETS = {"now_ns": 0, "tick_ns": 8, "stop": 16, "_reserved": 20}
+    OFFSETS = {"now_ns": 0, "tick_ns": 8, "stop": 16, "quiet": 20}
 
     @classmethod
     def type_name(cls) -> str:

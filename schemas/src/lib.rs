@@ -23,6 +23,7 @@ mod registry;
 pub use registry::message_type_names;
 mod map;
 mod metrics;
+pub mod reader;
 mod robot;
 mod scene;
 mod sensors;

@@ -52,7 +52,9 @@ pub struct Hello {
     /// messages are stamped with the granted time; the scheduler may then step it while
     /// nodes it shares no topic with finish an earlier time. 0 (unknown): never overlapped.
     pub declared: u32,
-    pub _reserved: u32,
+    /// The token of this machine's count of quiet steps (`caravan::lockstep::Pending`), which
+    /// the node holds open: it may then be granted quiet steps. 0: always notify.
+    pub quiet: u32,
 }
 
 /// Permission to step once at simulated time `now_ns`.
@@ -67,7 +69,10 @@ pub struct Grant {
     pub tick_ns: u64,
     /// 1: the run is over; the node finishes instead of stepping.
     pub stop: u32,
-    pub _reserved: u32,
+    /// Not 0: a quiet step, counted in the count of this token (the node's `Hello::quiet`):
+    /// the node takes it off the count before reporting, and notifies only when at most one
+    /// quiet step is left. 0: report and notify.
+    pub quiet: u32,
 }
 
 impl Grant {
@@ -77,7 +82,15 @@ impl Grant {
             now_ns,
             tick_ns,
             stop: 0,
-            _reserved: 0,
+            quiet: 0,
+        }
+    }
+
+    /// A quiet step (see [`Grant::quiet`]) counted in the count of `token`.
+    pub fn quiet(self, token: u32) -> Self {
+        Self {
+            quiet: token,
+            ..self
         }
     }
 
@@ -87,7 +100,7 @@ impl Grant {
             now_ns,
             tick_ns,
             stop: 1,
-            _reserved: 0,
+            quiet: 0,
         }
     }
 }

@@ -4,65 +4,181 @@
 //! only its valid items, and a count that alone counts an array (a `FixedVec`'s `_len`, a
 //! scan's `beam_count`) left out; numbers as serde writes them.
 
-use crate::describe::{Element, Kind, Scalar, TypeLayout};
+use crate::describe::{Element, Field, Kind, Scalar, TypeLayout};
 use crate::descriptor::{Descriptor, is_hidden_count};
-use serde_json::{Map, Value};
+use serde::ser::{Serialize, SerializeMap, SerializeSeq, Serializer};
+use serde_json::Value;
 
 impl Descriptor {
     /// The JSON view of one message of this type, from its `size` bytes.
     pub fn view(&self, bytes: &[u8]) -> Result<Value, String> {
-        let layout = self.layout();
         self.check_size(bytes.len())?;
-        Ok(self.object(layout, bytes))
+        serde_json::to_value(self.object(self.layout(), bytes, None)).map_err(|e| e.to_string())
     }
 
-    fn object(&self, layout: &TypeLayout, bytes: &[u8]) -> Value {
-        let mut map = Map::new();
-        for f in &layout.fields {
-            if is_hidden_count(layout, &f.name) {
-                continue;
+    /// Appends the JSON text of [`Self::view`] to `out`, with `extra` as one more key (over a
+    /// field of that name), straight from the bytes: the same text `serde_json::to_vec` gives
+    /// of the view with `extra` inserted (keys sorted, as `serde_json::Map` keeps them), without
+    /// building the `Value` tree, which was most of a recording's conversion cost.
+    pub fn write_json(
+        &self,
+        bytes: &[u8],
+        extra: Option<(&str, &Value)>,
+        out: &mut Vec<u8>,
+    ) -> Result<(), String> {
+        self.check_size(bytes.len())?;
+        serde_json::to_writer(out, &self.object(self.layout(), bytes, extra))
+            .map_err(|e| e.to_string())
+    }
+
+    fn object<'a>(
+        &'a self,
+        layout: &'a TypeLayout,
+        bytes: &'a [u8],
+        extra: Option<(&'a str, &'a Value)>,
+    ) -> Object<'a> {
+        Object {
+            d: self,
+            layout,
+            bytes,
+            extra,
+        }
+    }
+}
+
+/// A struct's fields as a JSON object, serialised from its bytes.
+struct Object<'a> {
+    d: &'a Descriptor,
+    layout: &'a TypeLayout,
+    bytes: &'a [u8],
+    /// One more key, written over a field of that name.
+    extra: Option<(&'a str, &'a Value)>,
+}
+
+/// One value of an [`Object`].
+enum Item<'a> {
+    Field(&'a Field),
+    Extra(&'a Value),
+}
+
+impl Serialize for Object<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let layout = self.layout;
+        let mut items: Vec<(&str, Item)> = layout
+            .fields
+            .iter()
+            .filter(|f| !is_hidden_count(layout, &f.name))
+            .filter(|f| self.extra.is_none_or(|(k, _)| k != f.name))
+            .map(|f| (f.name.as_str(), Item::Field(f)))
+            .collect();
+        if let Some((key, value)) = self.extra {
+            items.push((key, Item::Extra(value)));
+        }
+        // `serde_json::Map` is a `BTreeMap`: its keys come out in byte order.
+        items.sort_by(|a, b| a.0.cmp(b.0));
+        let mut map = s.serialize_map(Some(items.len()))?;
+        for (name, item) in items {
+            match item {
+                Item::Extra(value) => map.serialize_entry(name, value)?,
+                Item::Field(f) => map.serialize_entry(name, &self.field(f))?,
             }
-            let slot = &bytes[f.offset..f.offset + f.size];
-            let value = match f.kind {
-                Kind::Scalar(s) => scalar(s, slot),
-                Kind::Struct(name) => self.nested(name, slot),
-                Kind::Array(element, len) => {
-                    let valid = if f.count.is_empty() {
-                        len
-                    } else {
-                        let product = f.count.iter().fold(1u128, |n, c| {
-                            n.saturating_mul(integer(layout, c, bytes) as u128)
-                        });
-                        product.min(len as u128) as usize
-                    };
-                    let stride = f.size / len.max(1);
-                    if f.text {
-                        let text = std::str::from_utf8(&slot[..valid]).unwrap_or("");
-                        Value::String(text.to_string())
-                    } else {
-                        let items = (0..valid).map(|i| {
-                            let item = &slot[i * stride..(i + 1) * stride];
-                            match element {
-                                Element::Scalar(s) => scalar(s, item),
-                                Element::Struct(name) => self.nested(name, item),
-                            }
-                        });
-                        Value::Array(items.collect())
+        }
+        map.end()
+    }
+}
+
+impl<'a> Object<'a> {
+    fn field(&self, f: &'a Field) -> FieldValue<'a> {
+        let slot = &self.bytes[f.offset..f.offset + f.size];
+        match f.kind {
+            Kind::Scalar(s) => FieldValue::Scalar(s, slot),
+            Kind::Struct(name) => self.nested(name, slot),
+            Kind::Array(element, len) => {
+                let valid = valid_items(self.layout, f, self.bytes);
+                if f.text {
+                    FieldValue::Text(std::str::from_utf8(&slot[..valid]).unwrap_or(""))
+                } else {
+                    FieldValue::Array {
+                        owner: Object {
+                            extra: None,
+                            ..*self
+                        },
+                        element,
+                        items: &slot[..valid * (f.size / len.max(1))],
+                        stride: f.size / len.max(1),
                     }
                 }
-            };
-            map.insert(f.name.clone(), value);
+            }
         }
-        Value::Object(map)
     }
 
-    fn nested(&self, name: &str, bytes: &[u8]) -> Value {
-        match self.struct_layout(name) {
-            Some(layout) => self.object(layout, bytes),
+    fn nested(&self, name: &str, bytes: &'a [u8]) -> FieldValue<'a> {
+        match self.d.struct_layout(name) {
+            Some(layout) => FieldValue::Struct(self.d.object(layout, bytes, None)),
             // A checked descriptor describes every struct it holds.
-            None => Value::Null,
+            None => FieldValue::Null,
         }
     }
+}
+
+/// One field's value, serialised from its bytes.
+enum FieldValue<'a> {
+    Scalar(Scalar, &'a [u8]),
+    Struct(Object<'a>),
+    Text(&'a str),
+    Array {
+        /// The struct the array is a field of (for the descriptor).
+        owner: Object<'a>,
+        element: Element,
+        /// The valid items' bytes.
+        items: &'a [u8],
+        stride: usize,
+    },
+    Null,
+}
+
+impl Serialize for FieldValue<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            FieldValue::Scalar(kind, bytes) => scalar(*kind, bytes, s),
+            FieldValue::Struct(object) => object.serialize(s),
+            FieldValue::Text(text) => s.serialize_str(text),
+            FieldValue::Null => s.serialize_unit(),
+            FieldValue::Array {
+                owner,
+                element,
+                items,
+                stride,
+            } => {
+                let stride = (*stride).max(1);
+                let mut seq = s.serialize_seq(Some(items.len() / stride))?;
+                for item in items.chunks_exact(stride) {
+                    match element {
+                        Element::Scalar(k) => {
+                            seq.serialize_element(&FieldValue::Scalar(*k, item))?
+                        }
+                        Element::Struct(name) => {
+                            seq.serialize_element(&owner.nested(name, item))?
+                        }
+                    }
+                }
+                seq.end()
+            }
+        }
+    }
+}
+
+/// How many items of array field `f` of `layout` are valid in `bytes` (the struct's): all,
+/// or the product of its counts, at most its length.
+pub(crate) fn valid_items(layout: &TypeLayout, f: &Field, bytes: &[u8]) -> usize {
+    let len = f.kind.array_len().unwrap_or(1);
+    if f.count.is_empty() {
+        return len;
+    }
+    let product = f.count.iter().fold(1u128, |n, c| {
+        n.saturating_mul(integer(layout, c, bytes) as u128)
+    });
+    product.min(len as u128) as usize
 }
 
 /// The integer field `name` of `layout` in `bytes`; 0 if it is not one.
@@ -89,22 +205,23 @@ pub(crate) fn count_value(kind: Scalar, slot: &[u8]) -> u64 {
     }
 }
 
-/// One number, as `serde_json::to_value` gives it (a non-finite float is `null`).
-fn scalar(s: Scalar, b: &[u8]) -> Value {
+/// One number, as `serde_json::to_value` of the number gives it (a non-finite float is
+/// `null`). An `f32` is written as the `f64` it widens to, as a `Value` holds it: the
+/// recordings have always had `0.10000000149011612` for `0.1f32`.
+fn scalar<S: Serializer>(kind: Scalar, b: &[u8], s: S) -> Result<S::Ok, S::Error> {
     fn to<const N: usize>(b: &[u8]) -> [u8; N] {
         b.try_into().unwrap_or([0; N])
     }
-    let value = match s {
-        Scalar::F64 => serde_json::to_value(f64::from_ne_bytes(to(b))),
-        Scalar::F32 => serde_json::to_value(f32::from_ne_bytes(to(b))),
-        Scalar::U64 => serde_json::to_value(u64::from_ne_bytes(to(b))),
-        Scalar::I64 => serde_json::to_value(i64::from_ne_bytes(to(b))),
-        Scalar::U32 => serde_json::to_value(u32::from_ne_bytes(to(b))),
-        Scalar::I32 => serde_json::to_value(i32::from_ne_bytes(to(b))),
-        Scalar::U8 => serde_json::to_value(b[0]),
-        Scalar::I8 => serde_json::to_value(b[0] as i8),
-    };
-    value.unwrap_or(Value::Null)
+    match kind {
+        Scalar::F64 => s.serialize_f64(f64::from_ne_bytes(to(b))),
+        Scalar::F32 => s.serialize_f64(f32::from_ne_bytes(to(b)) as f64),
+        Scalar::U64 => s.serialize_u64(u64::from_ne_bytes(to(b))),
+        Scalar::I64 => s.serialize_i64(i64::from_ne_bytes(to(b))),
+        Scalar::U32 => s.serialize_u32(u32::from_ne_bytes(to(b))),
+        Scalar::I32 => s.serialize_i32(i32::from_ne_bytes(to(b))),
+        Scalar::U8 => s.serialize_u8(b[0]),
+        Scalar::I8 => s.serialize_i8(b[0] as i8),
+    }
 }
 
 #[cfg(test)]

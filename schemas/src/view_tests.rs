@@ -135,3 +135,31 @@ fn a_view_of_the_wrong_length_is_refused() {
         json!({"x": 0.0, "y": 0.0, "theta": 0.0})
     );
 }
+
+/// `write_json` writes the very text the recorder wrote before it existed: the view, with the
+/// header inserted as a key, through `serde_json::to_vec` (so recordings keep their bytes).
+#[test]
+fn write_json_is_the_text_of_the_view_with_the_header_inserted() {
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    let header = json!({"seq": 3, "stamp_ns": 20_000_000, "source_id": "1234567890123"});
+    for name in crate::message_type_names() {
+        let d = crate::catalog::descriptor(name).unwrap();
+        for _ in 0..24 {
+            let mut bytes = vec![0u8; d.layout().size];
+            fill(d, d.layout(), &mut bytes, &mut rng);
+            let mut view = d.view(&bytes).unwrap();
+            view["header"] = header.clone();
+            let mut written = Vec::new();
+            d.write_json(&bytes, Some(("header", &header)), &mut written)
+                .unwrap();
+            assert_eq!(
+                String::from_utf8(written).unwrap(),
+                String::from_utf8(serde_json::to_vec(&view).unwrap()).unwrap(),
+                "{name}"
+            );
+            let mut plain = Vec::new();
+            d.write_json(&bytes, None, &mut plain).unwrap();
+            assert_eq!(plain, serde_json::to_vec(&d.view(&bytes).unwrap()).unwrap());
+        }
+    }
+}

@@ -9,8 +9,12 @@
 //! drawn in its robot's `base_link`; the world's solids (`scene`, from the physics) are a
 //! `foxglove.SceneUpdate` on `foxglove/scene`.
 //!
-//! Views depend only on the raw message, so a lockstep recording stays byte-identical.
+//! Views depend only on the raw message, so a lockstep recording stays byte-identical. They are
+//! read from the message's bytes ([`caravan_schemas::reader`]), not from its JSON: a 1 MiB map
+//! as a JSON tree was most of what the recording cost.
 
+use caravan_schemas::descriptor::Descriptor;
+use caravan_schemas::reader::Fields;
 use caravan_schemas::topics::robot_frame;
 use foxglove::Encode;
 use foxglove::messages::{
@@ -18,7 +22,6 @@ use foxglove::messages::{
     PackedElementField, Pose, PoseInFrame, PosesInFrame, Quaternion, SceneEntity, SceneUpdate,
     SpherePrimitive, Timestamp, Vector2, Vector3, packed_element_field::NumericType,
 };
-use serde_json::Value;
 
 /// The channel every transform goes to.
 pub const TF_TOPIC: &str = "tf";
@@ -64,17 +67,26 @@ fn timestamp(ns: u64) -> Timestamp {
     Timestamp::new(sec, (ns % 1_000_000_000) as u32)
 }
 
-fn num(v: &Value, key: &str) -> f64 {
-    v[key].as_f64().unwrap_or(0.0)
+fn num(v: &Fields, key: &str) -> f64 {
+    v.number(key).unwrap_or(0.0)
 }
 
-/// A `Pose2D` JSON value as a pose in the plane.
-fn pose_2d(v: &Value) -> Pose {
-    let half = num(v, "theta") / 2.0;
+/// A struct field of `v`, or a struct of nothing but zeros where it has none.
+fn sub<'a>(v: &Fields<'a>, key: &str) -> Option<Fields<'a>> {
+    v.get(key)
+}
+
+fn num_in(v: Option<Fields>, key: &str) -> f64 {
+    v.map_or(0.0, |v| num(&v, key))
+}
+
+/// A `Pose2D` as a pose in the plane.
+fn pose_2d(v: Option<Fields>) -> Pose {
+    let half = num_in(v, "theta") / 2.0;
     Pose {
         position: Some(Vector3 {
-            x: num(v, "x"),
-            y: num(v, "y"),
+            x: num_in(v, "x"),
+            y: num_in(v, "y"),
             z: 0.0,
         }),
         orientation: Some(Quaternion {
@@ -86,21 +98,21 @@ fn pose_2d(v: &Value) -> Pose {
     }
 }
 
-/// A `Pose3D` JSON value.
-fn pose_3d(v: &Value) -> Pose {
-    let p = &v["position"];
-    let q = &v["orientation"];
+/// A `Pose3D`.
+fn pose_3d(v: Option<Fields>) -> Pose {
+    let p = v.and_then(|v| sub(&v, "position"));
+    let q = v.and_then(|v| sub(&v, "orientation"));
     Pose {
         position: Some(Vector3 {
-            x: num(p, "x"),
-            y: num(p, "y"),
-            z: num(p, "z"),
+            x: num_in(p, "x"),
+            y: num_in(p, "y"),
+            z: num_in(p, "z"),
         }),
         orientation: Some(Quaternion {
-            x: num(q, "x"),
-            y: num(q, "y"),
-            z: num(q, "z"),
-            w: num(q, "w"),
+            x: num_in(q, "x"),
+            y: num_in(q, "y"),
+            z: num_in(q, "z"),
+            w: num_in(q, "w"),
         }),
     }
 }
@@ -115,14 +127,14 @@ fn transform(stamp: Timestamp, child: String, pose: Pose) -> FrameTransform {
     }
 }
 
-fn f64s(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
-        .unwrap_or_default()
-}
-
-/// The Foxglove views of one recorded message (none for types without a view).
-pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<View> {
+/// The Foxglove views of one recorded message, its bytes as `descriptor` lays them out (none
+/// for types without a view, or bytes of the wrong length).
+pub fn views(topic: &str, descriptor: &Descriptor, bytes: &[u8], stamp_ns: u64) -> Vec<View> {
+    let Ok(json) = descriptor.fields(bytes) else {
+        return Vec::new();
+    };
+    let json = &json;
+    let type_name = descriptor.type_name();
     let stamp = timestamp(stamp_ns);
     let own = format!("foxglove/{topic}");
     let robot = caravan_schemas::topics::robot_of(topic);
@@ -133,7 +145,7 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
     };
     match type_name {
         "caravan::Pose2D" => {
-            let pose = pose_2d(json);
+            let pose = pose_2d(Some(*json));
             let mut out = vec![view(own, &in_map(pose))];
             if let Some(child) = caravan_schemas::topics::pose_frame(topic) {
                 let tf = FrameTransforms {
@@ -143,14 +155,17 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
             }
             out
         }
-        "caravan::Odometry" => vec![view(own, &in_map(pose_3d(&json["pose"])))],
-        "caravan::Goal" => vec![view(own, &in_map(pose_2d(&json["pose"])))],
+        "caravan::Odometry" => vec![view(own, &in_map(pose_3d(sub(json, "pose"))))],
+        "caravan::Goal" => vec![view(own, &in_map(pose_2d(sub(json, "pose"))))],
         "caravan::Path2D" => {
-            let poses = json["poses"].as_array().map(Vec::as_slice).unwrap_or(&[]);
             let path = PosesInFrame {
                 timestamp: Some(stamp),
                 frame_id: MAP_FRAME.into(),
-                poses: poses.iter().map(pose_2d).collect(),
+                poses: json
+                    .structs("poses")
+                    .into_iter()
+                    .map(|p| pose_2d(Some(p)))
+                    .collect(),
             };
             vec![view(own, &path)]
         }
@@ -171,28 +186,22 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
                 }),
                 start_angle: num(json, "angle_min"),
                 end_angle: num(json, "angle_max"),
-                ranges: f64s(&json["ranges"]),
-                intensities: f64s(&json["intensities"]),
+                ranges: json.numbers("ranges"),
+                intensities: json.numbers("intensities"),
             };
             vec![view(own, &scan)]
         }
         "caravan::OccupancyGrid" => {
-            let width = json["width"].as_u64().unwrap_or(0) as u32;
+            let width = json.unsigned("width").unwrap_or(0) as u32;
             let resolution = num(json, "resolution");
             // Cells are i8 (−1 unknown, 0–100 occupancy), one byte each, row-major from the
-            // origin, as ROS's OccupancyGrid and Foxglove's Grid both lay them out.
-            let data: Vec<u8> = json["data"]
-                .as_array()
-                .map(|a| {
-                    a.iter()
-                        .map(|c| c.as_i64().unwrap_or(-1) as i8 as u8)
-                        .collect()
-                })
-                .unwrap_or_default();
+            // origin, as ROS's OccupancyGrid and Foxglove's Grid both lay them out: the
+            // message's own bytes.
+            let data: Vec<u8> = json.bytes("data").unwrap_or_default().to_vec();
             let grid = Grid {
                 timestamp: Some(stamp),
                 frame_id: MAP_FRAME.into(),
-                pose: Some(pose_2d(&json["origin"])),
+                pose: Some(pose_2d(sub(json, "origin"))),
                 column_count: width,
                 cell_size: Some(Vector2 {
                     x: resolution,
@@ -213,12 +222,12 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
             let Some((i, _)) = robot else {
                 return Vec::new();
             };
-            let links = json["links"].as_array().map(Vec::as_slice).unwrap_or(&[]);
-            let transforms = links
-                .iter()
+            let transforms = json
+                .structs("links")
+                .into_iter()
                 .map(|l| {
-                    let name = l["name"].as_str().unwrap_or("link");
-                    transform(stamp, robot_frame(i, name), pose_3d(&l["pose"]))
+                    let name = l.text("name").unwrap_or("");
+                    transform(stamp, robot_frame(i, name), pose_3d(sub(&l, "pose")))
                 })
                 .collect();
             vec![view(TF_TOPIC.into(), &FrameTransforms { transforms })]
@@ -231,7 +240,7 @@ pub fn views(topic: &str, type_name: &str, json: &Value, stamp_ns: u64) -> Vec<V
 /// A `Scene` as entities of cubes, cylinders and spheres, each replacing the previous one of
 /// its id each time it is sent: `world` in the map frame, and `robot_<i>` for the shapes
 /// attached to robot i, in `robot_<i>/base_link_true`, so they move with it.
-fn scene_update(json: &Value, stamp: Timestamp) -> SceneUpdate {
+fn scene_update(json: &Fields, stamp: Timestamp) -> SceneUpdate {
     let mut entities: std::collections::BTreeMap<u64, SceneEntity> = Default::default();
     let entity = |attached: u64| {
         let (frame_id, id) = match attached {
@@ -253,23 +262,24 @@ fn scene_update(json: &Value, stamp: Timestamp) -> SceneUpdate {
     };
     // The world first, even when empty, so that a scene always replaces it.
     entities.insert(0, entity(0));
-    for s in json["shapes"].as_array().map(Vec::as_slice).unwrap_or(&[]) {
-        let attached = s["attached"].as_u64().unwrap_or(0);
+    for s in json.structs("shapes") {
+        let attached = s.unsigned("attached").unwrap_or(0);
         let entity = entities.entry(attached).or_insert_with(|| entity(attached));
-        let c = f64s(&s["color"]);
+        let c = s.numbers("color");
         let color = Some(Color {
             r: c.first().copied().unwrap_or(1.0),
             g: c.get(1).copied().unwrap_or(1.0),
             b: c.get(2).copied().unwrap_or(1.0),
             a: c.get(3).copied().unwrap_or(1.0),
         });
-        let pose = Some(pose_3d(&s["pose"]));
+        let pose = Some(pose_3d(sub(&s, "pose")));
+        let size = sub(&s, "size");
         let size = Some(Vector3 {
-            x: num(&s["size"], "x"),
-            y: num(&s["size"], "y"),
-            z: num(&s["size"], "z"),
+            x: num_in(size, "x"),
+            y: num_in(size, "y"),
+            z: num_in(size, "z"),
         });
-        match s["kind"].as_u64() {
+        match s.unsigned("kind") {
             Some(0) => entity.cubes.push(CubePrimitive { pose, size, color }),
             Some(1) => entity.cylinders.push(CylinderPrimitive {
                 pose,
@@ -288,10 +298,11 @@ fn scene_update(json: &Value, stamp: Timestamp) -> SceneUpdate {
     }
 }
 
-/// The Foxglove topics a raw topic of `type_name` gives, known before its first message so that
-/// the channels exist from the start: the views of an empty message, so the two cannot differ.
-pub fn topics_of(topic: &str, type_name: &str) -> Vec<(String, fn() -> SceneSchema)> {
-    views(topic, type_name, &Value::Null, 0)
+/// The Foxglove topics a raw topic gives, known before its first message so that the channels
+/// exist from the start: the views of the type's default message, so the two cannot differ.
+pub fn topics_of(topic: &str, descriptor: &Descriptor) -> Vec<(String, fn() -> SceneSchema)> {
+    let bytes = descriptor.default_bytes().unwrap_or_default();
+    views(topic, descriptor, &bytes, 0)
         .into_iter()
         .map(|v| (v.topic, v.schema))
         .collect()
@@ -302,6 +313,14 @@ mod tests {
     use super::*;
     use prost::Message;
     use serde_json::json;
+
+    /// The views of the message of `type_name` whose JSON view is `json` (the rest default).
+    fn json_views(topic: &str, type_name: &str, json: &serde_json::Value, stamp: u64) -> Vec<View> {
+        let d = caravan_schemas::catalog::descriptor(type_name).unwrap();
+        let mut bytes = d.default_bytes().unwrap();
+        d.write(json, &mut bytes).unwrap();
+        views(topic, d, &bytes, stamp)
+    }
 
     #[test]
     fn a_scene_is_one_world_entity_of_primitives() {
@@ -317,7 +336,7 @@ mod tests {
             scene.shapes.push(shape).unwrap();
         }
         let json = serde_json::to_value(scene.as_ref()).unwrap();
-        let v = views("scene", "caravan::Scene", &json, 2_000_000_000);
+        let v = json_views("scene", "caravan::Scene", &json, 2_000_000_000);
         assert_eq!(v.len(), 1);
         assert_eq!(v[0].topic, "foxglove/scene");
         assert_eq!((v[0].schema)().name, "foxglove.SceneUpdate");
@@ -339,7 +358,7 @@ mod tests {
         };
         scene.shapes.push(body).unwrap();
         let json = serde_json::to_value(scene.as_ref()).unwrap();
-        let v = views("scene", "caravan::Scene", &json, 2_000_000_000);
+        let v = json_views("scene", "caravan::Scene", &json, 2_000_000_000);
         let update = SceneUpdate::decode(v[0].bytes.as_slice()).unwrap();
         let ids: Vec<(&str, &str)> = update
             .entities
@@ -355,7 +374,7 @@ mod tests {
 
     #[test]
     fn a_robot_pose_is_a_transform_and_a_pose_in_the_map() {
-        let v = views(
+        let v = json_views(
             "robot/2/pose_true",
             "caravan::Pose2D",
             &json!({"x": 1.0, "y": -2.0, "theta": std::f64::consts::FRAC_PI_2}),
@@ -376,7 +395,7 @@ mod tests {
 
     #[test]
     fn a_map_is_a_grid_with_unknown_cells_kept() {
-        let v = views(
+        let v = json_views(
             "map",
             "caravan::OccupancyGrid",
             &json!({"resolution": 0.05, "width": 2, "height": 2,
@@ -392,7 +411,7 @@ mod tests {
 
     #[test]
     fn a_scan_is_drawn_in_its_robot_and_a_path_in_the_map() {
-        let scan = views(
+        let scan = json_views(
             "robot/0/scan",
             "caravan::LaserScan",
             &json!({"angle_min": -1.0, "angle_max": 1.0, "ranges": [1.0, 2.0], "intensities": [0.0, 0.0]}),
@@ -403,7 +422,7 @@ mod tests {
             (s.frame_id.as_str(), s.ranges.as_slice()),
             ("robot_0/base_link", &[1.0, 2.0][..])
         );
-        let path = views(
+        let path = json_views(
             "robot/0/path",
             "caravan::Path2D",
             &json!({"poses": [{"x": 0.0, "y": 0.0, "theta": 0.0}, {"x": 1.0, "y": 0.0, "theta": 0.0}]}),
@@ -434,14 +453,12 @@ mod tests {
                 json!({}),
             ),
         ] {
-            let made: Vec<String> = views(topic, type_name, &sample, 0)
+            let made: Vec<String> = json_views(topic, type_name, &sample, 0)
                 .into_iter()
                 .map(|v| v.topic)
                 .collect();
-            let announced: Vec<String> = topics_of(topic, type_name)
-                .into_iter()
-                .map(|t| t.0)
-                .collect();
+            let d = caravan_schemas::catalog::descriptor(type_name).unwrap();
+            let announced: Vec<String> = topics_of(topic, d).into_iter().map(|t| t.0).collect();
             assert_eq!(made, announced, "{topic}");
         }
     }

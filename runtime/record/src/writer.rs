@@ -14,7 +14,6 @@ use caravan::tap::Tapped;
 use caravan_schemas::descriptor::Descriptor;
 use crossbeam::channel::{Receiver, Sender};
 use hdrhistogram::Histogram;
-use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
@@ -128,8 +127,8 @@ struct Writer {
     /// The MCAP file, for messages about it (a full disk).
     path: PathBuf,
     lockstep: bool,
-    /// (topic, type name) by [`NewTopic::id`].
-    topics: Vec<(std::sync::Arc<str>, &'static str)>,
+    /// (topic, type name, whether it has Foxglove views) by [`NewTopic::id`].
+    topics: Vec<(std::sync::Arc<str>, &'static str, bool)>,
     /// Statistics by [`NewTopic::id`], for topics with messages.
     stats: Vec<Option<TopicStats>>,
     channels: BTreeMap<String, u16>,
@@ -144,7 +143,11 @@ impl Writer {
     fn create(path: &Path, lockstep: bool, meta: &RecordingMeta) -> Result<Self> {
         let file =
             File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-        let mut options = mcap::WriteOptions::new().library("caravan");
+        // zstd's fastest level: a tenth of the launcher's CPU went to level 3's matching, for
+        // files about a tenth larger (docs/benchmarks.md, "Efficiency").
+        let mut options = mcap::WriteOptions::new()
+            .library("caravan")
+            .compression_level(1);
         if lockstep {
             // Multi-threaded compression need not give the same bytes on another machine.
             options = options.compression_threads(0);
@@ -221,14 +224,15 @@ impl Writer {
 
     fn add_topic(&mut self, new: NewTopic) -> Result<()> {
         if self.topics.len() <= new.id {
-            self.topics.resize(new.id + 1, ("".into(), ""));
+            self.topics.resize(new.id + 1, ("".into(), "", false));
             self.stats.resize_with(new.id + 1, || None);
         }
-        self.topics[new.id] = (new.topic.as_str().into(), new.type_name);
+        let views = scene::topics_of(&new.topic, &new.descriptor);
+        self.topics[new.id] = (new.topic.as_str().into(), new.type_name, !views.is_empty());
         if new.recorded {
             self.channel(&new.topic, &new.descriptor)?;
         }
-        for (view, schema) in scene::topics_of(&new.topic, new.type_name) {
+        for (view, schema) in views {
             if new.recorded {
                 self.scene_channel(&view, schema)?;
             }
@@ -297,20 +301,25 @@ impl Writer {
     }
 
     fn write(&mut self, drained: Drained, now_wall: u64) -> Result<()> {
-        let (topic, type_name) = self
+        let (topic, type_name, has_views) = self
             .topics
             .get(drained.id)
             .cloned()
             .ok_or_else(|| anyhow!("a message of a topic the recorder never announced"))?;
         let msg = drained.message;
         let stamp_ns = msg.header.stamp_ns;
-        let mut record = msg.json().with_context(|| format!("topic '{topic}'"))?;
-        let views = scene::views(&topic, type_name, &record, stamp_ns);
-        if let Value::Object(fields) = &mut record {
-            let header = schema::header_json(&msg.header, !self.lockstep);
-            fields.insert("header".into(), header);
-        }
-        let bytes = serde_json::to_vec(&record)?;
+        // Views and record are read straight from the message's bytes; the record's text is
+        // what `serde_json::to_vec` of its JSON view gave (`Descriptor::write_json`).
+        let views = if has_views {
+            scene::views(&topic, &msg.descriptor, &msg.bytes, stamp_ns)
+        } else {
+            Vec::new()
+        };
+        let header = schema::header_json(&msg.header, !self.lockstep);
+        let mut bytes = Vec::with_capacity(msg.bytes.len() * 2);
+        msg.descriptor
+            .write_json(&msg.bytes, Some(("header", &header)), &mut bytes)
+            .map_err(|e| anyhow!("topic '{topic}': cannot convert to JSON: {e}"))?;
         if let Some(live) = &mut self.live {
             live.log(&topic, stamp_ns, &bytes);
             for view in &views {
@@ -354,7 +363,7 @@ impl Writer {
             .topics
             .iter()
             .zip(stats)
-            .filter_map(|((topic, _), s)| Some((topic.to_string(), s?)))
+            .filter_map(|((topic, _, _), s)| Some((topic.to_string(), s?)))
             .collect())
     }
 }

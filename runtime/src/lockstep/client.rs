@@ -33,6 +33,10 @@ pub struct Client {
     hello: Hello,
     /// The last report, repeated if the scheduler grants the same step again.
     last_done: std::cell::RefCell<Option<Done>>,
+    /// This machine's count of quiet steps, if the group's scheduler made one here.
+    pending: Option<super::pending::Pending>,
+    /// The step being taken was granted quiet.
+    quiet_step: std::cell::Cell<bool>,
     shared: Rc<Shared>,
 }
 
@@ -52,8 +56,10 @@ impl Client {
             inputs: FixedVec::new(),
             outputs: FixedVec::new(),
             declared: 0,
-            _reserved: 0,
+            quiet: 0,
         };
+        let pending = super::pending::Pending::open(iox.config());
+        hello.quiet = pending.as_ref().map_or(0, |p| p.token());
         for topic in triggers {
             hello.triggers.push(proto::name_hash(topic)).map_err(|_| {
                 Error::Lockstep(format!("node '{node}' triggers on too many topics"))
@@ -84,6 +90,8 @@ impl Client {
             hello_notifier: transport::notifier(iox, proto::HELLO)?,
             hello,
             last_done: std::cell::RefCell::new(None),
+            pending,
+            quiet_step: std::cell::Cell::new(false),
             shared: shared.clone(),
         };
         client.say_hello()?;
@@ -115,9 +123,19 @@ impl Client {
                     return Ok(GrantOutcome::Stop);
                 }
                 match *self.last_done.borrow() {
-                    Some(done) if grant.now_ns == done.now_ns => self.send_done(done)?,
+                    // A repeat is never quiet: it was not counted.
+                    Some(done) if grant.now_ns == done.now_ns => self.send_done(done, true)?,
                     Some(done) if grant.now_ns < done.now_ns => {}
-                    _ => return Ok(GrantOutcome::Step(grant)),
+                    _ => {
+                        self.quiet_step.set(
+                            grant.quiet != 0
+                                && self
+                                    .pending
+                                    .as_ref()
+                                    .is_some_and(|p| p.token() == grant.quiet),
+                        );
+                        return Ok(GrantOutcome::Step(grant));
+                    }
                 }
             }
             // Whether SIGTERM or SIGINT came, after waiting up to `timeout` for a grant.
@@ -175,6 +193,12 @@ impl Client {
             undeclared: self.shared.ports.borrow().undeclared as u32,
             _reserved: 0,
         };
+        // Taken off the count before the report is sent, so the scheduler never reads a
+        // report whose step is still counted (and never sets the count back under it).
+        let notify = match (&self.pending, self.quiet_step.replace(false)) {
+            (Some(pending), true) => pending.finish(),
+            _ => true,
+        };
         for topic in self.shared.published.borrow_mut().drain(..) {
             // More topics than fit cannot be scheduled precisely; the node is still woken by
             // its period, so truncation only delays subscribers. The scheduler no longer
@@ -185,14 +209,18 @@ impl Client {
             }
         }
         *self.last_done.borrow_mut() = Some(done);
-        self.send_done(done)
+        self.send_done(done, notify)
     }
 
-    fn send_done(&self, done: Done) -> Result<(), Error> {
+    /// Sends a report; wakes the scheduler if `notify` (else it reads the report when a later
+    /// one, or the last quiet step, wakes it: see `pending.rs`).
+    fn send_done(&self, done: Done, notify: bool) -> Result<(), Error> {
         send(&self.done, done, proto::DONE)?;
-        self.done_notifier
-            .notify()
-            .map_err(|e| Error::transport(proto::DONE, e))?;
+        if notify {
+            self.done_notifier
+                .notify()
+                .map_err(|e| Error::transport(proto::DONE, e))?;
+        }
         Ok(())
     }
 }

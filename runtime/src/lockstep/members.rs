@@ -29,6 +29,9 @@ pub(super) struct Member {
     /// Wall time from its last grant to its report: the longest-running nodes are granted
     /// first, so the step that bounds the advance starts soonest.
     pub(super) last_step: Duration,
+    /// It holds the scheduler's count of quiet steps (`pending.rs`): its steps are granted
+    /// quiet.
+    pub(super) quiet: bool,
     pub(super) grant: Pub<Grant>,
     pub(super) grant_notifier: Notifier<ipc::Service>,
 }

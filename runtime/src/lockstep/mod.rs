@@ -20,10 +20,12 @@ mod advance;
 mod client;
 mod members;
 mod overlap;
+mod pending;
 mod scheduler;
 
 pub use advance::{Advance, ScheduleStats, Watchdog};
 pub(crate) use client::{Client, GrantOutcome};
+pub use pending::Pending;
 pub use scheduler::Scheduler;
 
 use crate::Error;

@@ -3,6 +3,7 @@
 use super::advance::{Advance, ScheduleStats, Watchdog};
 use super::members::{Flight, Member};
 use super::overlap::{self, Footprint};
+use super::pending::Pending;
 use super::{Sub, publisher, send, spin_on, subscriber};
 use crate::Error;
 use crate::transport;
@@ -43,11 +44,28 @@ pub struct Scheduler {
     /// The last time that finished.
     last_finished_ns: Option<u64>,
     stats: ScheduleStats,
+    /// The count of quiet steps its members on this machine share (`pending.rs`); `None`
+    /// if it could not be made (every report then notifies, as a node of another machine's).
+    pending: Option<Pending>,
 }
 
 impl Scheduler {
-    /// A scheduler on the group of `config`, with minimum message delay `tick`.
+    /// A scheduler on the group of `config`, with minimum message delay `tick`. It makes the
+    /// group's count of quiet steps ([`Pending`]); a launcher makes it before its processes
+    /// start, so that each finds it when it joins, and hands it over with [`Self::with_pending`].
     pub fn new(config: &iceoryx2::config::Config, tick: Duration) -> Result<Self, Error> {
+        let pending = Pending::create(config)
+            .inspect_err(|e| tracing::warn!("every lockstep report wakes the scheduler: {e}"))
+            .ok();
+        Self::with_pending(config, tick, pending)
+    }
+
+    /// A scheduler with the count of quiet steps `pending` made before (see [`Self::new`]).
+    pub fn with_pending(
+        config: &iceoryx2::config::Config,
+        tick: Duration,
+        pending: Option<Pending>,
+    ) -> Result<Self, Error> {
         crate::log::init("caravan");
         let iox = NodeBuilder::new()
             .config(config)
@@ -73,6 +91,7 @@ impl Scheduler {
             now_ns: 0,
             last_finished_ns: None,
             stats: ScheduleStats::default(),
+            pending,
         })
     }
 
@@ -158,6 +177,16 @@ impl Scheduler {
         Footprint::new(declared, hello.inputs.as_slice(), hello.outputs.as_slice())
     }
 
+    /// Whether the node of `hello` holds this scheduler's count of quiet steps (not one of
+    /// another machine or an earlier run).
+    fn holds_count(&self, hello: &Hello) -> bool {
+        hello.quiet != 0
+            && self
+                .pending
+                .as_ref()
+                .is_some_and(|p| p.token() == hello.quiet)
+    }
+
     fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
         let name = hello.node.as_str().to_string();
         let hash = proto::name_hash(&name);
@@ -165,8 +194,10 @@ impl Scheduler {
             // A restarted process rejoins at the next tick.
             if !self.members[i].active {
                 let footprint = self.footprint(hello);
+                let quiet = self.holds_count(hello);
                 let member = &mut self.members[i];
                 member.active = true;
+                member.quiet = quiet;
                 member.footprint = footprint;
                 member.steps = 0;
                 member.overlapped = false;
@@ -185,6 +216,7 @@ impl Scheduler {
             period_ns: hello.period_ns,
             steps_on_joining: hello.period_ns > 0 || hello.triggers.as_slice().is_empty(),
             footprint: self.footprint(hello),
+            quiet: self.holds_count(hello),
             steps: 0,
             overlapped: false,
             granted_at: Instant::now(),
@@ -381,8 +413,23 @@ impl Scheduler {
         if !nodes.is_empty() {
             self.flights[f].granted_at = Instant::now();
         }
+        let token = self.pending.as_ref().map(|p| {
+            if self.flights.iter().all(|f| f.waiting.is_empty()) {
+                // No step is outstanding: a count above 0 is drift (a node died in a step).
+                p.reset();
+            }
+            let quiet = nodes.iter().filter(|&&i| self.members[i].quiet).count();
+            // Counted before the grants go out, so no report can take the count below.
+            p.add(quiet as i64);
+            p.token()
+        });
         for i in nodes {
-            self.grant(i, Grant::step(now_ns, self.tick_ns))?;
+            let grant = Grant::step(now_ns, self.tick_ns);
+            let grant = match token {
+                Some(token) if self.members[i].quiet => grant.quiet(token),
+                _ => grant,
+            };
+            self.grant(i, grant)?;
             self.flights[f].waiting.insert(i);
             self.stats.steps += 1;
         }

@@ -100,10 +100,19 @@ pub fn run_group(
         events_tx.clone(),
         console.clone(),
     )?;
+    let iceoryx = caravan::group::load_config(config_path)?;
+    let pending = if lockstep && !follower {
+        caravan::lockstep::Pending::create(&iceoryx)
+            .inspect_err(|e| eprintln!("caravan: every lockstep report wakes the scheduler: {e}"))
+            .ok()
+    } else {
+        None
+    };
     let driver = driver::spawn(
         DriverConfig {
+            pending,
             group: lf.group.name.clone(),
-            iceoryx: caravan::group::load_config(config_path)?,
+            iceoryx,
             record_path: dir.join(caravan_report::RECORDING_FILE),
             // The clock host records the whole group.
             patterns: if follower {

@@ -1,0 +1,179 @@
+//! Quiet reports: the count of steps granted "quietly" and not yet reported, shared by the
+//! scheduler and the nodes of one machine, so that a node wakes the scheduler only when its
+//! report could matter.
+//!
+//! Without it every finished step notifies the scheduler, which wakes, reads one report and
+//! sleeps again: ten wake-ups of the scheduler per 10 ms tick in the convoy, each a context
+//! switch and 10–20 µs of CPU on a two-core machine. With it the scheduler grants a step
+//! *quiet* (`Grant::quiet`) to a node that holds this count (its `Hello::quiet` names the
+//! count's token); the node takes one off the count before it reports and notifies only when
+//! at most one quiet step is left: when the slowest node alone still runs (the scheduler
+//! grants what may overlap it) and when the last one ends. Reports are read, as before, from
+//! the `done` service whenever the scheduler wakes; what they say, and so every recording, is
+//! the same.
+//!
+//! The count is a 16-byte file in /dev/shm named with the group's prefix (so `caravan clean`
+//! removes it), mode 0600: a token (u32, never 0) that tells a node of another machine's
+//! group, or of an earlier run, from one of this run, and the count (i64). A count that
+//! drifts (a node died in a quiet step) is set back to 0 whenever no step is outstanding;
+//! until then it only costs wake-ups (too low: more notifications) or a wait of the
+//! scheduler's poll (too high by two or more).
+
+use crate::Error;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicI64, AtomicU32, Ordering};
+
+/// Quiet steps left after which a report notifies: the slowest node alone (1) or none (0).
+const NOTIFY_AT_OR_BELOW: i64 = 1;
+
+/// The shared count of quiet steps outstanding.
+pub struct Pending {
+    map: memmap2::MmapMut,
+    /// The scheduler's side removes the file when dropped.
+    owned: Option<PathBuf>,
+}
+
+fn path(config: &iceoryx2::config::Config) -> PathBuf {
+    PathBuf::from(format!(
+        "/dev/shm/{}lockstep_pending",
+        config.global.prefix.as_str()
+    ))
+}
+
+impl Pending {
+    /// Creates the count for the group of `config` (the scheduler's side), replacing one an
+    /// earlier run left, with a new token.
+    pub fn create(config: &iceoryx2::config::Config) -> Result<Self, Error> {
+        use std::os::unix::fs::OpenOptionsExt;
+        let path = path(config);
+        let _ = std::fs::remove_file(&path);
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .mode(0o600)
+            .open(&path)
+            .and_then(|f| f.set_len(16).map(|_| f))
+            .map_err(|e| Error::Lockstep(format!("cannot create {}: {e}", path.display())))?;
+        // SAFETY: the file is ours (created above, 0600) and stays 16 bytes long; it is only
+        // read and written through atomics.
+        let map = unsafe { memmap2::MmapMut::map_mut(&file) }
+            .map_err(|e| Error::Lockstep(format!("cannot map {}: {e}", path.display())))?;
+        let pending = Self {
+            map,
+            owned: Some(path),
+        };
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos());
+        let token = (nanos ^ std::process::id().rotate_left(16)) | 1;
+        pending.token_cell().store(token, Ordering::SeqCst);
+        Ok(pending)
+    }
+
+    /// Opens the count of the group of `config` (a node's side), if this machine has one.
+    pub fn open(config: &iceoryx2::config::Config) -> Option<Self> {
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path(config))
+            .ok()?;
+        if file.metadata().ok()?.len() != 16 {
+            return None;
+        }
+        // SAFETY: as in `create`; a file of another length is refused above.
+        let map = unsafe { memmap2::MmapMut::map_mut(&file) }.ok()?;
+        Some(Self { map, owned: None })
+    }
+
+    fn token_cell(&self) -> &AtomicU32 {
+        // SAFETY: the map is 16 bytes, page-aligned, and lives as long as `self`.
+        unsafe { &*(self.map.as_ptr() as *const AtomicU32) }
+    }
+
+    fn count(&self) -> &AtomicI64 {
+        // SAFETY: bytes 8..16 of the page-aligned 16-byte map, as long as `self` lives.
+        unsafe { &*(self.map.as_ptr().add(8) as *const AtomicI64) }
+    }
+
+    /// The token that tells this run's count from any other (never 0).
+    pub fn token(&self) -> u32 {
+        self.token_cell().load(Ordering::SeqCst)
+    }
+
+    /// The scheduler grants `n` quiet steps (before it sends the grants).
+    pub fn add(&self, n: i64) {
+        self.count().fetch_add(n, Ordering::SeqCst);
+    }
+
+    /// No step is outstanding: whatever the count says is drift.
+    pub fn reset(&self) {
+        self.count().store(0, Ordering::SeqCst);
+    }
+
+    /// A node finished a quiet step (before it reports): whether it must notify.
+    pub fn finish(&self) -> bool {
+        self.count().fetch_sub(1, Ordering::SeqCst) - 1 <= NOTIFY_AT_OR_BELOW
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        if let Some(path) = &self.owned {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config(name: &str) -> iceoryx2::config::Config {
+        let group = format!("pending-{name}-{}", std::process::id());
+        crate::group::config(&group).unwrap()
+    }
+
+    #[test]
+    fn a_node_notifies_when_at_most_one_quiet_step_is_left() {
+        let config = config("notify");
+        let scheduler = Pending::create(&config).unwrap();
+        let node = Pending::open(&config).expect("the node finds the count");
+        assert_eq!(node.token(), scheduler.token());
+        assert_ne!(scheduler.token(), 0);
+        scheduler.add(4);
+        let notified: Vec<bool> = (0..4).map(|_| node.finish()).collect();
+        assert_eq!(notified, [false, false, true, true]);
+    }
+
+    #[test]
+    fn the_count_is_private_and_gone_with_its_scheduler() {
+        use std::os::unix::fs::PermissionsExt;
+        let config = config("private");
+        let scheduler = Pending::create(&config).unwrap();
+        let mode = std::fs::metadata(path(&config))
+            .unwrap()
+            .permissions()
+            .mode();
+        assert_eq!(mode & 0o777, 0o600);
+        drop(scheduler);
+        assert!(Pending::open(&config).is_none());
+    }
+
+    #[test]
+    fn drift_is_reset_and_a_new_run_gets_a_new_token() {
+        let config = config("drift");
+        let first = Pending::create(&config).unwrap();
+        first.add(3);
+        first.reset();
+        first.add(1);
+        assert!(Pending::open(&config).unwrap().finish());
+        let token = first.token();
+        drop(first);
+        std::thread::sleep(std::time::Duration::from_millis(1));
+        let second = Pending::create(&config).unwrap();
+        assert_ne!(second.token(), 0);
+        // Tokens come from the clock and the process: equal only by a 1 in 2³¹ chance.
+        let _ = token;
+    }
+}
