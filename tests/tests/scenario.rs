@@ -155,6 +155,41 @@ fn a_plugin_that_never_ends_is_killed_at_its_time_limit() {
     caravan_tests::wait_until("the stuck plugin is gone", || !caravan_tests::alive(pid));
 }
 
+/// A plugin that ends but leaves a process running that holds its output open (`sleep 600 &`)
+/// held the launcher until that process ended, past the plugin's time limit. What a plugin
+/// leaves in its process group is killed when it ends.
+#[test]
+fn a_plugin_that_leaves_a_process_running_does_not_hold_the_launcher() {
+    let body = format!("{}\n[[report]]\nexec = \"./leaves.sh\"\n", ping_pong());
+    let s = Scenario::new("tiny-leaves", &body);
+    let script = s.dir.join("leaves.sh");
+    let pid_file = s.dir.join("left.pid");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\n[ \"$1\" = --check ] && exit 0\nsleep 600 &\necho $! > '{}'\nexit 0\n",
+            pid_file.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let mut launcher = s.command(&FIVE_SECONDS).spawn().unwrap();
+    let mut status = None;
+    caravan_tests::wait_until("the launcher ends", || {
+        status = launcher.try_wait().unwrap();
+        status.is_some()
+    });
+    assert_eq!(status.unwrap().code(), Some(0));
+    let pid: i32 = std::fs::read_to_string(&pid_file)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    caravan_tests::wait_until("what the plugin left is gone", || {
+        !caravan_tests::alive(pid)
+    });
+}
+
 #[test]
 fn a_report_time_limit_must_be_positive_and_bounded() {
     for (value, expected) in [("0s", "above 0"), ("25h", "at most 24 h"), ("soon", "soon")] {

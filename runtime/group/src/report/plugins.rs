@@ -78,7 +78,7 @@ const PROGRESS_EVERY: Duration = Duration::from_secs(15);
 
 /// Runs the plugin with `args` and waits for it, at most its `timeout_s`: past that the
 /// plugin (and whatever it started: it runs in a process group of its own) is killed, and it
-/// has failed. A plugin running long is said every [`PROGRESS_EVERY`], so a launcher waiting
+/// has failed. When it ends in time, what it left running in its group is killed. A plugin running long is said every [`PROGRESS_EVERY`], so a launcher waiting
 /// for one is never silent.
 fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
     let Some((first, rest)) = entry.exec.split_first() else {
@@ -98,13 +98,15 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
         .map_err(|e| format!("cannot run {}: {e}", program.display()))?;
     // Both pipes are drained as the plugin writes, so a chatty plugin never blocks on one.
     let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        let (tx, rx) = std::sync::mpsc::channel();
         std::thread::spawn(move || {
             let mut bytes = Vec::new();
             if let Some(mut pipe) = pipe {
                 let _ = pipe.read_to_end(&mut bytes);
             }
-            bytes
-        })
+            let _ = tx.send(bytes);
+        });
+        rx
     };
     let stdout = drain(child.stdout.take().map(|p| Box::new(p) as _));
     let stderr = drain(child.stderr.take().map(|p| Box::new(p) as _));
@@ -138,12 +140,24 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
             }
         }
     };
+    // Whatever the plugin left running in its process group is killed: it would hold the
+    // pipes open, and the launcher would wait for it past the plugin's time limit.
+    // SAFETY: signalling the process group this function started; its id is not reused while
+    // any member lives.
+    unsafe { libc::kill(-pid, libc::SIGKILL) };
+    // A process that left the group (setsid) may still hold a pipe: its output is dropped.
+    let collect = |rx: std::sync::mpsc::Receiver<Vec<u8>>| {
+        rx.recv_timeout(PIPES_AFTER_EXIT).unwrap_or_default()
+    };
     Ok(Output {
         status,
-        stdout: stdout.join().unwrap_or_default(),
-        stderr: stderr.join().unwrap_or_default(),
+        stdout: collect(stdout),
+        stderr: collect(stderr),
     })
 }
+
+/// How long the pipes are read after the plugin ended and its process group was killed.
+const PIPES_AFTER_EXIT: Duration = Duration::from_secs(5);
 
 /// The plugin's error: its stderr (a plugin prints one paragraph), else its exit status.
 fn message(output: &Output) -> String {
