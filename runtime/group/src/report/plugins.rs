@@ -73,13 +73,17 @@ pub fn run_all(run_dir: &Path, entries: &[ReportEntry]) -> Outcome {
     outcome
 }
 
-/// How often the launcher says that a plugin is still running.
+/// When the launcher first says that it waits for a plugin, and how often after that: a
+/// plugin's usual run takes a second or two, so a longer wait is said before it looks like a
+/// hang.
+const PROGRESS_FIRST: Duration = Duration::from_secs(5);
 const PROGRESS_EVERY: Duration = Duration::from_secs(15);
 
 /// Runs the plugin with `args` and waits for it, at most its `timeout_s`: past that the
 /// plugin (and whatever it started: it runs in a process group of its own) is killed, and it
-/// has failed. When it ends in time, what it left running in its group is killed. A plugin running long is said every [`PROGRESS_EVERY`], so a launcher waiting
-/// for one is never silent.
+/// has failed. When it ends in time, what it left running in its group is killed. A plugin
+/// running long is said after [`PROGRESS_FIRST`] and every [`PROGRESS_EVERY`], so a launcher
+/// waiting for one is never silent.
 fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
     let Some((first, rest)) = entry.exec.split_first() else {
         return Err("the command is empty".into());
@@ -115,9 +119,11 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
     std::thread::spawn(move || tx.send(child.wait()));
     let limit = Duration::from_secs_f64(entry.timeout_s);
     let start = Instant::now();
+    let mut say_at = PROGRESS_FIRST;
     let status = loop {
         let left = limit.saturating_sub(start.elapsed());
-        match rx.recv_timeout(left.min(PROGRESS_EVERY)) {
+        let to_say = say_at.saturating_sub(start.elapsed());
+        match rx.recv_timeout(left.min(to_say)) {
             Ok(status) => break status.map_err(|e| format!("cannot wait for the plugin: {e}"))?,
             Err(RecvTimeoutError::Timeout) if start.elapsed() >= limit => {
                 // SAFETY: signalling the process group this function started.
@@ -129,12 +135,16 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
                     limit.as_secs_f64()
                 ));
             }
-            Err(RecvTimeoutError::Timeout) => eprintln!(
-                "caravan: report plugin {} still running after {:.0} s (time limit {} s)",
-                entry.exec.join(" "),
-                start.elapsed().as_secs_f64(),
-                limit.as_secs_f64()
-            ),
+            Err(RecvTimeoutError::Timeout) if start.elapsed() >= say_at => {
+                eprintln!(
+                    "caravan: waiting for report plugin {} ({:.0} s; its time limit is {} s)",
+                    entry.exec.join(" "),
+                    start.elapsed().as_secs_f64(),
+                    limit.as_secs_f64()
+                );
+                say_at += PROGRESS_EVERY;
+            }
+            Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => {
                 return Err("lost the plugin's process".into());
             }
