@@ -155,6 +155,80 @@ fn a_plugin_that_never_ends_is_killed_at_its_time_limit() {
     caravan_tests::wait_until("the stuck plugin is gone", || !caravan_tests::alive(pid));
 }
 
+/// A plugin that ends but leaves a process running that holds its output open (`sleep 600 &`)
+/// held the launcher until that process ended, past the plugin's time limit. What a plugin
+/// leaves in its process group is killed when it ends.
+#[test]
+fn a_plugin_that_leaves_a_process_running_does_not_hold_the_launcher() {
+    let body = format!("{}\n[[report]]\nexec = \"./leaves.sh\"\n", ping_pong());
+    let s = Scenario::new("tiny-leaves", &body);
+    let script = s.dir.join("leaves.sh");
+    let pid_file = s.dir.join("left.pid");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\n[ \"$1\" = --check ] && exit 0\nsleep 600 &\necho $! > '{}'\nexit 0\n",
+            pid_file.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let mut launcher = s.command(&FIVE_SECONDS).spawn().unwrap();
+    let mut status = None;
+    caravan_tests::wait_until("the launcher ends", || {
+        status = launcher.try_wait().unwrap();
+        status.is_some()
+    });
+    assert_eq!(status.unwrap().code(), Some(0));
+    let pid: i32 = std::fs::read_to_string(&pid_file)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    caravan_tests::wait_until("what the plugin left is gone", || {
+        !caravan_tests::alive(pid)
+    });
+}
+
+/// A plugin that takes longer than a few seconds is said, so a launcher waiting for it does
+/// not look hung; it is not killed before its time limit.
+#[test]
+fn a_slow_plugin_is_said_while_the_launcher_waits_for_it() {
+    let body = format!(
+        "{}\n[[report]]\nexec = \"./slow.sh\"\ntimeout = \"5m\"\n",
+        ping_pong()
+    );
+    let s = Scenario::new("tiny-slow", &body);
+    let script = s.dir.join("slow.sh");
+    // Ends once the launcher has said it waits (its stderr is the file the test reads).
+    let said = s.dir.join("launcher.err");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\n[ \"$1\" = --check ] && exit 0\n\
+             while ! grep -q 'waiting for report plugin' '{}'; do sleep 0.2; done\nexit 3\n",
+            said.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let err = std::fs::File::create(&said).unwrap();
+    let status = s.command(&FIVE_SECONDS).stderr(err).status().unwrap();
+    let text = std::fs::read_to_string(&said).unwrap();
+    assert!(
+        text.contains("caravan: waiting for report plugin ./slow.sh (")
+            && text.contains("s; its time limit is 300 s)"),
+        "{text}"
+    );
+    // It ended on its own (exit 3), a failed plugin, not one killed at its limit.
+    assert_eq!(status.code(), Some(1), "{text}");
+    let failed = &s.report()["failed_sections"][0];
+    assert!(
+        !failed["message"].as_str().unwrap().contains("time limit"),
+        "{failed}"
+    );
+}
+
 #[test]
 fn a_report_time_limit_must_be_positive_and_bounded() {
     for (value, expected) in [("0s", "above 0"), ("25h", "at most 24 h"), ("soon", "soon")] {

@@ -241,7 +241,10 @@ fn a_huge_grid_is_refused_and_a_big_one_says_it_checks_its_cells() {
     let huge = sweep(&refs, &out);
     assert_eq!(huge.status.code(), Some(2), "{}", stderr(&huge));
     assert!(
-        stderr(&huge).contains("10 × 10 × 10 × 10 × 10 × 10 cells, more than the 100000"),
+        stderr(&huge).contains(
+            "the grid has 10 × 10 × 10 × 10 × 10 × 10 = 1000000 cells, more than the 100000 a \
+             sweep takes; nothing was checked or run"
+        ),
         "{}",
         stderr(&huge)
     );
@@ -264,5 +267,50 @@ fn a_huge_grid_is_refused_and_a_big_one_says_it_checks_its_cells() {
     assert!(err.contains("checking 200 cells"), "{err}");
     assert!(err.contains("no process 'nope'"), "{err}");
     assert!(err.contains("(every cell)"), "{err}");
+    assert!(!out.exists());
+}
+
+/// Every cell is checked as `caravan launch` would, but a process whose command, params and
+/// environment no cell changes is checked once for the whole grid; a process the grid does
+/// change is still checked in each cell, and a cell it refuses is named alone.
+#[test]
+fn a_sweep_checks_a_process_its_grid_does_not_change_once() {
+    let tmp = TempDir::new("sweep-memo");
+    let count = tmp.0.join("checks.txt");
+    let script = tmp.0.join("count.sh");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\n[ \"$CARAVAN_CHECK\" = 1 ] && echo checked >> '{}' && exit 0\nexec sleep 600\n",
+            count.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let launch = tmp.0.join("launch.toml");
+    std::fs::write(
+        &launch,
+        format!(
+            "[group]\nname = \"memo\"\n{}\n[[process]]\nname = \"counter\"\nexec = \"./count.sh\"\nrate = \"1Hz\"\ncheck = true\n",
+            caravan_tests::ping_pong()
+        ),
+    )
+    .unwrap();
+    let out = tmp.0.join("out");
+    let run = sweep(
+        &[
+            launch.to_str().unwrap(),
+            "--grid",
+            "process.pong.params.gain=1,2,3,4,steep",
+        ],
+        &out,
+    );
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(err.contains("cell gain=steep: "), "{err}");
+    assert!(err.contains("process 'pong'"), "{err}");
+    assert_eq!(err.matches("process 'pong'").count(), 1, "{err}");
+    let checks = std::fs::read_to_string(&count).unwrap();
+    assert_eq!(checks.lines().count(), 1, "{checks}");
     assert!(!out.exists());
 }

@@ -22,6 +22,7 @@
 
 use crate::params_table::{differences, render, rows_of};
 use anyhow::{Context, Result, bail};
+use caravan_group::bad_input::bad;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -60,6 +61,13 @@ pub fn run(cmd: &DocsCommand) -> Result<u8> {
             .context("the caravan executable has no directory")?
             .to_path_buf(),
     };
+    // A root without docs/ would be walked to nothing and "match": it is the wrong directory.
+    if !args.root.join("docs").is_dir() {
+        return Err(bad(format!(
+            "--root {}: no docs/ directory in it; give the workspace root",
+            args.root.display()
+        )));
+    }
     let mut problems = Vec::new();
     let mut tables = 0;
     for page in pages(&args.root)? {
@@ -74,17 +82,21 @@ pub fn run(cmd: &DocsCommand) -> Result<u8> {
         while let Some(start) = rest.find(OPEN) {
             let after = &rest[start + OPEN.len()..];
             let Some(name_end) = after.find("-->") else {
-                bail!("{shown}: a '{OPEN}' marker without '-->'");
+                return Err(bad(format!("{shown}: a '{OPEN}' marker without '-->'")));
             };
             // One table may stand for several programs that take the same params
             // (`<!-- params:caravan-imu-driver caravan-imu-report -->`).
             let programs: Vec<&str> = after[..name_end].split_whitespace().collect();
             let Some(&program) = programs.first() else {
-                bail!("{shown}: a '{OPEN} -->' marker without a program");
+                return Err(bad(format!(
+                    "{shown}: a '{OPEN} -->' marker without a program"
+                )));
             };
             let body_start = start + OPEN.len() + name_end + 3;
             let Some(body_len) = rest[body_start..].find(CLOSE) else {
-                bail!("{shown}: '{OPEN}{program} -->' without a closing '{CLOSE}'");
+                return Err(bad(format!(
+                    "{shown}: '{OPEN}{program} -->' without a closing '{CLOSE}'"
+                )));
             };
             let body = &rest[body_start..body_start + body_len];
             let rows = rows_of(&describe(&bin_dir, program)?);

@@ -158,7 +158,10 @@ pub fn clean(args: &CleanArgs) -> Result<()> {
         let running = !live_nodes(&group)?.is_empty();
         match &args.group {
             Some(g) if *g != group => {}
-            Some(g) if running => return Err(anyhow!("group '{g}' is running; stop it first")),
+            // Bad input (exit 2): the user named a group that is not theirs to clean yet.
+            Some(g) if running => {
+                return Err(bad(format!("group '{g}' is running; stop it first")));
+            }
             _ if running => {}
             _ => stale.push(group),
         }
@@ -172,12 +175,13 @@ pub fn clean(args: &CleanArgs) -> Result<()> {
             println!("nothing to clean");
             return Ok(());
         }
+        // Which to clean is the user's choice: bad input (exit 2) until they make it.
         (None, false, [_, _, ..]) => {
-            return Err(anyhow!(
+            return Err(bad(format!(
                 "{} groups left shared memory behind ({}); name one with --group, or clean them all with --all",
                 stale.len(),
                 stale.join(", ")
-            ));
+            )));
         }
         _ => stale,
     };

@@ -92,9 +92,16 @@ pub struct Launched {
 }
 
 pub use crate::bad_input::EXIT_BAD_INPUT;
+pub use crate::run::preflight::CheckMemo;
 
 /// Loads and validates the launch file with the command line's overrides; see [`load_file`].
 pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
+    load_with(args, None)
+}
+
+/// [`load`], taking the outcome of checks already run on the same input from `memo` (a
+/// sweep's cells share most of their processes' params).
+pub fn load_with(args: &LaunchArgs, memo: Option<&CheckMemo>) -> Result<LaunchFile, LaunchError> {
     let mut sets = args.set.clone();
     if let Some(d) = &args.duration {
         sets.push(format!("group.duration={d}"));
@@ -105,7 +112,8 @@ pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
     if let Some(s) = args.seed {
         sets.push(format!("group.seed={s}"));
     }
-    load_file(&args.file, &sets)
+    let check = |lf: &LaunchFile| check_entries(lf, memo);
+    caravan_launch::load_checked(&args.file, &sets, &run::exec::resolve_exec, &check)
 }
 
 /// Loads and validates the launch file at `path` with `sets` (`KEY=VALUE`, as `--set` takes
@@ -113,14 +121,25 @@ pub fn load(args: &LaunchArgs) -> Result<LaunchFile, LaunchError> {
 /// [`run::preflight`]) and every report plugin its params (`PROGRAM --check`), so that
 /// nothing bad gets started.
 pub fn load_file(path: &Path, sets: &[String]) -> Result<LaunchFile, LaunchError> {
-    caravan_launch::load_checked(path, sets, &run::exec::resolve_exec, &check_entries)
+    let check = |lf: &LaunchFile| check_entries(lf, None);
+    caravan_launch::load_checked(path, sets, &run::exec::resolve_exec, &check)
 }
 
 /// Every process's check of its input, then every report plugin's (`PROGRAM --check`).
-fn check_entries(lf: &LaunchFile) -> Vec<EntryProblem> {
-    let mut problems = run::preflight::check_processes(lf);
+fn check_entries(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<EntryProblem> {
+    let mut problems = run::preflight::check_processes_with(lf, memo);
     for (index, entry) in report_entries(lf).iter().enumerate() {
-        if let Err(why) = report::check(entry) {
+        let checked = match memo {
+            Some(memo) => {
+                let key = format!(
+                    "{:?}\0{}\0{}\0{}",
+                    entry.exec, entry.params, entry.launch_dir, entry.timeout_s
+                );
+                memo.report(key, || report::check(entry))
+            }
+            None => report::check(entry),
+        };
+        if let Err(why) = checked {
             problems.push(run::preflight::report_problem(
                 index,
                 &entry.exec.join(" "),

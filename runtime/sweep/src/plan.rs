@@ -6,10 +6,12 @@ use super::file;
 use super::grid::{self, Axis, Cell};
 use super::manifest::{Definition, RunRef};
 use super::shard::{self, Shard};
-use caravan_group::launch::LaunchArgs;
+use caravan_group::launch::{CheckMemo, LaunchArgs};
 use caravan_launch::LaunchError;
 use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 /// The most cells a sweep takes: each is at least one group run, and every cell is validated
 /// before anything starts (a few milliseconds each), so more is a mistake.
@@ -17,6 +19,10 @@ pub const MAX_CELLS: usize = 100_000;
 
 /// From this many cells on, checking them shows a progress line (about a second's work).
 const PROGRESS_FROM: usize = 200;
+
+/// Without a terminal for the progress bar (a log, a batch job), how often a line says how far
+/// the check is.
+const PROGRESS_EVERY: Duration = Duration::from_secs(10);
 
 /// Everything the sweep will do, checked before anything runs.
 pub struct Plan {
@@ -181,8 +187,15 @@ pub fn plan(args: &SweepArgs) -> Result<Plan, Vec<String>> {
             .iter()
             .map(|a| a.values.len().to_string())
             .collect();
+        // The product saturates: past usize::MAX, the sizes say what the count would be.
+        let count = if cells == usize::MAX {
+            String::new()
+        } else {
+            format!(" = {cells}")
+        };
         problems.push(format!(
-            "the grid has {} cells, more than the {MAX_CELLS} a sweep takes",
+            "the grid has {}{count} cells, more than the {MAX_CELLS} a sweep takes; nothing \
+             was checked or run",
             sizes.join(" × ")
         ));
     }
@@ -270,7 +283,8 @@ fn validate(plan: &Plan, quiet: bool) -> Vec<String> {
     }
     // Each cell takes milliseconds: a big grid says what it is doing, and how far it is.
     let count = mine.iter().filter(|m| **m).count();
-    let bar = if quiet || count < PROGRESS_FROM {
+    let progress = !quiet && count >= PROGRESS_FROM;
+    let bar = if !progress {
         ProgressBar::hidden()
     } else {
         eprintln!(
@@ -281,8 +295,23 @@ fn validate(plan: &Plan, quiet: bool) -> Vec<String> {
                 .expect("valid template"),
         )
     };
-    for (cell, _) in plan.cells.iter().zip(&mine).filter(|(_, m)| **m) {
+    // Without a terminal the bar draws nothing: a plain line now and then says how far it is.
+    let lines = progress && !std::io::stderr().is_terminal();
+    let mut said = Instant::now();
+    // Cells mostly differ in one process's params: the others' checks are run once.
+    let memo = CheckMemo::default();
+    for (done, (cell, _)) in plan
+        .cells
+        .iter()
+        .zip(&mine)
+        .filter(|(_, m)| **m)
+        .enumerate()
+    {
         bar.inc(1);
+        if lines && said.elapsed() >= PROGRESS_EVERY {
+            eprintln!("caravan: checked {done} of {count} cells");
+            said = Instant::now();
+        }
         let args = LaunchArgs {
             file: plan.launch.clone(),
             set: plan.sets(cell, &format!("{}-check", group_prefix(&plan.name))),
@@ -297,7 +326,7 @@ fn validate(plan: &Plan, quiet: bool) -> Vec<String> {
             only: Vec::new(),
             host: None,
         };
-        match caravan_group::launch::load(&args) {
+        match caravan_group::launch::load_with(&args, Some(&memo)) {
             Ok(_) => {}
             Err(e @ LaunchError::Read { .. }) => return vec![e.to_string()],
             Err(LaunchError::Invalid(list)) => {

@@ -1,7 +1,56 @@
-//! The reliability issue's third round: values that named neither key nor `--set`, and the
-//! hosts' new launch-file keys.
+//! The reliability issue's third round: values that named neither key nor `--set`, the
+//! hosts' new launch-file keys, seed ranges past the cap, and every command's exit code for
+//! bad input.
 
-use caravan_tests::launch_with_set;
+use caravan_tests::{
+    Scenario, caravan, launch_with_set, realtime_ping_pong, workspace_bin, workspace_root,
+};
+use std::process::{Child, Command, Output};
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// `out` is bad input: exit 2, `expected` in its message, no panic.
+fn assert_bad_input(args: &[&str], out: &Output, expected: &str) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert!(
+        err.contains(expected),
+        "{args:?}: expected '{expected}' in {err}"
+    );
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+}
+
+/// A realtime ping-pong group, running until [`stop`].
+fn running(tag: &str) -> (Scenario, Child) {
+    let s = Scenario::new(tag, &realtime_ping_pong("10min"));
+    let child = s.start_realtime(2);
+    (s, child)
+}
+
+fn stop(mut child: Child) {
+    // SAFETY: signalling our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(child.wait().unwrap().success());
+}
+
+/// `caravan topic pub MESSAGE` into a running group: bad input whatever is wrong with the
+/// message (each case below), exit 2 naming it.
+fn publish_refused(tag: &str, message: &str, expected: &str) {
+    let (s, child) = running(tag);
+    let args = [
+        "topic",
+        "pub",
+        "demo/ping",
+        message,
+        "--group",
+        &s.group.name,
+    ];
+    let out = caravan(&args);
+    stop(child);
+    assert_bad_input(&args, &out, expected);
+}
 
 #[test]
 fn an_argument_of_the_wrong_type_set_on_the_command_line_names_the_key_and_the_set() {
@@ -33,4 +82,80 @@ fn a_host_lease_out_of_its_range_is_refused_naming_the_set() {
             "{set}: expected '{expected}' in {err}"
         );
     }
+}
+
+/// `caravan-tracked-terrain` had a seed parser of its own that collected the range before
+/// counting it: "capacity overflow". It shares `caravan sweep`'s parser and cap now.
+#[test]
+fn a_terrain_seed_range_up_to_the_largest_u64_is_refused_not_a_panic() {
+    let spec = workspace_root().join("launch/tracked/terrains/hills.toml");
+    let out_dir = std::env::temp_dir().join(format!("caravan-seeds-cap-{}", std::process::id()));
+    let out = Command::new(workspace_bin("caravan-tracked-terrain"))
+        .arg(&spec)
+        .args(["--seeds", "0..18446744073709551615", "--out-dir"])
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("gives 18446744073709551615 seeds, more than the 100000 one command takes"),
+        "{err}"
+    );
+    // Refused before anything was written.
+    assert!(!out_dir.exists());
+}
+
+#[test]
+fn topic_pub_of_malformed_json_exits_2() {
+    publish_refused("pub-json", r#"{"x": 1"#, "the message is not JSON");
+}
+
+#[test]
+fn topic_pub_of_an_unknown_field_exits_2() {
+    publish_refused("pub-field", r#"{"q": 1}"#, "Pose2D has no field 'q'");
+}
+
+#[test]
+fn topic_pub_of_a_field_of_the_wrong_type_exits_2() {
+    publish_refused("pub-type", r#"{"x": "a"}"#, "x: expected f64, found \"a\"");
+}
+
+#[test]
+fn clean_of_a_running_group_exits_2_and_leaves_it_running() {
+    let (s, child) = running("clean-running");
+    let args = ["clean", "--group", &s.group.name];
+    let out = caravan(&args);
+    let listed = caravan(&["node", "list", "--group", &s.group.name]);
+    stop(child);
+    assert_bad_input(&args, &out, "is running; stop it first");
+    assert!(listed.status.success(), "{}", stderr(&listed));
+}
+
+#[test]
+fn docs_params_of_a_root_without_docs_exits_2() {
+    let dir = std::env::temp_dir().join(format!("caravan-docs-root-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = dir.to_str().unwrap();
+    let args = ["docs", "params", "--check", "--root", root];
+    let out = caravan(&args);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_bad_input(&args, &out, "no docs/ directory");
+}
+
+#[test]
+fn docs_params_of_a_marker_without_its_end_exits_2() {
+    let dir = std::env::temp_dir().join(format!("caravan-docs-marker-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("docs")).unwrap();
+    std::fs::write(dir.join("docs/page.md"), "<!-- params:caravan-demo\n").unwrap();
+    let root = dir.to_str().unwrap();
+    let args = ["docs", "params", "--check", "--root", root];
+    let out = caravan(&args);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_bad_input(
+        &args,
+        &out,
+        "docs/page.md: a '<!-- params:' marker without '-->'",
+    );
 }

@@ -73,13 +73,17 @@ pub fn run_all(run_dir: &Path, entries: &[ReportEntry]) -> Outcome {
     outcome
 }
 
-/// How often the launcher says that a plugin is still running.
+/// When the launcher first says that it waits for a plugin, and how often after that: a
+/// plugin's usual run takes a second or two, so a longer wait is said before it looks like a
+/// hang.
+const PROGRESS_FIRST: Duration = Duration::from_secs(5);
 const PROGRESS_EVERY: Duration = Duration::from_secs(15);
 
 /// Runs the plugin with `args` and waits for it, at most its `timeout_s`: past that the
 /// plugin (and whatever it started: it runs in a process group of its own) is killed, and it
-/// has failed. A plugin running long is said every [`PROGRESS_EVERY`], so a launcher waiting
-/// for one is never silent.
+/// has failed. When it ends in time, what it left running in its group is killed. A plugin
+/// running long is said after [`PROGRESS_FIRST`] and every [`PROGRESS_EVERY`], so a launcher
+/// waiting for one is never silent.
 fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
     let Some((first, rest)) = entry.exec.split_first() else {
         return Err("the command is empty".into());
@@ -98,13 +102,15 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
         .map_err(|e| format!("cannot run {}: {e}", program.display()))?;
     // Both pipes are drained as the plugin writes, so a chatty plugin never blocks on one.
     let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        let (tx, rx) = std::sync::mpsc::channel();
         std::thread::spawn(move || {
             let mut bytes = Vec::new();
             if let Some(mut pipe) = pipe {
                 let _ = pipe.read_to_end(&mut bytes);
             }
-            bytes
-        })
+            let _ = tx.send(bytes);
+        });
+        rx
     };
     let stdout = drain(child.stdout.take().map(|p| Box::new(p) as _));
     let stderr = drain(child.stderr.take().map(|p| Box::new(p) as _));
@@ -113,9 +119,11 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
     std::thread::spawn(move || tx.send(child.wait()));
     let limit = Duration::from_secs_f64(entry.timeout_s);
     let start = Instant::now();
+    let mut say_at = PROGRESS_FIRST;
     let status = loop {
         let left = limit.saturating_sub(start.elapsed());
-        match rx.recv_timeout(left.min(PROGRESS_EVERY)) {
+        let to_say = say_at.saturating_sub(start.elapsed());
+        match rx.recv_timeout(left.min(to_say)) {
             Ok(status) => break status.map_err(|e| format!("cannot wait for the plugin: {e}"))?,
             Err(RecvTimeoutError::Timeout) if start.elapsed() >= limit => {
                 // SAFETY: signalling the process group this function started.
@@ -127,23 +135,39 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
                     limit.as_secs_f64()
                 ));
             }
-            Err(RecvTimeoutError::Timeout) => eprintln!(
-                "caravan: report plugin {} still running after {:.0} s (time limit {} s)",
-                entry.exec.join(" "),
-                start.elapsed().as_secs_f64(),
-                limit.as_secs_f64()
-            ),
+            Err(RecvTimeoutError::Timeout) if start.elapsed() >= say_at => {
+                eprintln!(
+                    "caravan: waiting for report plugin {} ({:.0} s; its time limit is {} s)",
+                    entry.exec.join(" "),
+                    start.elapsed().as_secs_f64(),
+                    limit.as_secs_f64()
+                );
+                say_at += PROGRESS_EVERY;
+            }
+            Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => {
                 return Err("lost the plugin's process".into());
             }
         }
     };
+    // Whatever the plugin left running in its process group is killed: it would hold the
+    // pipes open, and the launcher would wait for it past the plugin's time limit.
+    // SAFETY: signalling the process group this function started; its id is not reused while
+    // any member lives.
+    unsafe { libc::kill(-pid, libc::SIGKILL) };
+    // A process that left the group (setsid) may still hold a pipe: its output is dropped.
+    let collect = |rx: std::sync::mpsc::Receiver<Vec<u8>>| {
+        rx.recv_timeout(PIPES_AFTER_EXIT).unwrap_or_default()
+    };
     Ok(Output {
         status,
-        stdout: stdout.join().unwrap_or_default(),
-        stderr: stderr.join().unwrap_or_default(),
+        stdout: collect(stdout),
+        stderr: collect(stderr),
     })
 }
+
+/// How long the pipes are read after the plugin ended and its process group was killed.
+const PIPES_AFTER_EXIT: Duration = Duration::from_secs(5);
 
 /// The plugin's error: its stderr (a plugin prints one paragraph), else its exit status.
 fn message(output: &Output) -> String {

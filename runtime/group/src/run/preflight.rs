@@ -6,16 +6,62 @@
 
 use caravan_launch::model::{EntryList, EntryProblem, LaunchFile};
 use crossbeam::channel::{RecvTimeoutError, bounded};
+use std::collections::HashMap;
 use std::path::Path;
-use std::process::{Output, Stdio};
+use std::process::{Command, Output, Stdio};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// How long a check may take. Generous: a Python agent's first check creates its virtual
 /// environment and installs its packages.
 pub const CHECK_TIMEOUT: Duration = Duration::from_secs(600);
 
+/// Checks already run, by everything a check is given: a sweep loads its launch file once per
+/// cell, and cells mostly differ in one process's params, so the other processes' checks (and
+/// report plugins') would be run again on the same input for every cell. A check reads only
+/// its command line, environment and the files they name, which a sweep does not change while
+/// it validates. Checks that timed out or could not start are not kept.
+#[derive(Default)]
+pub struct CheckMemo {
+    processes: Mutex<HashMap<String, Output>>,
+    reports: Mutex<HashMap<String, Result<(), String>>>,
+}
+
+impl CheckMemo {
+    /// A report plugin's check of `key`, run by `check` unless it was run before.
+    pub fn report(
+        &self,
+        key: String,
+        check: impl FnOnce() -> Result<(), String>,
+    ) -> Result<(), String> {
+        if let Some(known) = self.reports.lock().unwrap().get(&key) {
+            return known.clone();
+        }
+        let result = check();
+        self.reports.lock().unwrap().insert(key, result.clone());
+        result
+    }
+}
+
+/// Everything a check's process is given, as one string (the inherited environment is the
+/// launcher's, the same for every check).
+fn memo_key(cmd: &Command) -> String {
+    let envs: Vec<_> = cmd.get_envs().collect();
+    let args: Vec<_> = cmd.get_args().collect();
+    format!(
+        "{:?}\0{args:?}\0{envs:?}\0{:?}",
+        cmd.get_program(),
+        cmd.get_current_dir()
+    )
+}
+
 /// Runs the checks of `lf`'s processes at once and returns what they found wrong.
 pub fn check_processes(lf: &LaunchFile) -> Vec<EntryProblem> {
+    check_processes_with(lf, None)
+}
+
+/// [`check_processes`], taking known outcomes from `memo` and adding new ones to it.
+pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<EntryProblem> {
     let mut env = match super::group_environment(lf) {
         Ok(env) => env,
         Err(e) => {
@@ -35,11 +81,17 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<EntryProblem> {
         let name = plan.spec.name.clone();
         // A check holds no shared memory, and one blocked in a read would sit out a SIGTERM:
         // it is killed outright if the launcher dies.
-        let child = plan
-            .command(&env, libc::SIGKILL)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn();
+        let mut cmd = plan.command(&env, libc::SIGKILL);
+        let key = memo.map(|_| memo_key(&cmd));
+        let known = memo
+            .zip(key.as_ref())
+            .and_then(|(m, k)| m.processes.lock().unwrap().get(k).cloned());
+        if let Some(output) = known {
+            let params = &plan.spec.params;
+            problems.extend(judge(index, &name, &plan.program, params, Ok(output)));
+            continue;
+        }
+        let child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn();
         match child {
             Ok(child) => {
                 let (tx, rx) = bounded(1);
@@ -47,7 +99,8 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<EntryProblem> {
                 std::thread::spawn(move || {
                     let _ = tx.send(child.wait_with_output());
                 });
-                running.push((index, name, plan.program, plan.spec.params.clone(), pid, rx));
+                let entry = (index, name, plan.program, plan.spec.params.clone(), key);
+                running.push((entry, pid, rx));
             }
             Err(e) => problems.push(problem(
                 index,
@@ -59,7 +112,7 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<EntryProblem> {
         }
     }
     let deadline = Instant::now() + CHECK_TIMEOUT;
-    for (index, name, program, params, pid, rx) in running {
+    for ((index, name, program, params, key), pid, rx) in running {
         // A check longer than a few seconds is said once, so a slow one is not taken for a hang.
         let said = Instant::now() + Duration::from_secs(10);
         let mut received =
@@ -73,7 +126,12 @@ pub fn check_processes(lf: &LaunchFile) -> Vec<EntryProblem> {
             received = rx.recv_timeout(deadline.saturating_duration_since(Instant::now()));
         }
         let output = match received {
-            Ok(output) => output,
+            Ok(output) => {
+                if let (Some(memo), Some(key), Ok(output)) = (memo, key, &output) {
+                    memo.processes.lock().unwrap().insert(key, output.clone());
+                }
+                output
+            }
             Err(RecvTimeoutError::Timeout) => {
                 // SAFETY: kill(2) on the process group of a child we spawned and not reaped.
                 unsafe { libc::kill(-pid, libc::SIGKILL) };
