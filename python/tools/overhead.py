@@ -14,8 +14,11 @@ every process of its tree from /proc twice a second, and prints one JSON line:
   `compute_cpu_mean_ms` × `steps`, summed over nodes); `physics_ms_per_tick` the physics
   process's share of it;
 - `overhead`: the first over the second (1 = nothing but the nodes' work);
-- `launcher_ms_per_tick` by thread name (`recording writer`: JSON, views, compression; the
-  rest: scheduling and the recorder's taps);
+- `launcher_ms_per_tick` by thread name (`recording write`: JSON, views, compression;
+  `driver`: the scheduler and the recorder's taps; `main`: supervision, and after the run the
+  report, which reads the recording back);
+- `run_cpu_ms_per_tick` and `run_overhead`: the same without the launcher's main thread, i.e.
+  what the group costs while it runs;
 - `sleeps_per_tick`: voluntary context switches of every thread of the tree (a thread going
   to sleep, to be woken later: the wake-ups), and `preemptions_per_tick` the others;
 - `real_time_factor` and `wall_s`.
@@ -98,7 +101,8 @@ def measure(command, bin_dir=None, tick_ms=10.0):
     sleeps_by = collections.Counter()
     launcher = collections.Counter()
     sleeps = preempted = 0
-    for (pid, _), (name, cpu, voluntary, other) in threads.items():
+    after_run = 0.0
+    for (pid, tid), (name, cpu, voluntary, other) in threads.items():
         # Report plugins run after the simulation: not part of a tick.
         if program.get(pid, "?").endswith("-report"):
             continue
@@ -107,6 +111,11 @@ def measure(command, bin_dir=None, tick_ms=10.0):
         sleeps += voluntary
         preempted += other
         if pid == child.pid:
+            # The main thread supervises (next to nothing while the group runs) and, after
+            # the run, writes the report, reading the whole recording back.
+            if int(tid) == pid:
+                name = "main"
+                after_run += cpu
             launcher[name] += cpu
     total = sum(by_program.values())
     per_tick = lambda seconds: round(1000 * seconds / ticks, 4)  # noqa: E731
@@ -120,6 +129,8 @@ def measure(command, bin_dir=None, tick_ms=10.0):
         "compute_ms_per_tick": round(compute / ticks, 4),
         "physics_ms_per_tick": round(physics / ticks, 4),
         "overhead": round(total * 1000 / compute, 3) if compute else None,
+        "run_cpu_ms_per_tick": per_tick(total - after_run),
+        "run_overhead": round((total - after_run) * 1000 / compute, 3) if compute else None,
         "launcher_ms_per_tick": {n: per_tick(c) for n, c in launcher.most_common()},
         "sleeps_per_tick": round(sleeps / ticks, 2),
         "preemptions_per_tick": round(preempted / ticks, 2),
