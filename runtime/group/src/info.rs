@@ -16,6 +16,10 @@ type ChannelRow = (String, String, String, u64);
 /// messages, time span, channels, metadata and attachments; an error for a file that is
 /// damaged, cut short or not MCAP.
 pub fn describe(bytes: &[u8]) -> Result<Value> {
+    caravan_report::guarded(|| describe_unguarded(bytes))
+}
+
+fn describe_unguarded(bytes: &[u8]) -> Result<Value> {
     // A file cut short has no footer; it is read through up to where it ends.
     let summary = mcap::Summary::read(bytes).ok().flatten();
     let mut rows: BTreeMap<u16, ChannelRow> = BTreeMap::new();

@@ -65,6 +65,11 @@ fn speed_arg(text: &str) -> Result<f64, String> {
 /// bag (a directory, or an MCAP file of profile `ros2`) is read as the recording of its
 /// mapped topics (see `bag.rs`).
 pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
+    caravan_report::guarded(|| read_unguarded(path, patterns))
+        .with_context(|| path.display().to_string())
+}
+
+fn read_unguarded(path: &Path, patterns: &[String]) -> Result<Recording> {
     if caravan_ros2::bag::is_bag(path) {
         return crate::bag::read_bag_recording(path, patterns);
     }

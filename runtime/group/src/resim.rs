@@ -170,6 +170,11 @@ fn prepare(args: &ResimArgs) -> Result<(LaunchFile, Vec<Recorded>)> {
 /// does not): what `caravan resim` reruns. An error for a file without a summary or without
 /// the attachment, or whose records the summary points at are damaged.
 pub fn attached_launch_file(file: &Path, bytes: &[u8]) -> Result<(String, PathBuf)> {
+    caravan_report::guarded(|| attached_unguarded(file, bytes))
+        .with_context(|| file.display().to_string())
+}
+
+fn attached_unguarded(file: &Path, bytes: &[u8]) -> Result<(String, PathBuf)> {
     let summary = mcap::Summary::read(bytes)
         .ok()
         .flatten()

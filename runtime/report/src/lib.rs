@@ -76,5 +76,5 @@ pub use facts::{
 };
 pub use locate::{find_program, latest_run_dir};
 pub use plugin::{Inputs, ReportPlugin, Run};
-pub use recording::{RecordedMessage, as_u64, read_all};
+pub use recording::{RecordedMessage, as_u64, guarded, read_all};
 pub use section::{RESERVED, SECTIONS_DIR, Section, written};

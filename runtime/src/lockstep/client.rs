@@ -124,7 +124,10 @@ impl Client {
                 }
                 match *self.last_done.borrow() {
                     // A repeat is never quiet: it was not counted.
-                    Some(done) if grant.now_ns == done.now_ns => self.send_done(done, true)?,
+                    Some(done) if grant.now_ns == done.now_ns => {
+                        send(&self.done, done, proto::DONE)?;
+                        self.notify_done(true)?
+                    }
                     Some(done) if grant.now_ns < done.now_ns => {}
                     _ => {
                         self.quiet_step.set(
@@ -193,12 +196,6 @@ impl Client {
             undeclared: self.shared.ports.borrow().undeclared as u32,
             _reserved: 0,
         };
-        // Taken off the count before the report is sent, so the scheduler never reads a
-        // report whose step is still counted (and never sets the count back under it).
-        let notify = match (&self.pending, self.quiet_step.replace(false)) {
-            (Some(pending), true) => pending.finish(),
-            _ => true,
-        };
         for topic in self.shared.published.borrow_mut().drain(..) {
             // More topics than fit cannot be scheduled precisely; the node is still woken by
             // its period, so truncation only delays subscribers. The scheduler no longer
@@ -209,13 +206,21 @@ impl Client {
             }
         }
         *self.last_done.borrow_mut() = Some(done);
-        self.send_done(done, notify)
+        send(&self.done, done, proto::DONE)?;
+        // Taken off the count after the report is out: the last quiet step to end then comes
+        // after every report, so none waits unread for the scheduler's poll. (The scheduler may
+        // read this report and set the count to 0 before it is taken off: the count goes to
+        // −1, which only means more notifications until the next reset.)
+        let notify = match (&self.pending, self.quiet_step.replace(false)) {
+            (Some(pending), true) => pending.finish(),
+            _ => true,
+        };
+        self.notify_done(notify)
     }
 
-    /// Sends a report; wakes the scheduler if `notify` (else it reads the report when a later
-    /// one, or the last quiet step, wakes it: see `pending.rs`).
-    fn send_done(&self, done: Done, notify: bool) -> Result<(), Error> {
-        send(&self.done, done, proto::DONE)?;
+    /// Wakes the scheduler for a report sent, if `notify` (else it reads the report when a
+    /// later one, or the last quiet step, wakes it: see `pending.rs`).
+    fn notify_done(&self, notify: bool) -> Result<(), Error> {
         if notify {
             self.done_notifier
                 .notify()

@@ -548,8 +548,17 @@ impl Scheduler {
             }
             let now_ns = self.flights[f].now_ns;
             let waiting: Vec<usize> = self.flights[f].waiting.iter().copied().collect();
+            let token = self.pending.as_ref().map(Pending::token);
             for i in waiting {
-                self.grant(i, Grant::step(now_ns, self.tick_ns))?;
+                // Counted once, when first granted: if that grant was lost, this one is the
+                // step and is taken off the count; if not, the node answers it as a repeat,
+                // which is never counted.
+                let grant = Grant::step(now_ns, self.tick_ns);
+                let grant = match token {
+                    Some(token) if self.members[i].quiet => grant.quiet(token),
+                    _ => grant,
+                };
+                self.grant(i, grant)?;
             }
             self.flights[f].granted_at = Instant::now();
         }

@@ -162,11 +162,18 @@ fn run_lockstep(
 ) -> Result<(u64, caravan::lockstep::ScheduleStats)> {
     let mut scheduler = Scheduler::with_pending(&cfg.iceoryx, cfg.tick, cfg.pending.take())?;
     scheduler.set_spin(cfg.spin);
+    // A node that died in its step never reported what it published: the next drain looks
+    // at every tap.
+    let died = std::cell::Cell::new(false);
     let watchdog = |_: &[&str]| {
         if control.stop.load(Ordering::Relaxed) {
             return Err("the group is stopping".to_string());
         }
-        Ok(std::mem::take(&mut *control.deaths.lock().unwrap()))
+        let deaths = std::mem::take(&mut *control.deaths.lock().unwrap());
+        if !deaths.is_empty() {
+            died.set(true);
+        }
+        Ok(deaths)
     };
     let end_ns = cfg.duration.map(|d| d.as_nanos() as u64);
     let mut now_ns = 0;
@@ -220,9 +227,9 @@ fn run_lockstep(
             advances += 1;
             // A topic is looked at when a node said it published there. All of them are, at
             // the first advance (a node may publish while it starts, before it joins), when
-            // discovery found new topics, and once every `FULL_DRAIN_EVERY` advances (a
-            // publisher outside the schedule, such as `caravan topic pub`).
-            if discovered || advances % FULL_DRAIN_EVERY == 1 {
+            // discovery found new topics, after a node died, and once every
+            // `FULL_DRAIN_EVERY` advances (a publisher outside the schedule).
+            if discovered || died.replace(false) || advances % FULL_DRAIN_EVERY == 1 {
                 recorder.drain_except(&advance.overlapping)?;
             } else {
                 recorder.drain_published(&advance.published, &advance.overlapping)?;
