@@ -36,6 +36,18 @@ pub(super) struct Member {
     pub(super) grant_notifier: Notifier<ipc::Service>,
 }
 
+impl Member {
+    /// Its grant of a step at `now_ns`: quiet, under `token`, if it holds the count of quiet
+    /// steps (`pending.rs`).
+    pub(super) fn step_grant(&self, now_ns: u64, tick_ns: u64, token: Option<u32>) -> Grant {
+        let grant = Grant::step(now_ns, tick_ns);
+        match token {
+            Some(token) if self.quiet => grant.quiet(token),
+            _ => grant,
+        }
+    }
+}
+
 /// One time being stepped.
 pub(super) struct Flight {
     pub(super) now_ns: u64,

@@ -70,6 +70,14 @@ impl Pending {
         Ok(pending)
     }
 
+    /// [`Self::create`], or `None` said on stderr: without the count every report wakes the
+    /// scheduler, which is slower, not wrong.
+    pub fn create_or_warn(config: &iceoryx2::config::Config) -> Option<Self> {
+        (Self::create(config))
+            .inspect_err(|e| eprintln!("caravan: every lockstep report wakes the scheduler: {e}"))
+            .ok()
+    }
+
     /// Opens the count of the group of `config` (a node's side), if this machine has one: a
     /// regular file of this user's, private to it, of the count's size (not a link, nor a file
     /// another user put there first).
@@ -107,6 +115,17 @@ impl Pending {
     /// The token that tells this run's count from any other (never 0).
     pub fn token(&self) -> u32 {
         self.token_cell().load(Ordering::SeqCst)
+    }
+
+    /// The scheduler is about to grant `quiet` quiet steps (counted before the grants go out,
+    /// so no report can take the count below); `idle`: no step is outstanding, so a count
+    /// above 0 is drift (a node died in a quiet step). Returns the token to grant them under.
+    pub(crate) fn granting(&self, quiet: usize, idle: bool) -> u32 {
+        if idle {
+            self.reset();
+        }
+        self.add(quiet as i64);
+        self.token()
     }
 
     /// The scheduler grants `n` quiet steps (before it sends the grants).

@@ -54,10 +54,7 @@ impl Scheduler {
     /// group's count of quiet steps ([`Pending`]); a launcher makes it before its processes
     /// start, so that each finds it when it joins, and hands it over with [`Self::with_pending`].
     pub fn new(config: &iceoryx2::config::Config, tick: Duration) -> Result<Self, Error> {
-        let pending = Pending::create(config)
-            .inspect_err(|e| tracing::warn!("every lockstep report wakes the scheduler: {e}"))
-            .ok();
-        Self::with_pending(config, tick, pending)
+        Self::with_pending(config, tick, Pending::create_or_warn(config))
     }
 
     /// A scheduler with the count of quiet steps `pending` made before (see [`Self::new`]).
@@ -177,14 +174,10 @@ impl Scheduler {
         Footprint::new(declared, hello.inputs.as_slice(), hello.outputs.as_slice())
     }
 
-    /// Whether the node of `hello` holds this scheduler's count of quiet steps (not one of
-    /// another machine or an earlier run).
+    /// Whether the node of `hello` holds this scheduler's count of quiet steps (a token is
+    /// never 0: one of another machine or an earlier run differs).
     fn holds_count(&self, hello: &Hello) -> bool {
-        hello.quiet != 0
-            && self
-                .pending
-                .as_ref()
-                .is_some_and(|p| p.token() == hello.quiet)
+        (self.pending.as_ref()).is_some_and(|p| p.token() == hello.quiet)
     }
 
     fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
@@ -413,23 +406,11 @@ impl Scheduler {
         if !nodes.is_empty() {
             self.flights[f].granted_at = Instant::now();
         }
-        let token = self.pending.as_ref().map(|p| {
-            if self.flights.iter().all(|f| f.waiting.is_empty()) {
-                // No step is outstanding: a count above 0 is drift (a node died in a step).
-                p.reset();
-            }
-            let quiet = nodes.iter().filter(|&&i| self.members[i].quiet).count();
-            // Counted before the grants go out, so no report can take the count below.
-            p.add(quiet as i64);
-            p.token()
-        });
+        let idle = self.flights.iter().all(|f| f.waiting.is_empty());
+        let quiet = nodes.iter().filter(|&&i| self.members[i].quiet).count();
+        let token = self.pending.as_ref().map(|p| p.granting(quiet, idle));
         for i in nodes {
-            let grant = Grant::step(now_ns, self.tick_ns);
-            let grant = match token {
-                Some(token) if self.members[i].quiet => grant.quiet(token),
-                _ => grant,
-            };
-            self.grant(i, grant)?;
+            self.grant(i, self.members[i].step_grant(now_ns, self.tick_ns, token))?;
             self.flights[f].waiting.insert(i);
             self.stats.steps += 1;
         }
@@ -551,14 +532,8 @@ impl Scheduler {
             let token = self.pending.as_ref().map(Pending::token);
             for i in waiting {
                 // Counted once, when first granted: if that grant was lost, this one is the
-                // step and is taken off the count; if not, the node answers it as a repeat,
-                // which is never counted.
-                let grant = Grant::step(now_ns, self.tick_ns);
-                let grant = match token {
-                    Some(token) if self.members[i].quiet => grant.quiet(token),
-                    _ => grant,
-                };
-                self.grant(i, grant)?;
+                // step and is taken off the count; else the node answers it as a repeat.
+                self.grant(i, self.members[i].step_grant(now_ns, self.tick_ns, token))?;
             }
             self.flights[f].granted_at = Instant::now();
         }

@@ -101,13 +101,9 @@ pub fn run_group(
         console.clone(),
     )?;
     let iceoryx = caravan::group::load_config(config_path)?;
-    let pending = if lockstep && !follower {
-        caravan::lockstep::Pending::create(&iceoryx)
-            .inspect_err(|e| eprintln!("caravan: every lockstep report wakes the scheduler: {e}"))
-            .ok()
-    } else {
-        None
-    };
+    let pending = (lockstep && !follower)
+        .then(|| caravan::lockstep::Pending::create_or_warn(&iceoryx))
+        .flatten();
     let driver = driver::spawn(
         DriverConfig {
             pending,
