@@ -65,8 +65,7 @@ fn speed_arg(text: &str) -> Result<f64, String> {
 /// bag (a directory, or an MCAP file of profile `ros2`) is read as the recording of its
 /// mapped topics (see `bag.rs`).
 pub fn read_recording(path: &Path, patterns: &[String]) -> Result<Recording> {
-    caravan_report::guarded(|| read_unguarded(path, patterns))
-        .with_context(|| path.display().to_string())
+    caravan_report::guarded(path.display(), || read_unguarded(path, patterns))
 }
 
 fn read_unguarded(path: &Path, patterns: &[String]) -> Result<Recording> {

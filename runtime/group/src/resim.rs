@@ -170,8 +170,7 @@ fn prepare(args: &ResimArgs) -> Result<(LaunchFile, Vec<Recorded>)> {
 /// does not): what `caravan resim` reruns. An error for a file without a summary or without
 /// the attachment, or whose records the summary points at are damaged.
 pub fn attached_launch_file(file: &Path, bytes: &[u8]) -> Result<(String, PathBuf)> {
-    caravan_report::guarded(|| attached_unguarded(file, bytes))
-        .with_context(|| file.display().to_string())
+    caravan_report::guarded(file.display(), || attached_unguarded(file, bytes))
 }
 
 fn attached_unguarded(file: &Path, bytes: &[u8]) -> Result<(String, PathBuf)> {

@@ -39,8 +39,9 @@ std::thread_local!(static GUARDED: std::cell::Cell<u32> = const { std::cell::Cel
 /// Runs `read`, a reading of a recording through the mcap crate, with a panic inside it made
 /// an error: the crate adds and subtracts a damaged file's offsets and lengths unchecked in
 /// several places (the recording fuzz test keeps finding new ones), and a damaged file is bad
-/// input, never a crash. The panic's own message is not printed.
-pub fn guarded<T>(read: impl FnOnce() -> Result<T>) -> Result<T> {
+/// input, never a crash. The panic's own message is not printed; the error says `what` (the
+/// file) is damaged. Errors `read` returns are passed on as they are.
+pub fn guarded<T>(what: impl std::fmt::Display, read: impl FnOnce() -> Result<T>) -> Result<T> {
     static QUIET_HOOK: std::sync::Once = std::sync::Once::new();
     QUIET_HOOK.call_once(|| {
         let earlier = std::panic::take_hook();
@@ -55,7 +56,7 @@ pub fn guarded<T>(read: impl FnOnce() -> Result<T>) -> Result<T> {
     GUARDED.with(|g| g.set(g.get() - 1));
     result.unwrap_or_else(|_| {
         Err(anyhow::anyhow!(
-            "the file is damaged: its records do not fit together"
+            "{what} is damaged: its records do not fit together"
         ))
     })
 }
@@ -63,7 +64,7 @@ pub fn guarded<T>(read: impl FnOnce() -> Result<T>) -> Result<T> {
 /// All messages of `path` on Caravan's own (JSON) channels, in file order; the Foxglove scene
 /// channels beside them are views of the same messages.
 pub fn read_all(path: &Path) -> Result<Vec<RecordedMessage>> {
-    guarded(|| read_all_unguarded(path)).with_context(|| path.display().to_string())
+    guarded(path.display(), || read_all_unguarded(path))
 }
 
 fn read_all_unguarded(path: &Path) -> Result<Vec<RecordedMessage>> {
