@@ -71,11 +71,6 @@ fn num(v: &Fields, key: &str) -> f64 {
     v.number(key).unwrap_or(0.0)
 }
 
-/// A struct field of `v`, or a struct of nothing but zeros where it has none.
-fn sub<'a>(v: &Fields<'a>, key: &str) -> Option<Fields<'a>> {
-    v.get(key)
-}
-
 fn num_in(v: Option<Fields>, key: &str) -> f64 {
     v.map_or(0.0, |v| num(&v, key))
 }
@@ -100,8 +95,8 @@ fn pose_2d(v: Option<Fields>) -> Pose {
 
 /// A `Pose3D`.
 fn pose_3d(v: Option<Fields>) -> Pose {
-    let p = v.and_then(|v| sub(&v, "position"));
-    let q = v.and_then(|v| sub(&v, "orientation"));
+    let p = v.and_then(|v| v.get("position"));
+    let q = v.and_then(|v| v.get("orientation"));
     Pose {
         position: Some(Vector3 {
             x: num_in(p, "x"),
@@ -155,8 +150,8 @@ pub fn views(topic: &str, descriptor: &Descriptor, bytes: &[u8], stamp_ns: u64) 
             }
             out
         }
-        "caravan::Odometry" => vec![view(own, &in_map(pose_3d(sub(json, "pose"))))],
-        "caravan::Goal" => vec![view(own, &in_map(pose_2d(sub(json, "pose"))))],
+        "caravan::Odometry" => vec![view(own, &in_map(pose_3d(json.get("pose"))))],
+        "caravan::Goal" => vec![view(own, &in_map(pose_2d(json.get("pose"))))],
         "caravan::Path2D" => {
             let path = PosesInFrame {
                 timestamp: Some(stamp),
@@ -201,7 +196,7 @@ pub fn views(topic: &str, descriptor: &Descriptor, bytes: &[u8], stamp_ns: u64) 
             let grid = Grid {
                 timestamp: Some(stamp),
                 frame_id: MAP_FRAME.into(),
-                pose: Some(pose_2d(sub(json, "origin"))),
+                pose: Some(pose_2d(json.get("origin"))),
                 column_count: width,
                 cell_size: Some(Vector2 {
                     x: resolution,
@@ -227,7 +222,7 @@ pub fn views(topic: &str, descriptor: &Descriptor, bytes: &[u8], stamp_ns: u64) 
                 .into_iter()
                 .map(|l| {
                     let name = l.text("name").unwrap_or("");
-                    transform(stamp, robot_frame(i, name), pose_3d(sub(&l, "pose")))
+                    transform(stamp, robot_frame(i, name), pose_3d(l.get("pose")))
                 })
                 .collect();
             vec![view(TF_TOPIC.into(), &FrameTransforms { transforms })]
@@ -272,8 +267,8 @@ fn scene_update(json: &Fields, stamp: Timestamp) -> SceneUpdate {
             b: c.get(2).copied().unwrap_or(1.0),
             a: c.get(3).copied().unwrap_or(1.0),
         });
-        let pose = Some(pose_3d(sub(&s, "pose")));
-        let size = sub(&s, "size");
+        let pose = Some(pose_3d(s.get("pose")));
+        let size = s.get("size");
         let size = Some(Vector3 {
             x: num_in(size, "x"),
             y: num_in(size, "y"),
