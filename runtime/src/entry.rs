@@ -26,7 +26,12 @@ pub const EXIT_FAILURE: u8 = 1;
 /// params `P` as a JSON Schema ([`crate::describe_params`]: keys, types, defaults, doc comments)
 /// and exits 0 without reading its environment.
 ///
-/// Errors are printed as `program: message`. The exit code is [`EXIT_BAD_INPUT`] (2) for bad
+/// Started as a container's process ([`crate::env_vars::CONTAINER`], launch key `container`),
+/// it does steps 1 and 2 for every member before any joins, then runs each member's `run` on
+/// a stack of its own in this one thread ([`crate::container`]); `setup` and `run` are
+/// therefore `Fn`, called once per member.
+///
+/// Errors are printed as `program: message` (`program (node): message` in a container). The exit code is [`EXIT_BAD_INPUT`] (2) for bad
 /// params or input (`setup` failing, or `run` returning [`Error::Params`], [`Error::Env`] or
 /// [`Error::Input`]) and [`EXIT_FAILURE`] (1) for a failure at run time.
 ///
@@ -52,8 +57,8 @@ pub const EXIT_FAILURE: u8 = 1;
 /// ```
 pub fn node_main<P: DeserializeOwned + schemars::JsonSchema, S>(
     program: &str,
-    setup: impl FnOnce(P, &NodeIdentity) -> Result<S, String>,
-    run: impl FnOnce(Node, S) -> Result<(), Error>,
+    setup: impl Fn(P, &NodeIdentity) -> Result<S, String>,
+    run: impl Fn(Node, S) -> Result<(), Error>,
 ) -> ExitCode {
     if crate::describe_params_requested() {
         crate::print_params_description::<P>();
@@ -68,18 +73,50 @@ pub fn node_main<P: DeserializeOwned + schemars::JsonSchema, S>(
     if iceoryx2_bb_posix::signal::SignalHandler::termination_requested() {
         return ExitCode::SUCCESS;
     }
+    // The node's name (a container's member's) goes before an error's message.
+    let mut who = String::new();
     let result = (|| -> Result<(), (u8, Error)> {
-        let identity = NodeIdentity::from_env().map_err(classify)?;
-        let p: P = parse_params(&identity.name, &identity.params).map_err(classify)?;
-        let ready = setup(p, &identity).map_err(|message| {
-            let node = identity.name.clone();
-            (EXIT_BAD_INPUT, Error::Params { node, message })
-        })?;
+        let identities = match crate::container::members_from_env().map_err(classify)? {
+            Some(members) => members,
+            None => vec![NodeIdentity::from_env().map_err(classify)?],
+        };
+        let container =
+            identities.len() > 1 || std::env::var_os(crate::env_vars::CONTAINER).is_some();
+        // Every member's input is checked before any joins the group.
+        let mut ready = Vec::new();
+        for identity in identities {
+            if container {
+                who = format!(" ({})", identity.name);
+            }
+            let p: P = parse_params(&identity.name, &identity.params).map_err(classify)?;
+            let state = setup(p, &identity).map_err(|message| {
+                let node = identity.name.clone();
+                (EXIT_BAD_INPUT, Error::Params { node, message })
+            })?;
+            ready.push((identity, state));
+        }
         if crate::check_only() {
             return Ok(());
         }
-        let node = Node::new(identity).map_err(classify)?;
-        run(node, ready).map_err(classify)
+        if !container {
+            let (identity, state) = ready.pop().expect("one identity");
+            let node = Node::new(identity).map_err(classify)?;
+            return run(node, state).map_err(classify);
+        }
+        let run = &run;
+        let members = ready
+            .into_iter()
+            .map(|(identity, state)| {
+                let name = identity.name.clone();
+                let body: crate::container::Body<'_> =
+                    Box::new(move || run(Node::new(identity)?, state));
+                (name, body)
+            })
+            .collect();
+        crate::container::run(members).map_err(|(name, e)| {
+            who = format!(" ({name})");
+            classify(e)
+        })
     })();
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -90,11 +127,11 @@ pub fn node_main<P: DeserializeOwned + schemars::JsonSchema, S>(
             if code != EXIT_BAD_INPUT
                 && iceoryx2_bb_posix::signal::SignalHandler::termination_requested() =>
         {
-            eprintln!("{program}: stopped ({e})");
+            eprintln!("{program}{who}: stopped ({e})");
             ExitCode::SUCCESS
         }
         Err((code, e)) => {
-            eprintln!("{program}: {e}");
+            eprintln!("{program}{who}: {e}");
             ExitCode::from(code)
         }
     }

@@ -34,6 +34,9 @@ pub mod env_vars {
     /// Set (to `1`) when the launcher only wants the node to check its params and inputs:
     /// the node exits 0 or 2 without joining the group (see [`crate::node_main`]).
     pub const CHECK: &str = "CARAVAN_CHECK";
+    /// Set for a container (launch key `container`): the process runs these nodes, a JSON
+    /// list of [`crate::container::Member`]; `CARAVAN_NODE` then names the container.
+    pub const CONTAINER: &str = "CARAVAN_CONTAINER";
 }
 
 /// True when the launcher started this process only to check its params and inputs

@@ -23,6 +23,7 @@
 //! in ~5 µs instead of a ~30 µs wake-up, for some CPU when nothing comes.
 
 mod clock;
+pub mod container;
 pub mod discovery;
 mod entry;
 mod error;

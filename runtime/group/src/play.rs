@@ -281,6 +281,7 @@ impl InGroup {
             ends_group: false,
             env: BTreeMap::new(),
             check: Some(false),
+            container: None,
             launch_dir: std::env::current_dir().context("cannot read the current directory")?,
         })
     }

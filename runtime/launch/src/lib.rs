@@ -3,6 +3,7 @@
 
 pub mod args;
 mod check;
+mod container;
 mod convert;
 mod include;
 pub mod load;

@@ -232,6 +232,9 @@ pub struct ProcessSpec {
     /// starts, to check its params and inputs; `None` does so for Caravan's own programs
     /// (workspace binaries and `caravan-python` agents), which all understand it.
     pub check: Option<bool>,
+    /// The container this node runs in (in lockstep): nodes of one program with the same
+    /// `container` run in one process, stepped by one thread (`caravan::container`).
+    pub container: Option<String>,
     /// The directory of the launch file that defined the process, absolute: relative `exec`
     /// paths start there, and the process gets it as `CARAVAN_LAUNCH_DIR`.
     pub launch_dir: PathBuf,

@@ -65,6 +65,7 @@ const PROCESS_KEYS: &[&str] = &[
     "ends_group",
     "env",
     "check",
+    "container",
 ];
 const REPORT_KEYS: &[&str] = &["exec", "params", "timeout"];
 
@@ -294,6 +295,7 @@ impl Checker<'_> {
             self.scope_problem(root, "no [[process]] entries; a group needs at least one");
         }
         let mut first_use: HashMap<String, Vec<Seg>> = HashMap::new();
+        let mut containers = super::container::Containers::default();
         let mut processes = Vec::new();
         for (i, table) in entries {
             let mut label = match table.get("name").and_then(Item::as_str) {
@@ -334,8 +336,13 @@ impl Checker<'_> {
                     ),
                 );
             }
+            if named && containers.has(&name) {
+                let what = format!("'{name}' is already the name of a container");
+                self.key_problem(&s, "name", what);
+            }
             let mut process = self.process(&s, name, hosts, &source.dir);
             process.launch_dir = source.abs_dir.clone();
+            self.container(&s, &process, |n| first_use.contains_key(n), &mut containers);
             processes.push(process);
         }
         processes
@@ -415,6 +422,7 @@ impl Checker<'_> {
             ends_group: self.get(s, "ends_group", boolean).unwrap_or(false),
             env: self.get(s, "env", env).unwrap_or_default(),
             check: self.get(s, "check", boolean),
+            container: self.get(s, "container", string),
             launch_dir: dir.to_path_buf(),
         }
     }

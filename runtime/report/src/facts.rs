@@ -37,6 +37,10 @@ pub struct ProcessRecord {
     /// Largest peak resident set of its runs, MiB.
     #[serde(default)]
     pub max_rss_mib: f64,
+    /// The container whose process ran this node (launch key `container`): its exit, CPU
+    /// time and memory are the container's, shared by its members.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub container: Option<String>,
 }
 
 /// A virtual host of the group.

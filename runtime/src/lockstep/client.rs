@@ -9,6 +9,7 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
+use iceoryx2_bb_posix::file_descriptor::FileDescriptorBased;
 use std::rc::Rc;
 use std::time::Duration;
 
@@ -143,6 +144,12 @@ impl Client {
             }
             // Whether SIGTERM or SIGINT came, after waiting up to `timeout` for a grant.
             let terminated = |timeout| -> Result<bool, Error> {
+                // In a container the thread goes to the other members meanwhile.
+                // SAFETY: the descriptor is only polled, while the listener lives.
+                let fd = unsafe { self.grant_listener.file_descriptor().native_handle() };
+                if let Some(terminated) = crate::container::park(fd, timeout) {
+                    return Ok(terminated);
+                }
                 let result = waitset
                     .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, timeout)
                     .map_err(|e| Error::transport("lockstep grant wait", e))?;

@@ -73,7 +73,14 @@ pub fn render(r: &Value) -> String {
             num(&n["cpu_s"], 2),
             num(&n["max_rss_mib"], 1),
             n["restarts"],
-            n["exit_status"].as_str().unwrap_or("")
+            match n["container"].as_str() {
+                // CPU and memory too are the container's.
+                Some(c) => format!(
+                    "{} (container {c})",
+                    n["exit_status"].as_str().unwrap_or("")
+                ),
+                None => n["exit_status"].as_str().unwrap_or("").to_string(),
+            }
         );
     }
     md.push_str("\n## Topics\n\n| topic | type | messages | gaps | latency p50/p90/p99/max µs |\n|---|---|---:|---:|---|\n");

@@ -15,7 +15,8 @@
 //!   messages), steps, rate_hz, deadline_misses, jitter_p50_ms, jitter_p99_ms, jitter_max_ms,
 //!   compute_mean_ms, compute_p99_ms, compute_max_ms (wall-clock time in the step),
 //!   compute_cpu_mean_ms (the stepping thread's CPU time in the step), messages_missed, cpu_s
-//!   (CPU time of the process, all runs), max_rss_mib (peak resident memory)}`
+//!   (CPU time of the process, all runs), max_rss_mib (peak resident memory), container (only
+//!   for a node run in a container: its name; cpu_s and max_rss_mib are then the container's)}`
 //! - `topics[]`: `{name, type, messages, gaps, latency_us: {p50, p90, p99, max}}`; latency is
 //!   wall-clock time from send to the recorder's receipt.
 //! - `links[]` (when messages crossed emulated network links): `{from, to, delivered, dropped,
@@ -182,6 +183,7 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
                 "messages_missed": s["messages_missed"],
                 "cpu_s": p.cpu_s,
                 "max_rss_mib": p.max_rss_mib,
+                "container": p.container,
                 "trend": facts.trends.get(&p.name),
             })
         })

@@ -81,9 +81,13 @@ pub fn supervise(
                 usage,
                 last_error,
             }) => {
-                let name = sup.names()[index].clone();
-                control.deaths.lock().unwrap().push(name.clone());
-                let ends = lf.processes.iter().any(|p| p.name == name && p.ends_group);
+                let nodes = sup.nodes_of(index);
+                control.deaths.lock().unwrap().extend(nodes.iter().cloned());
+                let ending = lf
+                    .processes
+                    .iter()
+                    .find(|p| nodes.contains(&p.name) && p.ends_group);
+                let (ends, name) = (ending.is_some(), ending.map_or("", |p| &p.name));
                 match sup.on_exit(index, generation, status, usage, &last_error, stopping) {
                     Ok(Some(at)) => next_restart = Some(next_restart.map_or(at, |n| n.min(at))),
                     Ok(None) => {}

@@ -51,6 +51,7 @@ fn plan(lf: &LaunchFile) -> Vec<Planned> {
                 spec,
                 program,
                 args,
+                members: Vec::new(),
             }
         })
         .collect()
@@ -94,7 +95,7 @@ pub fn run_group(
         _ => false,
     };
     let mut sup = Supervisor::new(
-        plan(lf),
+        supervisor::containers(plan(lf), lockstep),
         environment(lf, dir, config_path)?,
         &dir.join("logs"),
         events_tx.clone(),

@@ -79,6 +79,45 @@ pub struct Planned {
     pub spec: ProcessSpec,
     pub program: PathBuf,
     pub args: Vec<String>,
+    /// A container's nodes (launch key `container`), whose process this is: `spec` is then
+    /// the first member's, named after the container. Empty for a process of one node.
+    pub members: Vec<ProcessSpec>,
+}
+
+/// Puts the nodes of each container into one process, where the first member was (see
+/// `caravan::container`). Containers step in lockstep only: in realtime each node keeps a
+/// process of its own, as without the key.
+pub fn containers(plans: Vec<Planned>, lockstep: bool) -> Vec<Planned> {
+    let mut out: Vec<Planned> = Vec::new();
+    let mut at: BTreeMap<String, usize> = BTreeMap::new();
+    for plan in plans {
+        let Some(name) = plan.spec.container.clone().filter(|_| lockstep) else {
+            out.push(plan);
+            continue;
+        };
+        match at.get(&name) {
+            Some(&i) => out[i].members.push(plan.spec),
+            None => {
+                at.insert(name.clone(), out.len());
+                let mut spec = plan.spec.clone();
+                spec.name = name;
+                spec.required = false;
+                out.push(Planned {
+                    spec,
+                    members: vec![plan.spec],
+                    ..plan
+                });
+            }
+        }
+    }
+    for plan in &mut out {
+        // One member failing for good fails the container, so the container is required if
+        // any member is.
+        if !plan.members.is_empty() {
+            plan.spec.required = plan.members.iter().any(|m| m.required);
+        }
+    }
+    out
 }
 
 impl Planned {
@@ -92,7 +131,6 @@ impl Planned {
             .envs(env)
             .env(caravan::env_vars::NODE, &spec.name)
             .env(caravan::env_vars::HOST, &spec.host)
-            .env(caravan::env_vars::PARAMS, spec.params.to_string())
             .envs(&spec.env)
             .stdin(Stdio::null())
             // Own process group: Ctrl-C reaches the launcher only, which stops the group in
@@ -102,6 +140,22 @@ impl Planned {
         // If the launcher is killed (even with SIGKILL) its processes get the signal instead
         // of living on as orphans holding the group's shared memory.
         die_with_parent(&mut cmd, parent_death);
+        if !self.members.is_empty() {
+            let members: Vec<caravan::container::Member> = self
+                .members
+                .iter()
+                .map(|m| caravan::container::Member {
+                    node: m.name.clone(),
+                    params: m.params.clone(),
+                    rate: m.rate.clone(),
+                    on: m.on.clone(),
+                })
+                .collect();
+            let text = serde_json::to_string(&members).expect("members serialise");
+            cmd.env(caravan::env_vars::CONTAINER, text);
+            return cmd;
+        }
+        cmd.env(caravan::env_vars::PARAMS, spec.params.to_string());
         if let Some(rate) = &spec.rate {
             cmd.env(caravan::env_vars::RATE, rate);
         }
@@ -196,11 +250,28 @@ impl Supervisor {
         })
     }
 
+    /// The group's nodes: each process's, or its container's members.
     pub fn names(&self) -> Vec<String> {
-        self.procs
-            .iter()
-            .map(|p| p.plan.spec.name.clone())
+        (0..self.procs.len())
+            .flat_map(|i| self.nodes_of(i))
             .collect()
+    }
+
+    /// The nodes process `index` runs: itself, or its container's members.
+    pub fn nodes_of(&self, index: usize) -> Vec<String> {
+        let plan = &self.procs[index].plan;
+        if plan.members.is_empty() {
+            return vec![plan.spec.name.clone()];
+        }
+        plan.members.iter().map(|m| m.name.clone()).collect()
+    }
+
+    /// The process that runs node `name`: its own, or its container's.
+    fn process_of(&self, name: &str) -> Option<&Proc> {
+        self.procs.iter().find(|p| {
+            p.plan.spec.name == name && p.plan.members.is_empty()
+                || p.plan.members.iter().any(|m| m.name == name)
+        })
     }
 
     pub fn start_all(&mut self) -> std::io::Result<()> {
@@ -333,21 +404,15 @@ impl Supervisor {
             .all(|p| p.pid.is_none() && p.restart_at.is_none())
     }
 
-    /// Whether the process named `name` runs now.
+    /// Whether node `name`'s process runs now.
     pub fn is_running(&self, name: &str) -> bool {
-        self.procs
-            .iter()
-            .any(|p| p.plan.spec.name == name && p.pid.is_some())
+        self.process_of(name).is_some_and(|p| p.pid.is_some())
     }
 
-    /// Sends SIGKILL to the process named `name`, if it runs.
+    /// Sends SIGKILL to node `name`'s process (its container's: the members live and die
+    /// together), if it runs.
     pub fn kill(&mut self, name: &str) {
-        if let Some(pid) = self
-            .procs
-            .iter()
-            .find(|p| p.plan.spec.name == name)
-            .and_then(|p| p.pid)
-        {
+        if let Some(pid) = self.process_of(name).and_then(|p| p.pid) {
             signal_group(pid, libc::SIGKILL);
         }
     }
@@ -369,13 +434,14 @@ impl Supervisor {
         }
     }
 
+    /// One record per node; a container's members share its process's exit, CPU and memory.
     pub fn records(&self) -> Vec<ProcessRecord> {
-        self.procs
-            .iter()
-            .map(|p| ProcessRecord {
-                name: p.plan.spec.name.clone(),
-                host: p.plan.spec.host.clone(),
-                required: p.plan.spec.required,
+        let mut records = Vec::new();
+        for p in &self.procs {
+            let record = |spec: &ProcessSpec, container: Option<String>| ProcessRecord {
+                name: spec.name.clone(),
+                host: spec.host.clone(),
+                required: spec.required,
                 restarts: p.restarts,
                 exit_status: match (&p.last_status, p.pid) {
                     (_, Some(_)) => "running".into(),
@@ -385,7 +451,15 @@ impl Supervisor {
                 success: p.last_status.is_some_and(|s| s.success()),
                 cpu_s: p.usage.cpu_s,
                 max_rss_mib: p.usage.max_rss_mib,
-            })
-            .collect()
+                container,
+            };
+            if p.plan.members.is_empty() {
+                records.push(record(&p.plan.spec, None));
+            }
+            for m in &p.plan.members {
+                records.push(record(m, Some(p.plan.spec.name.clone())));
+            }
+        }
+        records
     }
 }
