@@ -46,3 +46,6 @@ fn custom_rust_follower_completes_the_convoy() {
         "{r2}"
     );
 }
+
+#[path = "convoy/containers.rs"]
+mod containers;

@@ -16,7 +16,7 @@ use toml_edit::Item;
 pub const TOP_KEYS: &[&str] = &[
     "args", "include", "group", "hosts", "links", "process", "report",
 ];
-const GROUP_KEYS: &[&str] = &[
+pub(crate) const GROUP_KEYS: &[&str] = &[
     "name",
     "clock",
     "duration",
@@ -30,7 +30,7 @@ const GROUP_KEYS: &[&str] = &[
     "host_lease",
     "spin",
 ];
-const HOST_KEYS: &[&str] = &[
+pub(crate) const HOST_KEYS: &[&str] = &[
     "cpu_slowdown",
     "listen",
     "connect",
@@ -38,8 +38,8 @@ const HOST_KEYS: &[&str] = &[
     "clock",
     "tls",
 ];
-const TLS_KEYS: &[&str] = &["ca", "certificate", "key"];
-const LINK_KEYS: &[&str] = &[
+pub(crate) const TLS_KEYS: &[&str] = &["ca", "certificate", "key"];
+pub(crate) const LINK_KEYS: &[&str] = &[
     "between",
     "latency",
     "jitter",
@@ -49,7 +49,7 @@ const LINK_KEYS: &[&str] = &[
     "spike",
     "bandwidth",
 ];
-const PROCESS_KEYS: &[&str] = &[
+pub(crate) const PROCESS_KEYS: &[&str] = &[
     "name",
     "exec",
     "args",
@@ -67,7 +67,7 @@ const PROCESS_KEYS: &[&str] = &[
     "check",
     "container",
 ];
-const REPORT_KEYS: &[&str] = &["exec", "params", "timeout"];
+pub(crate) const REPORT_KEYS: &[&str] = &["exec", "params", "timeout"];
 
 impl Checker<'_> {
     pub fn group(&mut self, root: &Scope) -> GroupSpec {

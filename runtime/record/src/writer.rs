@@ -19,10 +19,16 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Duration;
 
 /// Batches the writer may fall behind by before the recorder waits for it. A lockstep advance
 /// is one batch; the bound keeps memory in check when writing is slower than the group.
 const QUEUED_BATCHES: usize = 64;
+
+/// How long the writer lets commands gather after it wrote some, before it looks again. The
+/// recorder then never wakes it for a batch (a wake-up costs more than writing a lockstep
+/// advance), only when the queue is half full; an idle writer sleeps until the next command.
+const GATHER: Duration = Duration::from_millis(10);
 
 /// Per-topic statistics seen by the recorder.
 pub struct TopicStats {
@@ -383,8 +389,12 @@ impl WriterThread {
         let thread = std::thread::Builder::new()
             .name("recording writer".into())
             .spawn(move || {
-                for command in queue {
+                while let Ok(command) = queue.recv() {
                     writer.handle(command)?;
+                    for command in queue.try_iter() {
+                        writer.handle(command)?;
+                    }
+                    std::thread::park_timeout(GATHER);
                 }
                 writer.finish()
             })
@@ -403,6 +413,12 @@ impl WriterThread {
             None => false,
         };
         if sent {
+            // Wake a gathering writer before the queue is full (see GATHER).
+            if let (Some(commands), Some(thread)) = (&self.commands, &self.thread)
+                && commands.len() >= QUEUED_BATCHES / 2
+            {
+                thread.thread().unpark();
+            }
             return Ok(());
         }
         Err(self

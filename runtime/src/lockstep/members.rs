@@ -2,6 +2,7 @@
 
 use super::Pub;
 use super::overlap::Footprint;
+use crate::Error;
 use caravan_schemas::lockstep::Grant;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
@@ -45,6 +46,20 @@ impl Member {
             Some(token) if self.quiet => grant.quiet(token),
             _ => grant,
         }
+    }
+
+    /// Publishes its grant, without waking it ([`Self::wake`]).
+    pub(super) fn send(&mut self, grant: Grant) -> Result<(), Error> {
+        self.granted_at = Instant::now();
+        super::send(&self.grant, grant, &self.name)
+    }
+
+    /// Wakes it for the grant it was sent.
+    pub(super) fn wake(&self) -> Result<(), Error> {
+        self.grant_notifier
+            .notify()
+            .map_err(|e| Error::transport(&self.name, e))?;
+        Ok(())
     }
 }
 

@@ -4,7 +4,7 @@ use super::advance::{Advance, ScheduleStats, Watchdog};
 use super::members::{Flight, Member};
 use super::overlap::{self, Footprint};
 use super::pending::Pending;
-use super::{Sub, publisher, send, spin_on, subscriber};
+use super::{Sub, publisher, spin_on, subscriber};
 use crate::Error;
 use crate::transport;
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
@@ -409,10 +409,16 @@ impl Scheduler {
         let idle = self.flights.iter().all(|f| f.waiting.is_empty());
         let quiet = nodes.iter().filter(|&&i| self.members[i].quiet).count();
         let token = self.pending.as_ref().map(|p| p.granting(quiet, idle));
-        for i in nodes {
-            self.grant(i, self.members[i].step_grant(now_ns, self.tick_ns, token))?;
+        // Every grant is out before the first wake-up: a container woken by its first member's
+        // then finds the others' grants too, and steps them all before it sleeps again.
+        for &i in &nodes {
+            let grant = self.members[i].step_grant(now_ns, self.tick_ns, token);
+            self.members[i].send(grant)?;
             self.flights[f].waiting.insert(i);
             self.stats.steps += 1;
+        }
+        for &i in &nodes {
+            self.members[i].wake()?;
         }
         Ok(())
     }
@@ -562,14 +568,8 @@ impl Scheduler {
     }
 
     fn grant(&mut self, i: usize, grant: Grant) -> Result<(), Error> {
-        let member = &mut self.members[i];
-        member.granted_at = Instant::now();
-        send(&member.grant, grant, &member.name)?;
-        member
-            .grant_notifier
-            .notify()
-            .map_err(|e| Error::transport(&member.name, e))?;
-        Ok(())
+        self.members[i].send(grant)?;
+        self.members[i].wake()
     }
 
     /// Tells every node the run is over.

@@ -2,6 +2,7 @@
 //! report entries.
 
 mod args;
+mod docs;
 mod fuzz;
 mod include;
 mod links;
@@ -402,7 +403,7 @@ fn launch_bad_override() {
     assert_eq!(
         lines,
         [
-            "--set process.physics.colour=red: process 'physics', key 'colour': unknown key; expected one of: name, exec, args, host, rate, on, spin, params, restart, restart_backoff, max_restarts, required, ends_group, env, check"
+            "--set process.physics.colour=red: process 'physics', key 'colour': unknown key; expected one of: name, exec, args, host, rate, on, spin, params, restart, restart_backoff, max_restarts, required, ends_group, env, check, container"
         ]
     );
 }
