@@ -105,6 +105,14 @@ impl Trend {
     }
 }
 
+/// What the recording holds of one topic.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TopicCount {
+    pub messages: u64,
+    /// Messages missing from the file: gaps in each source's header `seq`.
+    pub gaps: u64,
+}
+
 /// The launcher's record of a run: who ran, how it ended, what the recorder measured.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RunFacts {
@@ -123,6 +131,11 @@ pub struct RunFacts {
     pub node_status: BTreeMap<String, Value>,
     pub topic_latency: BTreeMap<String, Latency>,
     pub topic_types: BTreeMap<String, String>,
+    /// Messages and gaps of every recorded topic (the Foxglove views left out), as the
+    /// recording's writer counted them; `None`
+    /// for runs from before it counted (the report then reads the recording back).
+    #[serde(default)]
+    pub topic_counts: Option<BTreeMap<String, TopicCount>>,
     /// The group's virtual hosts (none declared: empty).
     #[serde(default)]
     pub hosts: BTreeMap<String, HostFacts>,

@@ -36,7 +36,7 @@ mod markdown;
 mod plugins;
 
 use anyhow::Result;
-use caravan_report::{RecordedMessage, RunFacts};
+use caravan_report::{RecordedMessage, RunFacts, TopicCount};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -51,8 +51,15 @@ pub struct Written {
 /// and `report.md` there.
 pub fn write(run_dir: &Path) -> Result<Written> {
     let facts = RunFacts::load(run_dir)?;
-    let messages = caravan_report::read_all(&run_dir.join(caravan_report::RECORDING_FILE))?;
-    let mut report = generic(&facts, &messages, run_dir);
+    // The writer counted every topic's messages and gaps as it wrote them; only a run from
+    // before it did is read back.
+    let counts = match &facts.topic_counts {
+        Some(counts) => counts.clone(),
+        None => count(&caravan_report::read_all(
+            &run_dir.join(caravan_report::RECORDING_FILE),
+        )?),
+    };
+    let mut report = generic(&facts, &counts, run_dir);
     let mut markdown = markdown::render(&report);
     for chart in charts::write(run_dir, &report) {
         markdown.push_str(&format!("\n![{chart}]({chart})\n"));
@@ -118,7 +125,7 @@ fn object_text(entries: &BTreeMap<String, String>) -> String {
 }
 
 /// The part of the report every run has.
-fn generic(facts: &RunFacts, messages: &[RecordedMessage], run_dir: &Path) -> Value {
+fn generic(facts: &RunFacts, counts: &BTreeMap<String, TopicCount>, run_dir: &Path) -> Value {
     let mut report = json!({
         "version": 1,
         "group": {"name": facts.group, "clock": facts.clock, "seed": facts.seed, "launch_file": facts.launch_file},
@@ -133,7 +140,7 @@ fn generic(facts: &RunFacts, messages: &[RecordedMessage], run_dir: &Path) -> Va
             "clock_host": facts.clock_host,
         },
         "nodes": nodes(facts),
-        "topics": topics(facts, messages),
+        "topics": topics(facts, counts),
     });
     if let Some(section) = links::section(run_dir) {
         report["links"] = section;
@@ -190,26 +197,34 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
         .collect()
 }
 
-fn topics(facts: &RunFacts, messages: &[RecordedMessage]) -> Vec<Value> {
-    // (count, gaps, last seq per source)
-    let mut per_topic: BTreeMap<&str, (u64, u64, BTreeMap<u64, u64>)> = BTreeMap::new();
+/// Each topic's messages and gaps (in each source's `seq`), from the recording's messages.
+fn count(messages: &[RecordedMessage]) -> BTreeMap<String, TopicCount> {
+    let mut counts: BTreeMap<String, TopicCount> = BTreeMap::new();
+    let mut last_seq: BTreeMap<(&str, u64), u64> = BTreeMap::new();
     for m in messages {
-        let entry = per_topic.entry(&m.topic).or_default();
-        entry.0 += 1;
+        let entry = counts.entry(m.topic.clone()).or_insert(TopicCount {
+            messages: 0,
+            gaps: 0,
+        });
+        entry.messages += 1;
         if let (Some(src), Some(seq)) = (m.header_u64("source_id"), m.header_u64("seq"))
-            && let Some(last) = entry.2.insert(src, seq)
+            && let Some(last) = last_seq.insert((&m.topic, src), seq)
         {
-            entry.1 += seq.saturating_sub(last + 1);
+            entry.gaps += seq.saturating_sub(last + 1);
         }
     }
-    per_topic
-        .into_iter()
-        .map(|(name, (count, gaps, _))| {
+    counts
+}
+
+fn topics(facts: &RunFacts, counts: &BTreeMap<String, TopicCount>) -> Vec<Value> {
+    counts
+        .iter()
+        .map(|(name, c)| {
             json!({
                 "name": name,
                 "type": facts.topic_types.get(name),
-                "messages": count,
-                "gaps": gaps,
+                "messages": c.messages,
+                "gaps": c.gaps,
                 "latency_us": facts.topic_latency.get(name),
             })
         })

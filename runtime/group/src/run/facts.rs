@@ -4,7 +4,7 @@
 use super::driver::DriverOutcome;
 use super::events::Ending;
 use caravan_launch::model::LaunchFile;
-use caravan_report::{HostFacts, Latency, ProcessRecord, RunFacts};
+use caravan_report::{HostFacts, Latency, ProcessRecord, RunFacts, TopicCount};
 
 /// The facts of a run that ended as `ending` after `wall_time_s`.
 pub fn collect(
@@ -21,6 +21,17 @@ pub fn collect(
     } else {
         wall_time_s
     };
+    let topic_counts = recording
+        .topics
+        .iter()
+        .map(|(name, s)| {
+            let count = TopicCount {
+                messages: s.messages,
+                gaps: s.gaps,
+            };
+            (name.clone(), count)
+        })
+        .collect();
     let topic_latency = recording
         .topics
         .iter()
@@ -57,6 +68,7 @@ pub fn collect(
         node_status: recording.node_status,
         topic_latency,
         topic_types,
+        topic_counts: Some(topic_counts),
         hosts: lf
             .hosts
             .iter()
