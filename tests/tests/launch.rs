@@ -573,3 +573,6 @@ fn error_in_an_included_file_names_that_file_and_line() {
         ],
     );
 }
+
+#[path = "launch/counts.rs"]
+mod counts;
