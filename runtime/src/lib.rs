@@ -34,7 +34,6 @@ pub mod inject;
 pub mod input;
 pub mod lockstep;
 pub mod log;
-pub mod network;
 mod node;
 mod params;
 pub mod pattern;
@@ -50,6 +49,7 @@ mod transport;
 pub mod types;
 pub mod untyped;
 
+pub use caravan_network as network;
 pub use caravan_schemas as schemas;
 pub use caravan_schemas::Header;
 pub use caravan_schemas::{Delivery, Topic};

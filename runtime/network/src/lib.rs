@@ -326,7 +326,7 @@ mod tests {
 
 /// One node's view of the network: the links into its host, by publisher.
 #[derive(Debug)]
-pub(crate) struct NodeNet {
+pub struct NodeNet {
     pub seed: u64,
     pub node_hash: u64,
     /// Links into this node's host.
