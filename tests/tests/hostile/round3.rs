@@ -3,7 +3,7 @@
 //! bad input.
 
 use caravan_tests::{
-    Scenario, caravan, launch_with_set, realtime_ping_pong, workspace_bin, workspace_root,
+    PINGPONG, Scenario, caravan, launch_with_set, realtime_ping_pong, workspace_bin, workspace_root,
 };
 use std::process::{Child, Command, Output};
 
@@ -158,4 +158,44 @@ fn docs_params_of_a_marker_without_its_end_exits_2() {
         &out,
         "docs/page.md: a '<!-- params:' marker without '-->'",
     );
+}
+
+/// Where the first chunk record of the MCAP file `bytes` starts and ends.
+fn first_chunk(bytes: &[u8]) -> std::ops::Range<usize> {
+    let mut at = 8;
+    loop {
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        if bytes[at] == 0x06 {
+            return at..at + 9 + len;
+        }
+        at += 9 + len;
+    }
+}
+
+/// `caravan info` read the summary only and printed the normal table for a recording with
+/// 64 bytes of 0xFF in a chunk (play and resim refused it). It reads every chunk now, checks
+/// its CRC, and names the file and the chunk.
+#[test]
+fn info_of_a_recording_with_64_bytes_of_0xff_in_a_chunk_names_the_damaged_chunk() {
+    let s = Scenario::new("info-crc", PINGPONG);
+    let out = s.run(&["--duration", "2s"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let mcap = s.run_dirs().pop().unwrap().join("record.mcap");
+    let mut bytes = std::fs::read(&mcap).unwrap();
+    let chunk = first_chunk(&bytes);
+    assert!(chunk.len() > 400, "{chunk:?}");
+    bytes[chunk.start + 200..chunk.start + 264].fill(0xFF);
+    std::fs::write(&mcap, &bytes).unwrap();
+    let file = mcap.to_str().unwrap();
+    let named = format!(
+        "{file}: chunk 1 of 1 (bytes {} to {}, log times 0.000 to ",
+        chunk.start,
+        chunk.end - 1
+    );
+    for args in [vec!["info", file], vec!["info", "--json", file]] {
+        let out = caravan(&args);
+        assert_bad_input(&args, &out, &named);
+        assert!(stderr(&out).contains(") is damaged: "), "{}", stderr(&out));
+        assert!(out.stdout.is_empty(), "{args:?} printed a table");
+    }
 }
