@@ -130,13 +130,7 @@ fn check_entries(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<EntryProblem>
     let mut problems = run::preflight::check_processes_with(lf, memo);
     for (index, entry) in report_entries(lf).iter().enumerate() {
         let checked = match memo {
-            Some(memo) => {
-                let key = format!(
-                    "{:?}\0{}\0{}\0{}",
-                    entry.exec, entry.params, entry.launch_dir, entry.timeout_s
-                );
-                memo.report(key, || report::check(entry))
-            }
+            Some(memo) => memo.report(entry),
             None => report::check(entry),
         };
         if let Err(why) = checked {

@@ -23,23 +23,44 @@ pub const CHECK_TIMEOUT: Duration = Duration::from_secs(600);
 /// it validates. Checks that timed out or could not start are not kept.
 #[derive(Default)]
 pub struct CheckMemo {
-    processes: Mutex<HashMap<String, Output>>,
-    reports: Mutex<HashMap<String, Result<(), String>>>,
+    processes: Known<Output>,
+    reports: Known<Result<(), String>>,
 }
 
 impl CheckMemo {
-    /// A report plugin's check of `key`, run by `check` unless it was run before.
-    pub fn report(
-        &self,
-        key: String,
-        check: impl FnOnce() -> Result<(), String>,
-    ) -> Result<(), String> {
-        if let Some(known) = self.reports.lock().unwrap().get(&key) {
-            return known.clone();
+    /// A report plugin's check of `entry` (`PROGRAM --check`), unless it was run on the same
+    /// command line, params, directory and time limit before.
+    pub fn report(&self, entry: &caravan_report::ReportEntry) -> Result<(), String> {
+        let key = format!(
+            "{:?}\0{}\0{}\0{}",
+            entry.exec, entry.params, entry.launch_dir, entry.timeout_s
+        );
+        if let Some(known) = self.reports.get(&key) {
+            return known;
         }
-        let result = check();
-        self.reports.lock().unwrap().insert(key, result.clone());
+        let result = crate::report::check(entry);
+        self.reports.keep(key, &result);
         result
+    }
+}
+
+/// The outcomes of checks already run, by their key: one map for the processes' checks
+/// (which run at once and are kept as each ends) and the report plugins' (run one by one).
+struct Known<V>(Mutex<HashMap<String, V>>);
+
+impl<V> Default for Known<V> {
+    fn default() -> Self {
+        Self(Mutex::default())
+    }
+}
+
+impl<V: Clone> Known<V> {
+    fn get(&self, key: &str) -> Option<V> {
+        self.0.lock().unwrap().get(key).cloned()
+    }
+
+    fn keep(&self, key: String, outcome: &V) {
+        self.0.lock().unwrap().insert(key, outcome.clone());
     }
 }
 
@@ -83,9 +104,7 @@ pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<En
         // it is killed outright if the launcher dies.
         let mut cmd = plan.command(&env, libc::SIGKILL);
         let key = memo.map(|_| memo_key(&cmd));
-        let known = memo
-            .zip(key.as_ref())
-            .and_then(|(m, k)| m.processes.lock().unwrap().get(k).cloned());
+        let known = memo.zip(key.as_ref()).and_then(|(m, k)| m.processes.get(k));
         if let Some(output) = known {
             let params = &plan.spec.params;
             problems.extend(judge(index, &name, &plan.program, params, Ok(output)));
@@ -128,7 +147,7 @@ pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<En
         let output = match received {
             Ok(output) => {
                 if let (Some(memo), Some(key), Ok(output)) = (memo, key, &output) {
-                    memo.processes.lock().unwrap().insert(key, output.clone());
+                    memo.processes.keep(key, output);
                 }
                 output
             }
