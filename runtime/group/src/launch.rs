@@ -320,7 +320,7 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
         eprintln!("caravan: warning: {w}");
     }
     facts.save(&dir)?;
-    let written = report::write(&dir)?;
+    let written = report::write(&dir, options.quiet)?;
     for failure in &written.failures {
         console.say(failure);
     }
