@@ -199,3 +199,22 @@ fn info_of_a_recording_with_64_bytes_of_0xff_in_a_chunk_names_the_damaged_chunk(
         assert!(out.stdout.is_empty(), "{args:?} printed a table");
     }
 }
+
+/// `caravan schemas -o` into a folder that does not exist exited 1, as a failure while
+/// writing; it is bad input (exit 2) naming the folder, found before anything is generated.
+#[test]
+fn schemas_into_a_missing_folder_exits_2_naming_the_folder() {
+    let dir = std::env::temp_dir().join(format!("caravan-schemas-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let file = dir.join("missing/caravan_schemas.py");
+    let f = file.to_str().unwrap();
+    let args = ["schemas", "--python", "-o", f];
+    let out = caravan(&args);
+    let folder = format!("the folder {} does not exist", dir.join("missing").display());
+    assert_bad_input(&args, &out, &folder);
+    assert!(!dir.exists());
+    // A folder given as the file: the same.
+    let tmp = std::env::temp_dir();
+    let args = ["schemas", "--layout", "-o", tmp.to_str().unwrap()];
+    assert_bad_input(&args, &caravan(&args), "is a folder; name the file to write");
+}
