@@ -66,6 +66,29 @@ fn an_argument_of_the_wrong_type_set_on_the_command_line_names_the_key_and_the_s
     }
 }
 
+/// Found by `fuzz_scenario_params_never_panic`: serde names no key inside the IMU driver's
+/// tagged scenario, and the launcher found the key by the value quoted (a string, a number),
+/// so an array, a table or a boolean named only the file's line. Each names the key and its
+/// `--set` now.
+#[test]
+fn a_param_of_the_wrong_kind_set_on_the_command_line_names_the_key_and_the_set() {
+    for (set, expected) in [
+        ("process.driver.params.angle_deg=[1, 2]", "invalid type: sequence"),
+        ("process.driver.params.angle_deg={ a = 1 }", "invalid type: map"),
+        ("process.driver.params.angle_deg=true", "invalid type: boolean `true`"),
+        ("args.angle_deg=[1, 2]", "set by --set args.angle_deg=[1, 2]"),
+    ] {
+        let (code, err) = launch_with_set("imu/tilt.toml", "1s", set);
+        assert_eq!(code, 2, "{set}: {err}");
+        for part in ["process 'driver', key 'angle_deg'", expected] {
+            assert!(err.contains(part), "{set}: expected '{part}' in {err}");
+        }
+        if set.starts_with("process.") {
+            assert!(err.contains(&format!("--set {set}:")), "{set}: {err}");
+        }
+    }
+}
+
 #[test]
 fn a_host_lease_out_of_its_range_is_refused_naming_the_set() {
     for (value, expected) in [
@@ -210,11 +233,18 @@ fn schemas_into_a_missing_folder_exits_2_naming_the_folder() {
     let f = file.to_str().unwrap();
     let args = ["schemas", "--python", "-o", f];
     let out = caravan(&args);
-    let folder = format!("the folder {} does not exist", dir.join("missing").display());
+    let folder = format!(
+        "the folder {} does not exist",
+        dir.join("missing").display()
+    );
     assert_bad_input(&args, &out, &folder);
     assert!(!dir.exists());
     // A folder given as the file: the same.
     let tmp = std::env::temp_dir();
     let args = ["schemas", "--layout", "-o", tmp.to_str().unwrap()];
-    assert_bad_input(&args, &caravan(&args), "is a folder; name the file to write");
+    assert_bad_input(
+        &args,
+        &caravan(&args),
+        "is a folder; name the file to write",
+    );
 }
