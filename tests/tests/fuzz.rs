@@ -6,6 +6,8 @@
 
 #[path = "fuzz/inputs.rs"]
 mod inputs;
+#[path = "fuzz/params.rs"]
+mod params;
 
 use caravan_report::fuzz::mutate;
 use caravan_tests::workspace_root;
