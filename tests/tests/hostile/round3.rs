@@ -73,10 +73,22 @@ fn an_argument_of_the_wrong_type_set_on_the_command_line_names_the_key_and_the_s
 #[test]
 fn a_param_of_the_wrong_kind_set_on_the_command_line_names_the_key_and_the_set() {
     for (set, expected) in [
-        ("process.driver.params.angle_deg=[1, 2]", "invalid type: sequence"),
-        ("process.driver.params.angle_deg={ a = 1 }", "invalid type: map"),
-        ("process.driver.params.angle_deg=true", "invalid type: boolean `true`"),
-        ("args.angle_deg=[1, 2]", "set by --set args.angle_deg=[1, 2]"),
+        (
+            "process.driver.params.angle_deg=[1, 2]",
+            "invalid type: sequence",
+        ),
+        (
+            "process.driver.params.angle_deg={ a = 1 }",
+            "invalid type: map",
+        ),
+        (
+            "process.driver.params.angle_deg=true",
+            "invalid type: boolean `true`",
+        ),
+        (
+            "args.angle_deg=[1, 2]",
+            "set by --set args.angle_deg=[1, 2]",
+        ),
     ] {
         let (code, err) = launch_with_set("imu/tilt.toml", "1s", set);
         assert_eq!(code, 2, "{set}: {err}");
