@@ -244,6 +244,14 @@ fn a_follower_for_robot_9_on_a_five_robot_world_is_refused() {
         );
         assert!(err.contains("robot 9 is not among them"), "{file}: {err}");
     }
+    // A custom follower swapped in (the pure-pursuit example) checks it too.
+    let err = refused_naming(
+        "convoy/convoy-custom.toml",
+        "process.follower-2.params.robot=9",
+        "follower-2",
+        "robot",
+    );
+    assert!(err.contains("robot 9 is not among them"), "{err}");
 }
 
 /// Runs `caravan-tracked-terrain` on `spec` (written as `bad.toml` in a directory of its
