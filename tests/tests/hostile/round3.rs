@@ -1,6 +1,6 @@
 //! The reliability issue's third round: values that named neither key nor `--set`, the
-//! hosts' new launch-file keys, seed ranges past the cap, and every command's exit code for
-//! bad input.
+//! hosts' new launch-file keys, seed ranges past the cap, every command's exit code for bad
+//! input, and a recording's damaged chunk named by `caravan info`.
 
 use caravan_tests::{
     PINGPONG, Scenario, caravan, launch_with_set, realtime_ping_pong, workspace_bin, workspace_root,
