@@ -19,6 +19,7 @@ launch/convoy/convoy-python.toml runs it as follower-2 of the reference convoy:
 
 import bisect
 import math
+import tomllib
 
 from caravan import BadInput, Node, main, topics
 from caravan.robot import wheel_geometry
@@ -31,6 +32,7 @@ PARAMS = {
     "pose_topic": None,  # own pose (Pose2D); default robot/<i>/pose_true
     "predecessor_topic": None,  # the predecessor's pose; default robot/<i-1>/pose_true
     "urdf": None,  # the robot's URDF (required): wheel radius and separation
+    "world": None,  # a world file: when it lists [[start]] poses, robot must be one of them
     "follower": {
         "k1": 1.5,
         "k2": 1.5,
@@ -190,6 +192,20 @@ def command(own_history, history, now_s, p):
     return min(max(v, 0.0), v_max), min(max(omega, -p.omega_max), p.omega_max)
 
 
+def check_robot(path, name, robot):
+    """A world file that lists [[start]] poses names its robots: ``robot`` must be one."""
+    try:
+        with open(path, "rb") as f:
+            starts = len(tomllib.load(f).get("start", []))
+    except (OSError, tomllib.TOMLDecodeError) as e:
+        raise BadInput(f"key 'world': world file {name}: {e}") from None
+    if starts and robot >= starts:
+        raise BadInput(
+            f"key 'robot': world file {name} lists {starts} [[start]] pose(s), for robots 0 "
+            f"to {starts - 1}; robot {robot} is not among them"
+        )
+
+
 def agent():
     node = Node.from_env()
     p = node.params(PARAMS)
@@ -202,6 +218,8 @@ def agent():
     if p.urdf is None:
         raise BadInput("key 'urdf': give the robot's URDF (its wheel radius and separation)")
     i = p.robot
+    if p.world is not None:
+        check_robot(node.identity.resolve_path(p.world), p.world, i)
     r, sep = wheel_geometry(node.identity.resolve_path(p.urdf))
     own = node.subscriber(Pose2D, p.pose_topic or topics.pose_true(i))
     predecessor = node.subscriber(Pose2D, p.predecessor_topic or topics.pose_true(i - 1))

@@ -2,10 +2,13 @@
 //! random (`caravan_report::fuzz`), must load or give an error, never panic. CI runs 2,000
 //! worlds and 400 robot descriptions; `PROPTEST_CASES=1000000 cargo nextest run --release -p caravan-tests
 //! --test fuzz` is the long run (docs/reliability.md). `fuzz/inputs.rs` fuzzes recordings,
-//! hosts tables and policy files the same way.
+//! hosts tables and policy files the same way, `fuzz/params.rs` the scenarios' params as
+//! their programs check them before a start.
 
 #[path = "fuzz/inputs.rs"]
 mod inputs;
+#[path = "fuzz/params.rs"]
+mod params;
 
 use caravan_report::fuzz::mutate;
 use caravan_tests::workspace_root;

@@ -320,6 +320,17 @@ fn python_agent_with_bad_params_exits_2() {
     let no_urdf = run(serde_json::json!({"robot": 2}));
     assert_eq!(no_urdf.status.code(), Some(2), "{}", text(&no_urdf));
     assert!(text(&no_urdf).contains("key 'urdf'"), "{}", text(&no_urdf));
+    // A robot the world's [[start]] poses do not name (the convoy's lab has five).
+    let robot_9 = run(
+        serde_json::json!({"robot": 9, "urdf": "robots/convoy_bot.urdf",
+                                         "world": "worlds/lab.toml"}),
+    );
+    assert_eq!(robot_9.status.code(), Some(2), "{}", text(&robot_9));
+    assert!(
+        text(&robot_9).contains("key 'robot': world file worlds/lab.toml lists 5"),
+        "{}",
+        text(&robot_9)
+    );
     let bad_urdf = run(serde_json::json!({"robot": 2, "urdf": "robots/missing.urdf"}));
     assert_eq!(bad_urdf.status.code(), Some(2), "{}", text(&bad_urdf));
     assert!(

@@ -213,7 +213,7 @@ fn a_slow_plugin_is_said_while_the_launcher_waits_for_it() {
     .unwrap();
     std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
     let err = std::fs::File::create(&said).unwrap();
-    let status = s.command(&FIVE_SECONDS).stderr(err).status().unwrap();
+    let status = loud(&s).stderr(err).status().unwrap();
     let text = std::fs::read_to_string(&said).unwrap();
     assert!(
         text.contains("caravan: waiting for report plugin ./slow.sh (")
@@ -226,6 +226,49 @@ fn a_slow_plugin_is_said_while_the_launcher_waits_for_it() {
     assert!(
         !failed["message"].as_str().unwrap().contains("time limit"),
         "{failed}"
+    );
+}
+
+/// `caravan launch` of `s` for five simulated seconds without `--quiet` (which
+/// [`Scenario::command`] gives).
+fn loud(s: &Scenario) -> std::process::Command {
+    let mut cmd = std::process::Command::new(workspace_bin("caravan"));
+    cmd.arg("launch")
+        .arg(&s.file)
+        .arg("--runs-dir")
+        .arg(s.dir.join("runs"))
+        .args(FIVE_SECONDS);
+    cmd
+}
+
+/// `--quiet` holds for the launcher's wait for a slow plugin too: a plugin that runs past
+/// the first "waiting for report plugin" (5 s) is not said.
+#[test]
+fn a_slow_plugin_is_not_said_under_quiet() {
+    let body = format!(
+        "{}\n[[report]]\nexec = \"./slow.sh\"\ntimeout = \"5m\"\n",
+        ping_pong()
+    );
+    let s = Scenario::new("tiny-slow-quiet", &body);
+    let script = s.dir.join("slow.sh");
+    let slept = s.dir.join("slept");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\n[ \"$1\" = --check ] && exit 0\nsleep 7\ntouch '{}'\nexit 3\n",
+            slept.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let out = s.run(&FIVE_SECONDS);
+    // The plugin ran its 7 s while the launcher waited for it.
+    assert!(slept.exists(), "{}", stderr(&out));
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        !stderr(&out).contains("waiting for report plugin"),
+        "{}",
+        stderr(&out)
     );
 }
 

@@ -20,6 +20,9 @@ struct Params {
     /// The robot's URDF, relative to the launch file: wheel radius and separation (the
     /// default `""` fails to load, so in effect required).
     urdf: String,
+    /// The world file, relative to the launch file (optional): when it lists `[[start]]`
+    /// poses, `robot` must be one of the robots they name.
+    world: Option<String>,
 }
 
 impl Default for Params {
@@ -30,6 +33,7 @@ impl Default for Params {
             speed: 0.2,
             keep_back_m: 0.5,
             urdf: String::new(),
+            world: None,
         }
     }
 }
@@ -38,13 +42,18 @@ fn main() -> std::process::ExitCode {
     caravan::node_main("pure-pursuit-follower", setup, run)
 }
 
-/// Before joining the group: the wheels from the robot's URDF.
+/// Before joining the group: the robot among the world's, the wheels from its URDF.
 fn setup(p: Params, identity: &caravan::NodeIdentity) -> Result<(Params, RobotModel), String> {
     if p.robot == 0 {
         return Err("key 'robot': robot 0 leads; a follower is robot 1 or later".into());
     }
     if p.urdf.is_empty() {
         return Err("key 'urdf': give the robot's URDF (its wheel radius and separation)".into());
+    }
+    if let Some(file) = &p.world {
+        caravan_world::load_world(&identity.resolve_path(file))
+            .map_err(|e| format!("key 'world': world file {e}"))?
+            .check_robot(file, p.robot)?;
     }
     let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
         .map_err(|e| format!("key 'urdf': {e}"))?;

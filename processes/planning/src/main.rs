@@ -20,8 +20,12 @@ use std::process::ExitCode;
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 struct Params {
-    /// The robot that plans (the leader).
+    /// The robot that plans (the leader); with a `world` that lists `[[start]]` poses, one of
+    /// its robots.
     robot: usize,
+    /// The world file, relative to the launch file, whose `[[start]]` poses name the robots
+    /// (optional: only `robot` is checked against it; the planner maps from `map`).
+    world: Option<String>,
     /// The robot's URDF, relative to the launch file: its chassis box is the footprint for the
     /// costmap (required).
     urdf: String,
@@ -36,6 +40,7 @@ impl Default for Params {
     fn default() -> Self {
         Self {
             robot: 0,
+            world: None,
             urdf: String::new(),
             replan_period_s: 1.0,
             costmap: CostmapParams::default(),
@@ -70,6 +75,11 @@ fn main() -> ExitCode {
         "caravan-planning",
         |mut p: Params, identity| {
             p.validate()?;
+            if let Some(file) = &p.world {
+                caravan_world::load_world(&identity.resolve_path(file))
+                    .map_err(|e| format!("key 'world': world file {e}"))?
+                    .check_robot(file, p.robot)?;
+            }
             if p.urdf.is_empty() {
                 return Err("key 'urdf': give the robot's URDF (its footprint)".into());
             }

@@ -44,18 +44,7 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     p.validate().map_err(|e| e.to_string())?;
     let world = caravan_world::load_world(&identity.resolve_path(&p.world))
         .map_err(|e| format!("key 'world': world file {e}"))?;
-    // A world that lists [[start]] poses names its robots: an index beyond them is a sensor
-    // for no robot (one that lists none leaves the robots to physics' `poses`).
-    let starts = world.starts.len();
-    if starts > 0 && p.robot >= starts {
-        return Err(format!(
-            "key 'robot': world file {} lists {starts} [[start]] pose(s), for robots 0 to {}; \
-             robot {} is not among them",
-            p.world,
-            starts - 1,
-            p.robot
-        ));
-    }
+    world.check_robot(&p.world, p.robot)?;
     let urdf = identity.resolve_path(&p.urdf);
     let robot = match &p.link {
         None => Some(

@@ -340,6 +340,22 @@ pub fn parse_world(text: &str) -> Result<World, String> {
 }
 
 impl World {
+    /// Whether `robot` is one of the robots this world names, for the params of a process
+    /// that reads `file`: a world that lists `[[start]]` poses names its robots, and an index
+    /// past them is a process for no robot (one that lists none leaves the robots to the
+    /// physics' `poses`). The error names the key `robot`.
+    pub fn check_robot(&self, file: &str, robot: usize) -> Result<(), String> {
+        let starts = self.starts.len();
+        if starts > 0 && robot >= starts {
+            return Err(format!(
+                "key 'robot': world file {file} lists {starts} [[start]] pose(s), for robots 0 \
+                 to {}; robot {robot} is not among them",
+                starts - 1
+            ));
+        }
+        Ok(())
+    }
+
     /// Distance along the unit vector `dir` from the free point `from` to the first surface,
     /// if one lies within `max` (sphere tracing on the exact distance field).
     pub fn ray_distance(&self, from: [f64; 2], dir: [f64; 2], max: f64) -> Option<f64> {
@@ -438,6 +454,25 @@ size = [0.4, 0.2]
 center = [3.0, 2.0]
 radius = 0.1
 "#;
+
+    #[test]
+    fn a_robot_past_the_worlds_start_poses_is_refused() {
+        let none = parse_world(LAB).unwrap();
+        assert!(
+            none.check_robot("lab.toml", 9).is_ok(),
+            "no [[start]]: physics' poses"
+        );
+        let two = parse_world(&format!(
+            "{LAB}\n[[start]]\npose = [1.0, 1.0, 0.0]\n[[start]]\npose = [0.5, 1.0, 0.0]\n"
+        ))
+        .unwrap();
+        assert!(two.check_robot("lab.toml", 1).is_ok());
+        let e = two.check_robot("lab.toml", 2).unwrap_err();
+        assert!(
+            e.starts_with("key 'robot': world file lab.toml lists 2"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn parses_and_measures_clearance() {

@@ -96,7 +96,7 @@ fn main() -> ExitCode {
             );
             Ok(ExitCode::from(launch::EXIT_BAD_INPUT))
         }
-        Command::Report { run_dir } => report::write(&run_dir).map(|w| {
+        Command::Report { run_dir } => report::write(&run_dir, false).map(|w| {
             println!("{}", report_summary(&w.report));
             for failure in &w.failures {
                 eprintln!("caravan: {failure}");

@@ -30,6 +30,9 @@ pub struct SchemasArgs {
 }
 
 pub fn run(args: &SchemasArgs) -> Result<()> {
+    if let Some(path) = &args.output {
+        output_place(path)?;
+    }
     let text = if args.python {
         python_module()?
     } else {
@@ -44,6 +47,30 @@ pub fn run(args: &SchemasArgs) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// Whether `-o PATH` names a place a file can be written: a folder that exists, and not a
+/// folder itself. Either is bad input (exit 2), found before anything is generated.
+fn output_place(path: &std::path::Path) -> Result<()> {
+    use caravan_group::bad_input::bad;
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => std::path::Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(bad(format!(
+            "-o {}: the folder {} does not exist",
+            path.display(),
+            folder.display()
+        )));
+    }
+    if path.is_dir() {
+        return Err(bad(format!(
+            "-o {}: is a folder; name the file to write",
+            path.display()
+        )));
+    }
+    Ok(())
 }
 
 fn ctype(scalar: Scalar) -> &'static str {

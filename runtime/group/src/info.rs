@@ -4,7 +4,7 @@
 //! that no longer holds. In a library so that the fuzz tests (tests/tests/fuzz/inputs.rs)
 //! call it in-process.
 
-use crate::recording::messages;
+use crate::recording::{damaged_chunk, messages};
 use anyhow::{Context, Result, bail};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
@@ -55,7 +55,8 @@ fn describe_unguarded(bytes: &[u8]) -> Result<Value> {
         }
         _ => {
             for m in messages(bytes)? {
-                let m = m.context("the file ends in the middle of a record")?;
+                let m =
+                    m.map_err(|e| damaged(bytes, e, "the file ends in the middle of a record"))?;
                 let c = &m.channel;
                 let schema = c
                     .schema
@@ -82,7 +83,7 @@ fn describe_unguarded(bytes: &[u8]) -> Result<Value> {
     if indexed {
         let mut read = 0u64;
         for m in messages(bytes)? {
-            m.context("a chunk is damaged")?;
+            m.map_err(|e| damaged(bytes, e, "a chunk is damaged"))?;
             read += 1;
         }
         if read != total {
@@ -103,6 +104,15 @@ fn describe_unguarded(bytes: &[u8]) -> Result<Value> {
         "metadata": metadata,
         "attachments": attachments,
     }))
+}
+
+/// A reader's `error` on `bytes`, naming the chunk that is damaged when one is (its number,
+/// bytes and log times), else said as `otherwise`.
+fn damaged(bytes: &[u8], error: mcap::McapError, otherwise: &'static str) -> anyhow::Error {
+    match damaged_chunk(bytes) {
+        Some(chunk) => anyhow::anyhow!("{chunk}"),
+        None => anyhow::Error::new(error).context(otherwise),
+    }
 }
 
 #[cfg(test)]
@@ -138,11 +148,14 @@ mod tests {
         assert!(super::describe(&bytes[..bytes.len() / 2]).is_err());
     }
 
-    /// Bytes overwritten inside a chunk: the summary still reads, the chunk's CRC does not.
+    /// Bytes overwritten inside a chunk: the summary still reads, the chunk's CRC does not,
+    /// and the error names that chunk (the last of several).
     #[test]
     fn a_damaged_chunk_is_an_error_though_the_summary_reads() {
         let mut file = std::io::Cursor::new(Vec::new());
-        let options = mcap::WriteOptions::new().compression(None);
+        let options = mcap::WriteOptions::new()
+            .compression(None)
+            .chunk_size(Some(200));
         let mut w = options.create(&mut file).unwrap();
         let schema = w
             .add_schema("caravan::Pose2D", "jsonschema", b"{}")
@@ -162,12 +175,19 @@ mod tests {
         drop(w);
         let mut bytes = file.into_inner();
         assert!(super::describe(&bytes).is_ok());
+        let chunks = (mcap::Summary::read(&bytes).unwrap().unwrap().chunk_indexes).len();
+        assert!(chunks > 1, "{chunks} chunk(s)");
         let at = (bytes.windows(payload.len()))
-            .position(|w| w == payload)
+            .rposition(|w| w == payload)
             .unwrap();
         bytes[at + 3] = b'9';
         let err = format!("{:#}", super::describe(&bytes).unwrap_err());
-        assert!(err.contains("a chunk is damaged"), "{err}");
+        let named = format!("chunk {chunks} of {chunks} (bytes ");
+        assert!(err.starts_with(&named), "{err}");
+        assert!(
+            err.contains("log times 0.006 to 0.009 s) is damaged: Chunk CRC failed"),
+            "{err}"
+        );
     }
 
     /// Found by the recording fuzz (tests/tests/fuzz/inputs.rs): a record's length near 2⁶⁴

@@ -130,13 +130,7 @@ fn check_entries(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<EntryProblem>
     let mut problems = run::preflight::check_processes_with(lf, memo);
     for (index, entry) in report_entries(lf).iter().enumerate() {
         let checked = match memo {
-            Some(memo) => {
-                let key = format!(
-                    "{:?}\0{}\0{}\0{}",
-                    entry.exec, entry.params, entry.launch_dir, entry.timeout_s
-                );
-                memo.report(key, || report::check(entry))
-            }
+            Some(memo) => memo.report(entry),
             None => report::check(entry),
         };
         if let Err(why) = checked {
@@ -326,7 +320,7 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
         eprintln!("caravan: warning: {w}");
     }
     facts.save(&dir)?;
-    let written = report::write(&dir)?;
+    let written = report::write(&dir, options.quiet)?;
     for failure in &written.failures {
         console.say(failure);
     }

@@ -121,7 +121,13 @@ fn read_unguarded(path: &Path, patterns: &[String]) -> Result<Recording> {
         }
     }
     for message in crate::recording::messages(&bytes).with_context(at)? {
-        let message = message.with_context(at)?;
+        // A damaged chunk is named (its number, bytes and log times).
+        let message = message
+            .map_err(|e| match crate::recording::damaged_chunk(&bytes) {
+                Some(chunk) => anyhow::anyhow!("{chunk}"),
+                None => e.into(),
+            })
+            .with_context(at)?;
         let channel = &message.channel;
         if !caravan_channel(channel) {
             continue;

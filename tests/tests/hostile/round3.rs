@@ -1,9 +1,9 @@
 //! The reliability issue's third round: values that named neither key nor `--set`, the
-//! hosts' new launch-file keys, seed ranges past the cap, and every command's exit code for
-//! bad input.
+//! hosts' new launch-file keys, seed ranges past the cap, every command's exit code for bad
+//! input, and a recording's damaged chunk named by `caravan info`.
 
 use caravan_tests::{
-    Scenario, caravan, launch_with_set, realtime_ping_pong, workspace_bin, workspace_root,
+    PINGPONG, Scenario, caravan, launch_with_set, realtime_ping_pong, workspace_bin, workspace_root,
 };
 use std::process::{Child, Command, Output};
 
@@ -63,6 +63,41 @@ fn an_argument_of_the_wrong_type_set_on_the_command_line_names_the_key_and_the_s
         "set by --set args.angle_deg=steep",
     ] {
         assert!(err.contains(expected), "expected '{expected}' in {err}");
+    }
+}
+
+/// Found by `fuzz_scenario_params_never_panic`: serde names no key inside the IMU driver's
+/// tagged scenario, and the launcher found the key by the value quoted (a string, a number),
+/// so an array, a table or a boolean named only the file's line. Each names the key and its
+/// `--set` now.
+#[test]
+fn a_param_of_the_wrong_kind_set_on_the_command_line_names_the_key_and_the_set() {
+    for (set, expected) in [
+        (
+            "process.driver.params.angle_deg=[1, 2]",
+            "invalid type: sequence",
+        ),
+        (
+            "process.driver.params.angle_deg={ a = 1 }",
+            "invalid type: map",
+        ),
+        (
+            "process.driver.params.angle_deg=true",
+            "invalid type: boolean `true`",
+        ),
+        (
+            "args.angle_deg=[1, 2]",
+            "set by --set args.angle_deg=[1, 2]",
+        ),
+    ] {
+        let (code, err) = launch_with_set("imu/tilt.toml", "1s", set);
+        assert_eq!(code, 2, "{set}: {err}");
+        for part in ["process 'driver', key 'angle_deg'", expected] {
+            assert!(err.contains(part), "{set}: expected '{part}' in {err}");
+        }
+        if set.starts_with("process.") {
+            assert!(err.contains(&format!("--set {set}:")), "{set}: {err}");
+        }
     }
 }
 
@@ -157,5 +192,71 @@ fn docs_params_of_a_marker_without_its_end_exits_2() {
         &args,
         &out,
         "docs/page.md: a '<!-- params:' marker without '-->'",
+    );
+}
+
+/// Where the first chunk record of the MCAP file `bytes` starts and ends.
+fn first_chunk(bytes: &[u8]) -> std::ops::Range<usize> {
+    let mut at = 8;
+    loop {
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        if bytes[at] == 0x06 {
+            return at..at + 9 + len;
+        }
+        at += 9 + len;
+    }
+}
+
+/// `caravan info` read the summary only and printed the normal table for a recording with
+/// 64 bytes of 0xFF in a chunk (play and resim refused it). It reads every chunk now, checks
+/// its CRC, and names the file and the chunk.
+#[test]
+fn info_of_a_recording_with_64_bytes_of_0xff_in_a_chunk_names_the_damaged_chunk() {
+    let s = Scenario::new("info-crc", PINGPONG);
+    let out = s.run(&["--duration", "2s"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let mcap = s.run_dirs().pop().unwrap().join("record.mcap");
+    let mut bytes = std::fs::read(&mcap).unwrap();
+    let chunk = first_chunk(&bytes);
+    assert!(chunk.len() > 400, "{chunk:?}");
+    bytes[chunk.start + 200..chunk.start + 264].fill(0xFF);
+    std::fs::write(&mcap, &bytes).unwrap();
+    let file = mcap.to_str().unwrap();
+    let named = format!(
+        "{file}: chunk 1 of 1 (bytes {} to {}, log times 0.000 to ",
+        chunk.start,
+        chunk.end - 1
+    );
+    for args in [vec!["info", file], vec!["info", "--json", file]] {
+        let out = caravan(&args);
+        assert_bad_input(&args, &out, &named);
+        assert!(stderr(&out).contains(") is damaged: "), "{}", stderr(&out));
+        assert!(out.stdout.is_empty(), "{args:?} printed a table");
+    }
+}
+
+/// `caravan schemas -o` into a folder that does not exist exited 1, as a failure while
+/// writing; it is bad input (exit 2) naming the folder, found before anything is generated.
+#[test]
+fn schemas_into_a_missing_folder_exits_2_naming_the_folder() {
+    let dir = std::env::temp_dir().join(format!("caravan-schemas-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let file = dir.join("missing/caravan_schemas.py");
+    let f = file.to_str().unwrap();
+    let args = ["schemas", "--python", "-o", f];
+    let out = caravan(&args);
+    let folder = format!(
+        "the folder {} does not exist",
+        dir.join("missing").display()
+    );
+    assert_bad_input(&args, &out, &folder);
+    assert!(!dir.exists());
+    // A folder given as the file: the same.
+    let tmp = std::env::temp_dir();
+    let args = ["schemas", "--layout", "-o", tmp.to_str().unwrap()];
+    assert_bad_input(
+        &args,
+        &caravan(&args),
+        "is a folder; name the file to write",
     );
 }

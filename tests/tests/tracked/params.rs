@@ -221,6 +221,39 @@ fn a_leader_for_robot_9_on_a_five_robot_world_is_refused() {
     assert!(err.contains("lists 5 [[start]] pose(s)"), "{err}");
 }
 
+#[test]
+fn a_planner_for_robot_9_on_a_five_robot_world_is_refused() {
+    let err = refused_naming(
+        "convoy/convoy.toml",
+        "process.planner.params.robot=9",
+        "planner",
+        "robot",
+    );
+    assert!(err.contains("lists 5 [[start]] pose(s)"), "{err}");
+}
+
+#[test]
+fn a_follower_for_robot_9_on_a_five_robot_world_is_refused() {
+    // The ground-truth convoy's followers too: they are given the world for this check.
+    for file in ["convoy/convoy.toml", "convoy/convoy-truth.toml"] {
+        let err = refused_naming(
+            file,
+            "process.follower-1.params.robot=9",
+            "follower-1",
+            "robot",
+        );
+        assert!(err.contains("robot 9 is not among them"), "{file}: {err}");
+    }
+    // A custom follower swapped in (the pure-pursuit example) checks it too.
+    let err = refused_naming(
+        "convoy/convoy-custom.toml",
+        "process.follower-2.params.robot=9",
+        "follower-2",
+        "robot",
+    );
+    assert!(err.contains("robot 9 is not among them"), "{err}");
+}
+
 /// Runs `caravan-tracked-terrain` on `spec` (written as `bad.toml` in a directory of its
 /// own) and expects it refused: exit 2, the message naming the file, `line` and `key`, and
 /// no world written. Returns stderr.

@@ -30,25 +30,19 @@ pub fn setup(
         .map_err(|e| format!("key 'urdf': robot description {e}"))?;
     p.follower.footprint_half_m = [robot.chassis_half_extents[0], robot.chassis_half_extents[1]];
     p.follower.footprint_offset_m = robot.chassis_center[0];
-    if let (Mode::Leader, true, Some(file)) = (p.mode, p.leader.goals.is_empty(), &p.world) {
+    if let Some(file) = &p.world {
         let world = caravan_world::load_world(&identity.resolve_path(file))
             .map_err(|e| format!("key 'world': world file {e}"))?;
-        // A world that lists [[start]] poses names its robots: the leader is one of them.
-        let starts = world.starts.len();
-        if starts > 0 && p.robot >= starts {
-            return Err(format!(
-                "key 'robot': world file {file} lists {starts} [[start]] pose(s), for robots 0 \
-                 to {}; robot {} is not among them",
-                starts - 1,
-                p.robot
-            ));
+        // A world that lists [[start]] poses names its robots: this agent's is one of them.
+        world.check_robot(file, p.robot)?;
+        if p.mode == Mode::Leader && p.leader.goals.is_empty() {
+            if world.goals.is_empty() {
+                return Err(format!(
+                    "key 'leader.goals': none given, and world file {file} has no [[goal]]s"
+                ));
+            }
+            p.leader.goals = world.goals.iter().map(|g| g.at).collect();
         }
-        if world.goals.is_empty() {
-            return Err(format!(
-                "key 'leader.goals': none given, and world file {file} has no [[goal]]s"
-            ));
-        }
-        p.leader.goals = world.goals.iter().map(|g| g.at).collect();
     }
     let geometry = Geometry {
         wheel_radius_m: robot.wheel_radius,

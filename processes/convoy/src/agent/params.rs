@@ -20,8 +20,8 @@ pub enum Mode {
 #[derive(Debug, Clone, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct Params {
-    /// This robot's index: 0 is the leader, i follows i − 1 by default. A leader reading its
-    /// goals from a `world` that lists `[[start]]` poses: one of its robots.
+    /// This robot's index: 0 is the leader, i follows i − 1 by default. With a `world` that
+    /// lists `[[start]]` poses: one of its robots.
     pub robot: usize,
     /// Which controller runs: `leader`, `follower` or `drive`.
     pub mode: Mode,
@@ -39,7 +39,9 @@ pub struct Params {
     /// chassis footprint the follower keeps its distance with (required: the default `""` is
     /// rejected).
     pub urdf: String,
-    /// Leader: the world file whose `[[goal]]`s are the goals when `leader.goals` is empty.
+    /// The world file, relative to the launch file: a world that lists `[[start]]` poses
+    /// names the robots, and `robot` must be one of them (any mode); a leader's goals are its
+    /// `[[goal]]`s when `leader.goals` is empty.
     pub world: Option<String>,
     /// The follower's law (`mode = "follower"`).
     pub follower: FollowerParams,

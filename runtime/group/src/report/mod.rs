@@ -48,8 +48,8 @@ pub struct Written {
 }
 
 /// Computes the report of `run_dir`, running every report plugin, and writes `report.json`
-/// and `report.md` there.
-pub fn write(run_dir: &Path) -> Result<Written> {
+/// and `report.md` there; `quiet`: without saying that it waits for a slow plugin.
+pub fn write(run_dir: &Path, quiet: bool) -> Result<Written> {
     let facts = RunFacts::load(run_dir)?;
     // The writer counted every topic's messages and gaps as it wrote them; only a run from
     // before it did is read back.
@@ -64,7 +64,7 @@ pub fn write(run_dir: &Path) -> Result<Written> {
     for chart in charts::write(run_dir, &report) {
         markdown.push_str(&format!("\n![{chart}]({chart})\n"));
     }
-    let outcome = plugins::run_all(run_dir, &facts.reports);
+    let outcome = plugins::run_all(run_dir, &facts.reports, quiet);
     // Sections go into report.json as their plugins wrote them: reading their numbers back
     // and printing them again could change a last digit.
     let mut entries: BTreeMap<String, String> = match &report {

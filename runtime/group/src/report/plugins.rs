@@ -25,7 +25,7 @@ pub struct Outcome {
 
 /// Checks a plugin's params before the run: `Err` holds the plugin's own message.
 pub fn check(entry: &ReportEntry) -> Result<(), String> {
-    let output = run(entry, &["--check".into()])?;
+    let output = run(entry, &["--check".into()], false)?;
     if output.status.success() {
         Ok(())
     } else {
@@ -33,8 +33,9 @@ pub fn check(entry: &ReportEntry) -> Result<(), String> {
     }
 }
 
-/// Runs every plugin on `run_dir`, after clearing the sections a previous report left.
-pub fn run_all(run_dir: &Path, entries: &[ReportEntry]) -> Outcome {
+/// Runs every plugin on `run_dir`, after clearing the sections a previous report left;
+/// `quiet`: without saying that it waits for a slow one.
+pub fn run_all(run_dir: &Path, entries: &[ReportEntry], quiet: bool) -> Outcome {
     let _ = std::fs::remove_dir_all(run_dir.join(caravan_report::SECTIONS_DIR));
     let mut outcome = Outcome {
         sections: Vec::new(),
@@ -44,7 +45,7 @@ pub fn run_all(run_dir: &Path, entries: &[ReportEntry]) -> Outcome {
         let exec = entry.exec.join(" ");
         let before = caravan_report::written(run_dir);
         let arg = std::path::absolute(run_dir).unwrap_or_else(|_| run_dir.to_path_buf());
-        match run(entry, &[arg.display().to_string()]) {
+        match run(entry, &[arg.display().to_string()], quiet) {
             Ok(output) if output.status.success() => {}
             Ok(output) => {
                 outcome.failures.push((exec, message(&output)));
@@ -83,8 +84,8 @@ const PROGRESS_EVERY: Duration = Duration::from_secs(15);
 /// plugin (and whatever it started: it runs in a process group of its own) is killed, and it
 /// has failed. When it ends in time, what it left running in its group is killed. A plugin
 /// running long is said after [`PROGRESS_FIRST`] and every [`PROGRESS_EVERY`], so a launcher
-/// waiting for one is never silent.
-fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
+/// waiting for one is never silent, unless `quiet` (`caravan launch --quiet`).
+fn run(entry: &ReportEntry, args: &[String], quiet: bool) -> Result<Output, String> {
     let Some((first, rest)) = entry.exec.split_first() else {
         return Err("the command is empty".into());
     };
@@ -136,12 +137,14 @@ fn run(entry: &ReportEntry, args: &[String]) -> Result<Output, String> {
                 ));
             }
             Err(RecvTimeoutError::Timeout) if start.elapsed() >= say_at => {
-                eprintln!(
-                    "caravan: waiting for report plugin {} ({:.0} s; its time limit is {} s)",
-                    entry.exec.join(" "),
-                    start.elapsed().as_secs_f64(),
-                    limit.as_secs_f64()
-                );
+                if !quiet {
+                    eprintln!(
+                        "caravan: waiting for report plugin {} ({:.0} s; its time limit is {} s)",
+                        entry.exec.join(" "),
+                        start.elapsed().as_secs_f64(),
+                        limit.as_secs_f64()
+                    );
+                }
                 say_at += PROGRESS_EVERY;
             }
             Err(RecvTimeoutError::Timeout) => {}

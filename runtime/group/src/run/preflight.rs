@@ -23,23 +23,44 @@ pub const CHECK_TIMEOUT: Duration = Duration::from_secs(600);
 /// it validates. Checks that timed out or could not start are not kept.
 #[derive(Default)]
 pub struct CheckMemo {
-    processes: Mutex<HashMap<String, Output>>,
-    reports: Mutex<HashMap<String, Result<(), String>>>,
+    processes: Known<Output>,
+    reports: Known<Result<(), String>>,
 }
 
 impl CheckMemo {
-    /// A report plugin's check of `key`, run by `check` unless it was run before.
-    pub fn report(
-        &self,
-        key: String,
-        check: impl FnOnce() -> Result<(), String>,
-    ) -> Result<(), String> {
-        if let Some(known) = self.reports.lock().unwrap().get(&key) {
-            return known.clone();
+    /// A report plugin's check of `entry` (`PROGRAM --check`), unless it was run on the same
+    /// command line, params, directory and time limit before.
+    pub fn report(&self, entry: &caravan_report::ReportEntry) -> Result<(), String> {
+        let key = format!(
+            "{:?}\0{}\0{}\0{}",
+            entry.exec, entry.params, entry.launch_dir, entry.timeout_s
+        );
+        if let Some(known) = self.reports.get(&key) {
+            return known;
         }
-        let result = check();
-        self.reports.lock().unwrap().insert(key, result.clone());
+        let result = crate::report::check(entry);
+        self.reports.keep(key, &result);
         result
+    }
+}
+
+/// The outcomes of checks already run, by their key: one map for the processes' checks
+/// (which run at once and are kept as each ends) and the report plugins' (run one by one).
+struct Known<V>(Mutex<HashMap<String, V>>);
+
+impl<V> Default for Known<V> {
+    fn default() -> Self {
+        Self(Mutex::default())
+    }
+}
+
+impl<V: Clone> Known<V> {
+    fn get(&self, key: &str) -> Option<V> {
+        self.0.lock().unwrap().get(key).cloned()
+    }
+
+    fn keep(&self, key: String, outcome: &V) {
+        self.0.lock().unwrap().insert(key, outcome.clone());
     }
 }
 
@@ -83,9 +104,7 @@ pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<En
         // it is killed outright if the launcher dies.
         let mut cmd = plan.command(&env, libc::SIGKILL);
         let key = memo.map(|_| memo_key(&cmd));
-        let known = memo
-            .zip(key.as_ref())
-            .and_then(|(m, k)| m.processes.lock().unwrap().get(k).cloned());
+        let known = memo.zip(key.as_ref()).and_then(|(m, k)| m.processes.get(k));
         if let Some(output) = known {
             let params = &plan.spec.params;
             problems.extend(judge(index, &name, &plan.program, params, Ok(output)));
@@ -128,7 +147,7 @@ pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<En
         let output = match received {
             Ok(output) => {
                 if let (Some(memo), Some(key), Ok(output)) = (memo, key, &output) {
-                    memo.processes.lock().unwrap().insert(key, output.clone());
+                    memo.processes.keep(key, output);
                 }
                 output
             }
@@ -234,15 +253,21 @@ fn named_key(text: &str) -> Option<String> {
 
 /// The params key a message that names none is about, found by the value it quotes (serde
 /// names no key inside an internally tagged enum: `invalid type: string "steep", expected
-/// f64`). Only a value that exactly one key holds names it.
+/// f64`), or by the kind of value it names (`invalid type: sequence, expected f64`). Only a
+/// value that exactly one key holds names it.
 fn key_of_quoted_value(text: &str, params: &serde_json::Value) -> Option<String> {
+    use serde_json::Value;
     let quoted = quoted_value(text)?;
     let mut found = Vec::new();
-    leaves(params, String::new(), &mut |path, value| {
-        let same = match value {
-            serde_json::Value::String(s) => quoted == format!("\"{s}\""),
-            // A number as serde prints it (`1.5`, `3`).
-            other => quoted == serde_json::to_string(other).unwrap_or_default(),
+    values(params, String::new(), &mut |path, value| {
+        let same = match (&quoted, value) {
+            (Quoted::Sequence, Value::Array(_)) | (Quoted::Map, Value::Object(_)) => true,
+            (Quoted::Scalar(q), Value::String(s)) => *q == format!("\"{s}\""),
+            // A number or boolean as serde prints it (`1.5`, `3`, `true`).
+            (Quoted::Scalar(q), v @ (Value::Number(_) | Value::Bool(_))) => {
+                *q == serde_json::to_string(v).unwrap_or_default()
+            }
+            _ => false,
         };
         if same {
             found.push(path);
@@ -254,20 +279,40 @@ fn key_of_quoted_value(text: &str, params: &serde_json::Value) -> Option<String>
     }
 }
 
-/// serde's rendering of the bad value: `string "x"` (quotes kept), or `` integer `3` `` and
-/// `` floating point `1.5` `` (the number).
-fn quoted_value(text: &str) -> Option<String> {
+/// The bad value serde's message names.
+enum Quoted {
+    /// `string "x"` (quotes kept), `` integer `3` ``, `` floating point `1.5` `` or
+    /// `` boolean `true` `` (the value).
+    Scalar(String),
+    /// `sequence`: an array.
+    Sequence,
+    /// `map`: a table.
+    Map,
+}
+
+fn quoted_value(text: &str) -> Option<Quoted> {
     let after = |marker: &str| text.find(marker).map(|i| &text[i + marker.len()..]);
     if let Some(rest) = after("string \"") {
         let end = rest.find('"')?;
-        return Some(format!("\"{}\"", &rest[..end]));
+        return Some(Quoted::Scalar(format!("\"{}\"", &rest[..end])));
     }
-    let rest = after("integer `").or_else(|| after("floating point `"))?;
-    Some(rest[..rest.find('`')?].to_string())
+    if text.contains("invalid type: sequence,") {
+        return Some(Quoted::Sequence);
+    }
+    if text.contains("invalid type: map,") {
+        return Some(Quoted::Map);
+    }
+    let rest = (after("integer `").or_else(|| after("floating point `")))
+        .or_else(|| after("boolean `"))?;
+    Some(Quoted::Scalar(rest[..rest.find('`')?].to_string()))
 }
 
-/// Calls `f` with the dotted path (`a.b[2].c`) and value of every leaf of `v`.
-fn leaves(v: &serde_json::Value, path: String, f: &mut dyn FnMut(String, &serde_json::Value)) {
+/// Calls `f` with the dotted path (`a.b[2].c`) and value of every value inside `v`, tables
+/// and arrays before what they hold.
+fn values(v: &serde_json::Value, path: String, f: &mut dyn FnMut(String, &serde_json::Value)) {
+    if !path.is_empty() {
+        f(path.clone(), v);
+    }
     match v {
         serde_json::Value::Object(map) => {
             for (k, child) in map {
@@ -276,15 +321,15 @@ fn leaves(v: &serde_json::Value, path: String, f: &mut dyn FnMut(String, &serde_
                 } else {
                     format!("{path}.{k}")
                 };
-                leaves(child, p, f);
+                values(child, p, f);
             }
         }
         serde_json::Value::Array(list) => {
             for (i, child) in list.iter().enumerate() {
-                leaves(child, format!("{path}[{i}]"), f);
+                values(child, format!("{path}[{i}]"), f);
             }
         }
-        leaf => f(path, leaf),
+        _ => {}
     }
 }
 
@@ -355,6 +400,21 @@ mod tests {
         assert_eq!(key(text).as_deref(), Some("angle_deg"));
         let text = "invalid type: floating point `1.5`, expected u32";
         assert_eq!(key(text).as_deref(), Some("poses[0].x"));
+        // One array, one table: each named by its kind.
+        let nested = serde_json::json!({"offset": [1.0, 2.0], "arm": {"r": 0.1}, "x": 1.0});
+        let text = "invalid type: sequence, expected f64";
+        assert_eq!(
+            key_of_quoted_value(text, &nested).as_deref(),
+            Some("offset")
+        );
+        let text = "invalid type: map, expected f64";
+        assert_eq!(key_of_quoted_value(text, &nested).as_deref(), Some("arm"));
+        let text = "invalid type: boolean `true`, expected f64";
+        let params = serde_json::json!({"scenario": "tilt", "angle_deg": true, "n": 3});
+        assert_eq!(
+            key_of_quoted_value(text, &params).as_deref(),
+            Some("angle_deg")
+        );
         // Two keys hold 3: neither is named.
         assert_eq!(key("invalid type: integer `3`, expected a string"), None);
         assert_eq!(key("cannot read world.toml"), None);
