@@ -120,20 +120,14 @@ impl Params {
             (None, Some(file)) => {
                 let world = caravan_world::load_world(&identity.resolve_path(file))
                     .map_err(|e| format!("key 'world': world file {e}"))?;
-                let starts = world.starts.len();
-                *world.starts.get(self.robot).ok_or_else(|| match starts {
-                    0 => format!(
+                // A world that lists [[start]] poses names its robots: this one is among them.
+                world.check_robot(file, self.robot)?;
+                *world.starts.get(self.robot).ok_or_else(|| {
+                    format!(
                         "key 'initial_pose': not given, and world file {file} has no [[start]] \
                          pose for robot {}",
                         self.robot
-                    ),
-                    // The world names its robots: this index is none of them.
-                    _ => format!(
-                        "key 'robot': world file {file} lists {starts} [[start]] pose(s), for \
-                         robots 0 to {}; robot {} is not among them",
-                        starts - 1,
-                        self.robot
-                    ),
+                    )
                 })?
             }
             (None, None) => {
