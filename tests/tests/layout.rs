@@ -138,6 +138,7 @@ fn the_launcher_depends_on_no_process_or_scenario_crate() {
 const LAYERS: &[&[&str]] = &[
     &["caravan-schemas-derive"],
     &["caravan-schemas"],
+    &["caravan-network"],
     &["caravan"],
     &["caravan-report", "caravan-ros2"],
     &["caravan-launch"],
