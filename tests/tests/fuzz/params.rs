@@ -22,7 +22,7 @@ use caravan_report::fuzz::mutate;
 use caravan_tests::{workspace_bin, workspace_root};
 use proptest::prelude::*;
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The most any one check may take: far more than any takes, far less than a hang.
 const BOUND: Duration = Duration::from_secs(30);
@@ -169,10 +169,10 @@ proptest! {
             return Ok(());
         };
         let params = serde_json::to_value(table).unwrap();
-        let started = Instant::now();
+        // A check that hangs is cut by its own time limit (a plugin's `BOUND`, a process's
+        // check limit) and said so, which `assert_clear` refuses; no clock is read here.
         if let Some(message) = target.check(params) {
             assert_clear(&message, &text);
         }
-        prop_assert!(started.elapsed() < BOUND, "took {:?}: {text}", started.elapsed());
     }
 }
