@@ -29,7 +29,11 @@ pub fn record(args: RecordArgs) -> Result<()> {
         args.patterns
     };
     let recording = caravan_group::watch::record(&group, &args.output, &patterns, args.seconds)?;
-    let total: u64 = recording.topics.values().map(|t| t.messages).sum();
+    let total: u64 = recording
+        .topics
+        .values()
+        .map(|t| t.counted.count().messages)
+        .sum();
     println!(
         "recorded {total} messages on {} topics to {}",
         recording.topics.len(),

@@ -11,6 +11,7 @@
 use super::{scene, schema};
 use anyhow::{Context, Result, anyhow};
 use caravan::tap::Tapped;
+use caravan_report::TopicCounter;
 use caravan_schemas::descriptor::Descriptor;
 use crossbeam::channel::{Receiver, Sender};
 use hdrhistogram::Histogram;
@@ -33,27 +34,20 @@ const GATHER: Duration = Duration::from_millis(10);
 /// Per-topic statistics seen by the recorder.
 pub struct TopicStats {
     pub type_name: String,
-    /// Messages written to the file.
-    pub messages: u64,
+    /// Messages written to the file, and the gaps in each source's `seq`.
+    pub counted: TopicCounter,
     pub missed: u64,
-    /// Messages a publisher numbered that did not reach the file: the gaps in each source's
-    /// `seq`, in file order.
-    pub gaps: u64,
     /// Wall-clock latency from send to the recorder's tap, ns.
     pub latency: Histogram<u64>,
-    /// The last `seq` of each source.
-    last_seq: BTreeMap<u64, u64>,
 }
 
 impl TopicStats {
     fn new(type_name: &str) -> Self {
         Self {
             type_name: type_name.to_string(),
-            messages: 0,
+            counted: TopicCounter::default(),
             missed: 0,
-            gaps: 0,
             latency: Histogram::new_with_bounds(1, 3_600_000_000_000, 3).expect("valid bounds"),
-            last_seq: BTreeMap::new(),
         }
     }
 }
@@ -361,10 +355,9 @@ impl Writer {
             self.write_message(channel, stamp_ns, &view.bytes)?;
         }
         let stats = self.stats[drained.id].get_or_insert_with(|| TopicStats::new(type_name));
-        stats.messages += 1;
-        if let Some(last) = stats.last_seq.insert(msg.header.source_id, msg.header.seq) {
-            stats.gaps += msg.header.seq.saturating_sub(last + 1);
-        }
+        stats
+            .counted
+            .add(Some((msg.header.source_id, msg.header.seq)));
         stats
             .latency
             .saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));

@@ -106,11 +106,36 @@ impl Trend {
 }
 
 /// What the recording holds of one topic.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct TopicCount {
     pub messages: u64,
     /// Messages missing from the file: gaps in each source's header `seq`.
     pub gaps: u64,
+}
+
+/// Counts one topic's messages, in file order, into a [`TopicCount`]: the recording's writer
+/// as it writes, the report when it reads an older run's file back.
+#[derive(Debug, Clone, Default)]
+pub struct TopicCounter {
+    count: TopicCount,
+    /// The last `seq` of each source.
+    last_seq: BTreeMap<u64, u64>,
+}
+
+impl TopicCounter {
+    /// One message; `numbered` is its header's (source id, seq), if it has a header.
+    pub fn add(&mut self, numbered: Option<(u64, u64)>) {
+        self.count.messages += 1;
+        if let Some((source, seq)) = numbered
+            && let Some(last) = self.last_seq.insert(source, seq)
+        {
+            self.count.gaps += seq.saturating_sub(last + 1);
+        }
+    }
+
+    pub fn count(&self) -> TopicCount {
+        self.count
+    }
 }
 
 /// The launcher's record of a run: who ran, how it ended, what the recorder measured.

@@ -72,7 +72,7 @@ pub mod wilson;
 
 pub use facts::{
     FACTS_FILE, HostFacts, Latency, ProcessRecord, RECORDING_FILE, RESOLVED_LAUNCH_FILE,
-    ReportEntry, RunFacts, TopicCount, Trend,
+    ReportEntry, RunFacts, TopicCount, TopicCounter, Trend,
 };
 pub use locate::{find_program, latest_run_dir};
 pub use plugin::{Inputs, ReportPlugin, Run};

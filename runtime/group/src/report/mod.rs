@@ -36,7 +36,7 @@ mod markdown;
 mod plugins;
 
 use anyhow::Result;
-use caravan_report::{RecordedMessage, RunFacts, TopicCount};
+use caravan_report::{RecordedMessage, RunFacts, TopicCount, TopicCounter};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -199,21 +199,15 @@ fn nodes(facts: &RunFacts) -> Vec<Value> {
 
 /// Each topic's messages and gaps (in each source's `seq`), from the recording's messages.
 fn count(messages: &[RecordedMessage]) -> BTreeMap<String, TopicCount> {
-    let mut counts: BTreeMap<String, TopicCount> = BTreeMap::new();
-    let mut last_seq: BTreeMap<(&str, u64), u64> = BTreeMap::new();
+    let mut counters: BTreeMap<&str, TopicCounter> = BTreeMap::new();
     for m in messages {
-        let entry = counts.entry(m.topic.clone()).or_insert(TopicCount {
-            messages: 0,
-            gaps: 0,
-        });
-        entry.messages += 1;
-        if let (Some(src), Some(seq)) = (m.header_u64("source_id"), m.header_u64("seq"))
-            && let Some(last) = last_seq.insert((&m.topic, src), seq)
-        {
-            entry.gaps += seq.saturating_sub(last + 1);
-        }
+        let numbered = m.header_u64("source_id").zip(m.header_u64("seq"));
+        counters.entry(&m.topic).or_default().add(numbered);
     }
-    counts
+    counters
+        .into_iter()
+        .map(|(topic, c)| (topic.to_string(), c.count()))
+        .collect()
 }
 
 fn topics(facts: &RunFacts, counts: &BTreeMap<String, TopicCount>) -> Vec<Value> {

@@ -4,7 +4,7 @@
 use super::driver::DriverOutcome;
 use super::events::Ending;
 use caravan_launch::model::LaunchFile;
-use caravan_report::{HostFacts, Latency, ProcessRecord, RunFacts, TopicCount};
+use caravan_report::{HostFacts, Latency, ProcessRecord, RunFacts};
 
 /// The facts of a run that ended as `ending` after `wall_time_s`.
 pub fn collect(
@@ -24,13 +24,7 @@ pub fn collect(
     let topic_counts = recording
         .topics
         .iter()
-        .map(|(name, s)| {
-            let count = TopicCount {
-                messages: s.messages,
-                gaps: s.gaps,
-            };
-            (name.clone(), count)
-        })
+        .map(|(name, s)| (name.clone(), s.counted.count()))
         .collect();
     let topic_latency = recording
         .topics
