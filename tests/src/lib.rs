@@ -451,6 +451,16 @@ pub fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
 }
 
 /// Runs the `caravan` command with `args`.
+/// The row of node `name` in a run report's `nodes`; panics naming it if there is none.
+pub fn node<'a>(report: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    report["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == name)
+        .unwrap_or_else(|| panic!("no node '{name}' in {report}"))
+}
+
 pub fn caravan(args: &[&str]) -> std::process::Output {
     Command::new(workspace_bin("caravan"))
         .args(args)

@@ -1,20 +1,11 @@
 //! `caravan launch` and the inspection commands, with real process groups.
 
-use caravan_tests::{PINGPONG, Scenario, caravan, ping_pong, recording, wait_until};
+use caravan_tests::{PINGPONG, Scenario, caravan, node, ping_pong, recording, wait_until};
 use std::path::Path;
 use std::process::Output;
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).to_string()
-}
-
-fn node<'a>(report: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
-    report["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|n| n["name"] == name)
-        .unwrap()
 }
 
 #[test]

@@ -2,16 +2,7 @@
 //! thread in lockstep, each still a node of its own to the group.
 
 use caravan_tests::recording::{all_messages, assert_same_messages, read};
-use caravan_tests::{Scenario, assert_refused, run_convoy_with, workspace_root};
-
-fn node<'a>(report: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
-    report["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|n| n["name"] == name)
-        .unwrap_or_else(|| panic!("no node '{name}' in {report}"))
-}
+use caravan_tests::{Scenario, assert_refused, node, run_convoy_with, workspace_root};
 
 #[test]
 fn a_convoy_in_containers_records_what_a_process_per_node_records() {
