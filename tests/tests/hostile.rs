@@ -313,6 +313,21 @@ fn inspection_commands_info_play_and_runs_dir_give_exit_2_for_bad_input() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("not-a-dir"), "{}", stderr(&out));
     assert!(s.shm_entries().is_empty());
+    // ... or a directory to be made under one.
+    let under = file.join("runs");
+    let out = caravan(&[
+        "launch",
+        s.file.to_str().unwrap(),
+        "--runs-dir",
+        under.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("not-a-dir is not a directory"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(s.shm_entries().is_empty());
 }
 
 #[path = "hostile/round3.rs"]

@@ -584,6 +584,8 @@ fn a_topic_read_and_published_as_different_types_on_two_hosts_fails_the_group() 
 
 #[path = "hosts/cleanup.rs"]
 mod cleanup;
+#[path = "hosts/join.rs"]
+mod join;
 #[path = "hosts/keys.rs"]
 mod keys;
 #[path = "hosts/pause.rs"]

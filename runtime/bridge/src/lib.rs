@@ -172,7 +172,37 @@ struct Shared {
     conflict: Mutex<Option<String>>,
     /// TLS handshakes that failed, each once, in the order seen.
     handshakes: Mutex<Vec<handshake::Failure>>,
+    /// The signal that stopped the wait for the other hosts.
+    interrupted: Mutex<Option<i32>>,
 }
+
+/// Ends [`Bridge::wait_for_hosts`] early, from another thread (a signal handler's).
+pub struct Interrupter(Arc<Shared>);
+
+impl Interrupter {
+    pub fn interrupt(&self, signal: i32) {
+        // Under the lock the join wait holds: it cannot miss this.
+        let _presence = self.0.presence.lock().unwrap();
+        *self.0.interrupted.lock().unwrap() = Some(signal);
+        self.0.changed.notify_all();
+    }
+}
+
+/// Why [`Bridge::wait_for_hosts`] gave up: a signal (Ctrl-C, SIGTERM) came first.
+#[derive(Debug)]
+pub struct Interrupted(pub i32);
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "stopped by signal {} while waiting for the other hosts; nothing was started",
+            self.0
+        )
+    }
+}
+
+impl std::error::Error for Interrupted {}
 
 /// Where the bridge's events go: the launcher's main loop, in the launcher's own event type.
 pub type Notify = Box<dyn Fn(FleetEvent) + Send>;
@@ -247,6 +277,7 @@ impl Bridge {
             events: Mutex::new(Outbox::default()),
             conflict: Mutex::new(None),
             handshakes: Mutex::new(Vec::new()),
+            interrupted: Mutex::new(None),
         });
         if spec.tls.is_some() {
             let (shared, hosts) = (shared.clone(), lf.hosts.clone());
@@ -352,7 +383,13 @@ impl Bridge {
         &self.host
     }
 
-    /// Waits until every required host has joined; an error names those that did not.
+    /// What ends [`Bridge::wait_for_hosts`] early.
+    pub fn interrupter(&self) -> Interrupter {
+        Interrupter(self.shared.clone())
+    }
+
+    /// Waits until every required host has joined; an error names those that did not, or is
+    /// [`Interrupted`].
     pub fn wait_for_hosts(&self, timeout: Duration, say: impl Fn(&str)) -> Result<()> {
         let deadline = Instant::now() + timeout;
         let mut presence = self.shared.presence.lock().unwrap();
@@ -365,6 +402,9 @@ impl Bridge {
                 say(&failure.describe(&missing));
             }
             told = failures.len();
+            if let Some(signal) = *self.shared.interrupted.lock().unwrap() {
+                return Err(Interrupted(signal).into());
+            }
             if let Some(why) = self.shared.conflict.lock().unwrap().clone() {
                 bail!("{why}");
             }

@@ -39,6 +39,24 @@ pub fn exit_code(e: &anyhow::Error) -> u8 {
     }
 }
 
+/// Why `dir` cannot be a directory to write into: it, or the nearest part of its path that
+/// exists, is not a directory (`--runs-dir FILE`, `--out FILE/sub`). What does not exist yet
+/// is made later.
+pub fn not_a_directory(dir: &std::path::Path) -> Option<String> {
+    let existing = dir.ancestors().find(|a| a.exists())?;
+    (!existing.is_dir()).then(|| {
+        if existing == dir {
+            format!("{}: exists and is not a directory", dir.display())
+        } else {
+            format!(
+                "{}: {} is not a directory",
+                dir.display(),
+                existing.display()
+            )
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -53,5 +71,23 @@ mod tests {
         assert_eq!(format!("{e:#}"), "topic pub: no group 'x' is running");
         assert_eq!(exit_code(&anyhow::anyhow!("disk full")), 1);
         assert_eq!(exit_code(&as_bad(anyhow::anyhow!("truncated"))), 2);
+    }
+
+    #[test]
+    fn a_directory_under_a_file_is_named_with_the_file() {
+        let dir = std::env::temp_dir().join(format!("caravan-nad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("afile");
+        std::fs::write(&file, "x").unwrap();
+        assert_eq!(not_a_directory(&dir), None);
+        assert_eq!(not_a_directory(&dir.join("new/deeper")), None);
+        let said = not_a_directory(&file).unwrap();
+        assert!(
+            said.ends_with("afile: exists and is not a directory"),
+            "{said}"
+        );
+        let said = not_a_directory(&file.join("sub")).unwrap();
+        assert!(said.contains("afile is not a directory"), "{said}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -60,7 +60,7 @@ pub fn global_config_path(group: &str) -> std::path::PathBuf {
 pub fn lock_group(group: &str) -> Result<Option<GroupLock>> {
     use std::os::unix::fs::OpenOptionsExt;
     use std::os::unix::io::AsRawFd;
-    let path = std::env::temp_dir().join(format!("caravan-group-{group}.lock"));
+    let path = lock_path(group);
     let file = std::fs::OpenOptions::new()
         .create(true)
         .truncate(false)
@@ -81,6 +81,36 @@ pub fn lock_group(group: &str) -> Result<Option<GroupLock>> {
         path,
         group: group.to_string(),
     }))
+}
+
+/// Whether a launcher holds `group`'s lock (looked at without taking it for good or removing
+/// the file: `caravan clean` may be about another group).
+fn lock_is_held(group: &str) -> bool {
+    use std::os::unix::io::AsRawFd;
+    let Ok(file) = std::fs::File::open(lock_path(group)) else {
+        return false;
+    };
+    // SAFETY: flock on a descriptor this function owns; closing it releases the lock.
+    unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_SH | libc::LOCK_NB) != 0 }
+}
+
+fn lock_path(group: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("caravan-group-{group}.lock"))
+}
+
+/// Groups with a lock file in the temporary directory, held or left by a killed launcher.
+fn groups_with_locks() -> Vec<String> {
+    std::fs::read_dir(std::env::temp_dir())
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().to_string();
+            let group = name.strip_prefix("caravan-group-")?.strip_suffix(".lock")?;
+            caravan::group::validate_name(group).ok()?;
+            Some(group.to_string())
+        })
+        .collect()
 }
 
 pub fn group_is_running(group: &str) -> Result<bool> {
@@ -154,8 +184,19 @@ pub struct CleanArgs {
 /// (`--all`) of every stale group. A running group is never touched.
 pub fn clean(args: &CleanArgs) -> Result<()> {
     let mut stale = Vec::new();
-    for group in caravan::group::groups_with_resources() {
-        let running = !live_nodes(&group)?.is_empty();
+    let with_memory = caravan::group::groups_with_resources();
+    let mut groups = with_memory.clone();
+    groups.extend(groups_with_locks());
+    groups.sort();
+    groups.dedup();
+    for group in groups {
+        // A launcher holds its lock from before its processes start (while it waits for
+        // other hosts, say) until after they end; one killed leaves only the file.
+        let running = if with_memory.contains(&group) {
+            !live_nodes(&group)?.is_empty()
+        } else {
+            lock_is_held(&group)
+        };
         match &args.group {
             Some(g) if *g != group => {}
             // Bad input (exit 2): the user named a group that is not theirs to clean yet.
@@ -178,7 +219,7 @@ pub fn clean(args: &CleanArgs) -> Result<()> {
         // Which to clean is the user's choice: bad input (exit 2) until they make it.
         (None, false, [_, _, ..]) => {
             return Err(bad(format!(
-                "{} groups left shared memory behind ({}); name one with --group, or clean them all with --all",
+                "{} groups left shared memory or a lock behind ({}); name one with --group, or clean them all with --all",
                 stale.len(),
                 stale.join(", ")
             )));
@@ -189,7 +230,7 @@ pub fn clean(args: &CleanArgs) -> Result<()> {
         let n = caravan::group::remove_resources(&group)?;
         // A dead launcher's lock and config go too (taking the lock proves none holds it).
         drop(lock_group(&group)?);
-        println!("removed {n} stale entries of group '{group}'");
+        println!("removed {n} stale entries of group '{group}', and its lock and config");
     }
     Ok(())
 }

@@ -155,11 +155,8 @@ pub fn launch(args: &LaunchArgs) -> Result<u8> {
         }
     };
     // Runs go into a directory: a file there is bad input, found before anything starts.
-    if args.runs_dir.exists() && !args.runs_dir.is_dir() {
-        eprintln!(
-            "caravan: --runs-dir {}: exists and is not a directory",
-            args.runs_dir.display()
-        );
+    if let Some(why) = crate::bad_input::not_a_directory(&args.runs_dir) {
+        eprintln!("caravan: --runs-dir {why}");
         return Ok(EXIT_BAD_INPUT);
     }
     let options = RunOptions {
@@ -248,6 +245,8 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
     let Some(_lock) = crate::clean::lock_group(&group)? else {
         return already();
     };
+    // From here on a signal must not end the launcher before it removes the lock.
+    let signals = crate::signals::Signals::watch()?;
     // Before this process first touches iceoryx2: its fallback config is the group's.
     let global = crate::clean::global_config_path(&group);
     caravan::group::write_config(&group, &global)
@@ -262,10 +261,20 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
         Some(host) => {
             let bridge = caravan_bridge::Bridge::open(&lf, host)?;
             console.say(&format!("host '{host}' of group '{group}' is up"));
-            if let Err(e) = bridge.wait_for_hosts(lf.group.join_timeout, |m| console.say(m)) {
+            let interrupter = bridge.interrupter();
+            let waited = signals.during(
+                |signal| interrupter.interrupt(signal),
+                || bridge.wait_for_hosts(lf.group.join_timeout, |m| console.say(m)),
+            );
+            if let Err(e) = waited {
                 eprintln!("caravan: {e:#}");
                 bridge.close();
-                return Ok(Launched { code: 1, dir: None });
+                // As a shell reports a command a signal stopped (and `caravan sweep` does).
+                let code = match e.downcast_ref::<caravan_bridge::Interrupted>() {
+                    Some(caravan_bridge::Interrupted(signal)) => 128 + *signal as u8,
+                    None => 1,
+                };
+                return Ok(Launched { code, dir: None });
             }
             Some(bridge)
         }
@@ -301,6 +310,7 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
         live,
         bridge.as_mut(),
         &options.arguments,
+        &signals,
     )
     .map(|mut facts| {
         // The report plugins read the recording, which the clock host has.

@@ -38,11 +38,8 @@ pub fn run(args: &MergeArgs) -> Result<u8> {
     } else {
         args.dirs.clone()
     };
-    if args.out.exists() && !args.out.is_dir() {
-        return bad(vec![format!(
-            "{}: exists and is not a directory",
-            args.out.display()
-        )]);
+    if let Some(why) = caravan_group::bad_input::not_a_directory(&args.out) {
+        return bad(vec![why]);
     }
     let manifests = match read_manifests(&dirs) {
         Ok(m) => m,

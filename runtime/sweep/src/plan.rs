@@ -270,11 +270,8 @@ fn with_origins(mut text: String, axes: &[Axis], cell: &Cell) -> String {
 /// checks only the cells it runs (the submitting `--slurm` checked them all).
 fn validate(plan: &Plan, quiet: bool) -> Vec<String> {
     // The output must be a directory (made, or resumed); a file there is bad input.
-    if plan.out.exists() && !plan.out.is_dir() {
-        return vec![format!(
-            "--out {}: exists and is not a directory",
-            plan.out.display()
-        )];
+    if let Some(why) = caravan_group::bad_input::not_a_directory(&plan.out) {
+        return vec![format!("--out {why}")];
     }
     let mut problems: Vec<(String, Vec<&str>)> = Vec::new();
     let mut mine = vec![false; plan.cells.len()];

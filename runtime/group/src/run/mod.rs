@@ -67,6 +67,7 @@ pub fn run_group(
     live: Option<caravan_record::live::LiveView>,
     mut bridge: Option<&mut caravan_bridge::Bridge>,
     arguments: &[String],
+    signals: &crate::signals::Signals,
 ) -> Result<RunFacts> {
     let lockstep = lf.group.clock == ClockMode::Lockstep;
     let (events_tx, events) = unbounded();
@@ -74,14 +75,13 @@ pub fn run_group(
     let (finish_tx, finish_rx) = unbounded();
     let control = Arc::new(Control::default());
     let signals_tx = events_tx.clone();
-    let mut signals = signal_hook::iterator::Signals::new([
-        signal_hook::consts::SIGINT,
-        signal_hook::consts::SIGTERM,
-    ])?;
-    let signals_handle = signals.handle();
+    let received = signals.received();
     std::thread::spawn(move || {
-        for sig in signals.forever() {
-            let _ = signals_tx.send(Event::Signal(sig));
+        // Ends when the launcher stops watching, or the run's events are no longer read.
+        for sig in received {
+            if signals_tx.send(Event::Signal(sig)).is_err() {
+                break;
+            }
         }
     });
     // Lockstep across hosts: one host's launcher owns simulated time and records; the others
@@ -188,7 +188,6 @@ pub fn run_group(
     sup.kill_leftovers();
     let ending = ending?;
     let wall_time_s = started.elapsed().as_secs_f64();
-    signals_handle.close();
     let _ = finish_tx.send(());
     let driven = driver
         .join()
