@@ -306,11 +306,13 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
         &lf,
         &dir,
         &config_path,
-        &console,
         live,
         bridge.as_mut(),
-        &options.arguments,
-        &signals,
+        &run::Launcher {
+            console: &console,
+            arguments: &options.arguments,
+            signals: &signals,
+        },
     )
     .map(|mut facts| {
         // The report plugins read the recording, which the clock host has.

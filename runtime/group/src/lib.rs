@@ -25,5 +25,5 @@ mod recording;
 pub mod report;
 pub mod resim;
 pub mod run;
-mod signals;
+pub mod signals;
 pub mod watch;

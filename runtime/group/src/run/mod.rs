@@ -57,18 +57,31 @@ fn plan(lf: &LaunchFile) -> Vec<Planned> {
         .collect()
 }
 
+/// What the launcher running a group lends it.
+pub struct Launcher<'a> {
+    /// Where progress is said.
+    pub console: &'a Console,
+    /// The command line after the program, for the recording's `run` metadata.
+    pub arguments: &'a [String],
+    /// Ctrl-C and SIGTERM, watched since the launcher took the group's lock.
+    pub signals: &'a crate::signals::Signals,
+}
+
 /// Starts `lf`'s processes in run directory `dir`, supervises them until the group ends and
 /// returns the run's facts (without its report plugins, which the caller adds).
 pub fn run_group(
     lf: &LaunchFile,
     dir: &Path,
     config_path: &Path,
-    console: &Console,
     live: Option<caravan_record::live::LiveView>,
     mut bridge: Option<&mut caravan_bridge::Bridge>,
-    arguments: &[String],
-    signals: &crate::signals::Signals,
+    launcher: &Launcher,
 ) -> Result<RunFacts> {
+    let &Launcher {
+        console,
+        arguments,
+        signals,
+    } = launcher;
     let lockstep = lf.group.clock == ClockMode::Lockstep;
     let (events_tx, events) = unbounded();
     let events_tx_for_bridge = events_tx.clone();
