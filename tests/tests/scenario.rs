@@ -136,8 +136,19 @@ fn a_plugin_that_never_ends_is_killed_at_its_time_limit() {
     )
     .unwrap();
     std::fs::set_permissions(&script, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
-    let out = s.run(&FIVE_SECONDS);
+    // Not quiet: the last line says what the exit code says.
+    let out = std::process::Command::new(caravan_tests::workspace_bin("caravan"))
+        .args(["launch", s.file.to_str().unwrap(), "--runs-dir"])
+        .arg(s.dir.join("runs"))
+        .args(FIVE_SECONDS)
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let said = stderr(&out);
+    assert!(
+        said.contains("completed, but a report plugin failed: simulated 5.0 s"),
+        "{said}"
+    );
     let report = s.report();
     assert_eq!(report["run"]["outcome"], "completed");
     let failed = &report["failed_sections"][0];

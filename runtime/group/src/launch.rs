@@ -348,8 +348,14 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
             facts.real_time_factor()
         ),
     };
+    // The run's outcome, and whether its report holds: the exit code says both.
+    let plugins = match written.failures.len() {
+        0 => "",
+        1 => ", but a report plugin failed",
+        _ => ", but report plugins failed",
+    };
     console.say(&format!(
-        "{}: {time}; report in {}",
+        "{}{plugins}: {time}; report in {}",
         facts.outcome,
         dir.join("report.md").display()
     ));

@@ -146,8 +146,14 @@ fn read_unguarded(path: &Path, patterns: &[String]) -> Result<Recording> {
         {
             describe(&mut recording, channel)?;
         }
+        // mcap checks a chunk's CRC after its last message: a message it gave first may be
+        // one the damage garbled, so the damaged chunk is named rather than the message.
         let json: Value = serde_json::from_slice(&message.data)
-            .with_context(|| format!("{}: a message on {} is not JSON", at(), channel.topic))?;
+            .map_err(|e| match crate::recording::damaged_chunk(&bytes) {
+                Some(chunk) => anyhow::anyhow!("{chunk}"),
+                None => anyhow::anyhow!("a message on {} is not JSON: {e}", channel.topic),
+            })
+            .with_context(at)?;
         let h = &json["header"];
         let field = |k: &str| caravan_report::as_u64(&h[k]);
         recording.messages.push(Recorded {

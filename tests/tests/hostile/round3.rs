@@ -233,6 +233,24 @@ fn info_of_a_recording_with_64_bytes_of_0xff_in_a_chunk_names_the_damaged_chunk(
         assert!(stderr(&out).contains(") is damaged: "), "{}", stderr(&out));
         assert!(out.stdout.is_empty(), "{args:?} printed a table");
     }
+    // The readers of every message name the chunk too, not a message it garbled.
+    let bag = s.dir.join("bag");
+    let runs = s.dir.join("resim");
+    let resim = [
+        "resim",
+        file,
+        "--node",
+        "pong",
+        "--runs-dir",
+        runs.to_str().unwrap(),
+    ];
+    let export = ["export", "--ros2", file, bag.to_str().unwrap()];
+    for args in [&resim[..], &export[..]] {
+        let out = caravan(args);
+        assert_bad_input(args, &out, &named);
+        assert!(!stderr(&out).contains("not JSON"), "{}", stderr(&out));
+    }
+    assert!(!bag.exists() && !runs.exists());
 }
 
 /// `caravan schemas -o` into a folder that does not exist exited 1, as a failure while
