@@ -125,6 +125,7 @@ impl Checker<'_> {
 
     pub fn hosts(&mut self, root: &Scope) -> BTreeMap<String, HostSpec> {
         let mut hosts = BTreeMap::new();
+        let mut hosts_with_tls = 0;
         let Some(s) = self.table(root, "hosts", "hosts".into(), None) else {
             return hosts;
         };
@@ -155,13 +156,19 @@ impl Checker<'_> {
             let connect = self.get(&h, "connect", endpoints).unwrap_or_default();
             let required = self.get(&h, "required", boolean).unwrap_or(true);
             let clock = self.get(&h, "clock", boolean).unwrap_or(false);
+            // A tls table with a problem of its own (named already) still counts as given, so
+            // what depends on it is not refused as well.
+            let has_tls = h.table.get("tls").is_some();
             let tls = self.tls(&h, name);
+            if has_tls {
+                hosts_with_tls += 1;
+            }
             for (key, list) in [("listen", &listen), ("connect", &connect)] {
                 let secure = list.iter().filter(|e| e.starts_with("quic/")).count();
-                if tls.is_some() && secure < list.len() {
+                if has_tls && secure < list.len() {
                     let msg = "this host has a tls table: its endpoints must be quic/ADDRESS:PORT";
                     self.key_problem(&h, key, msg.to_string());
-                } else if tls.is_none() && secure > 0 {
+                } else if !has_tls && secure > 0 {
                     let msg = format!(
                         "a quic/ endpoint needs a [hosts.{name}.tls] table with ca, certificate and key"
                     );
@@ -187,8 +194,7 @@ impl Checker<'_> {
                 },
             );
         }
-        let with_tls = hosts.values().filter(|h| h.tls.is_some()).count();
-        if with_tls > 0 && with_tls < hosts.len() {
+        if hosts_with_tls > 0 && hosts_with_tls < hosts.len() {
             let msg = "some hosts have a tls table and some do not: hosts without one could not connect to those with one; give every host a tls table, or none";
             self.scope_problem(&s, msg);
         }
