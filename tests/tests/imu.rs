@@ -218,3 +218,27 @@ fn an_imu_report_hold_of_1e308_s_is_refused_before_start() {
     // The report plugin alone: the driver keeps the shipped hold.
     assert_refused_before_start("imu/tilt.toml", "report.0.params.hold_s=1e308", "hold_s");
 }
+
+/// An IMU on the platform (no wheels) without `link`: the sensor took the robot for a wheeled
+/// one and blamed `urdf` alone; the message says to give `link`.
+#[test]
+fn an_imu_without_its_link_is_told_to_give_link() {
+    let root = caravan_tests::workspace_root().join("launch/imu");
+    let s = caravan_tests::Scenario::new(
+        "imu-nolink",
+        &format!(
+            r#"clock = "lockstep"
+duration = "1s"
+
+[[process]]
+name = "imu"
+exec = "caravan-sensor"
+rate = "1000Hz"
+params = {{ robot = 0, count = 1, world = "{root}/worlds/empty.toml", urdf = "{root}/robots/platform.urdf" }}
+"#,
+            root = root.display()
+        ),
+    );
+    let out = s.run(&[]);
+    caravan_tests::assert_refused(&s, &out, &["key 'urdf'", "give `link`"]);
+}

@@ -47,10 +47,14 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     world.check_robot(&p.world, p.robot)?;
     let urdf = identity.resolve_path(&p.urdf);
     let robot = match &p.link {
-        None => Some(
-            caravan_world::load_robot(&urdf)
-                .map_err(|e| format!("key 'urdf': robot description {e}"))?,
-        ),
+        // Without `link` the sensors ride on a wheeled robot's base: a description that is
+        // not one may well be a robot whose link was meant.
+        None => Some(caravan_world::load_robot(&urdf).map_err(|e| {
+            format!(
+                "key 'urdf': robot description {e} (without `link` the sensors ride on the \
+                 base of a wheeled robot; on another robot, give `link`, the link they ride on)"
+            )
+        })?),
         Some(link) => {
             let d = caravan_world::description::load_description(&urdf)
                 .map_err(|e| format!("key 'urdf': robot description {e}"))?;
