@@ -247,13 +247,15 @@ fn topic_info_node_info_and_top_describe_a_running_group() {
         "{}",
         stderr(&out)
     );
-    let out = caravan(&["topic", "info", "demo/pnig", "--group", g]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        stderr(&out).contains("no topic 'demo/pnig'"),
-        "{}",
-        stderr(&out)
-    );
+    for command in ["info", "echo", "hz"] {
+        let out = caravan(&["topic", command, "demo/pnig", "--group", g]);
+        assert_eq!(out.status.code(), Some(2), "topic {command}: {out:?}");
+        assert!(
+            stderr(&out).contains("no topic 'demo/pnig'"),
+            "topic {command}: {}",
+            stderr(&out)
+        );
+    }
 
     // SAFETY: signalling our own child.
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
