@@ -27,7 +27,7 @@ impl Descriptor {
         out: &mut Vec<u8>,
     ) -> Result<(), String> {
         self.check_size(bytes.len())?;
-        serde_json::to_writer(out, &self.object(self.layout(), bytes, extra))
+        serde_json::to_writer(Bytes(out), &self.object(self.layout(), bytes, extra))
             .map_err(|e| e.to_string())
     }
 
@@ -152,12 +152,10 @@ impl Serialize for FieldValue<'_> {
             } => {
                 let stride = (*stride).max(1);
                 let mut seq = s.serialize_seq(Some(items.len() / stride))?;
-                for item in items.chunks_exact(stride) {
-                    match element {
-                        Element::Scalar(k) => {
-                            seq.serialize_element(&FieldValue::Scalar(*k, item))?
-                        }
-                        Element::Struct(name) => {
+                match element {
+                    Element::Scalar(kind) => scalars(&mut seq, *kind, items)?,
+                    Element::Struct(name) => {
+                        for item in items.chunks_exact(stride) {
                             seq.serialize_element(&owner.nested(name, item))?
                         }
                     }
@@ -221,6 +219,59 @@ fn scalar<S: Serializer>(kind: Scalar, b: &[u8], s: S) -> Result<S::Ok, S::Error
         Scalar::I32 => s.serialize_i32(i32::from_ne_bytes(to(b))),
         Scalar::U8 => s.serialize_u8(b[0]),
         Scalar::I8 => s.serialize_i8(b[0] as i8),
+    }
+}
+
+/// An array's numbers, `items` their bytes, each as [`scalar`] gives it: the kind is matched
+/// once per array, not once per item (a map's quarter of a million cells).
+fn scalars<S: SerializeSeq>(seq: &mut S, kind: Scalar, items: &[u8]) -> Result<(), S::Error> {
+    fn each<const N: usize, T: Serialize, S: SerializeSeq>(
+        seq: &mut S,
+        items: &[u8],
+        value: impl Fn([u8; N]) -> T,
+    ) -> Result<(), S::Error> {
+        for item in items.chunks_exact(N) {
+            seq.serialize_element(&value(item.try_into().expect("N bytes")))?;
+        }
+        Ok(())
+    }
+    match kind {
+        Scalar::F64 => each(seq, items, f64::from_ne_bytes),
+        Scalar::F32 => each(seq, items, |b| f32::from_ne_bytes(b) as f64),
+        Scalar::U64 => each(seq, items, u64::from_ne_bytes),
+        Scalar::I64 => each(seq, items, i64::from_ne_bytes),
+        Scalar::U32 => each(seq, items, u32::from_ne_bytes),
+        Scalar::I32 => each(seq, items, i32::from_ne_bytes),
+        Scalar::U8 => each(seq, items, |[b]: [u8; 1]| b),
+        Scalar::I8 => each(seq, items, |[b]: [u8; 1]| b as i8),
+    }
+}
+
+/// A `Vec` written to a byte at a time where serde_json writes a few (a comma, a digit or
+/// three), which `extend_from_slice` would copy with a call each.
+struct Bytes<'a>(&'a mut Vec<u8>);
+
+impl std::io::Write for Bytes<'_> {
+    #[inline]
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.write_all(buf)?;
+        Ok(buf.len())
+    }
+
+    #[inline]
+    fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        if buf.len() <= 4 {
+            for &b in buf {
+                self.0.push(b);
+            }
+        } else {
+            self.0.extend_from_slice(buf);
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
     }
 }
 

@@ -238,7 +238,7 @@ fn a_scheduled_node_steps_exactly_when_it_asks() {
     let times = |node: &str| -> Vec<u64> {
         advances
             .iter()
-            .filter(|a| a.stepped.contains(&node.to_string()))
+            .filter(|a| a.stepped.contains(&node.into()))
             .map(|a| a.now_ns / 1_000_000)
             .collect()
     };

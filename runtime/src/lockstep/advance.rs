@@ -5,8 +5,9 @@
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Advance {
     pub now_ns: u64,
-    /// Names of the nodes that stepped, sorted.
-    pub stepped: Vec<String>,
+    /// Names of the nodes that stepped, sorted (shared with the scheduler's, not copied at
+    /// every advance).
+    pub stepped: Vec<std::sync::Arc<str>>,
     /// Hashes of the topics published in this step, sorted.
     pub published: Vec<u64>,
     /// Topics (hashes) published by nodes already stepping at the next time (see

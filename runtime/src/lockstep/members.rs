@@ -11,7 +11,8 @@ use std::time::{Duration, Instant};
 
 /// A node in the schedule.
 pub(super) struct Member {
-    pub(super) name: String,
+    /// Shared with every [`super::Advance`] that names it.
+    pub(super) name: std::sync::Arc<str>,
     /// False after the process died, until it says hello again (a restart).
     pub(super) active: bool,
     pub(super) period_ns: u64,

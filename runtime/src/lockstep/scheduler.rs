@@ -131,7 +131,7 @@ impl Scheduler {
         let mut expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
         loop {
             self.admit_new()?;
-            let joined: BTreeSet<&str> = self.members.iter().map(|m| m.name.as_str()).collect();
+            let joined: BTreeSet<&str> = self.members.iter().map(|m| &*m.name).collect();
             if expected.is_subset(&joined) {
                 return Ok(());
             }
@@ -214,7 +214,7 @@ impl Scheduler {
             overlapped: false,
             granted_at: Instant::now(),
             last_step: Duration::ZERO,
-            name,
+            name: name.into(),
         });
         self.by_hash.insert(hash, index);
         for topic in hello.triggers.as_slice() {
@@ -260,10 +260,7 @@ impl Scheduler {
                 .iter()
                 .flat_map(|f| f.waiting.iter().copied())
                 .collect();
-            let names: Vec<&str> = waiting
-                .iter()
-                .map(|&i| self.members[i].name.as_str())
-                .collect();
+            let names: Vec<&str> = waiting.iter().map(|&i| &*self.members[i].name).collect();
             let now_ns = self.now_ns;
             let dead = watchdog(&names).map_err(|why| {
                 Error::Lockstep(format!(
@@ -281,7 +278,7 @@ impl Scheduler {
         self.last_finished_ns = Some(finished.now_ns);
         // The next time's other nodes are granted by the next call, after the caller has
         // looked at what this time published (its recorder finds new topics first).
-        let mut stepped: Vec<String> = finished
+        let mut stepped: Vec<std::sync::Arc<str>> = finished
             .due
             .iter()
             .map(|&i| self.members[i].name.clone())
@@ -429,7 +426,8 @@ impl Scheduler {
             .receive()
             .map_err(|e| Error::transport("done", e))?
         {
-            let done = *sample.payload();
+            // Read in place: a report is 4 KB, most of it the published topics' room.
+            let done = sample.payload();
             let Some(&i) = self.by_hash.get(&done.node_hash) else {
                 continue;
             };
@@ -592,9 +590,6 @@ impl Scheduler {
         } else {
             &self.done_listener
         };
-        listener
-            .timed_wait(|_| {}, self.poll)
-            .map_err(|e| Error::transport("scheduler wait", e))?;
-        Ok(())
+        transport::wait_events(listener, self.poll)
     }
 }
