@@ -28,6 +28,7 @@ pub mod discovery;
 mod entry;
 mod error;
 mod executor;
+pub mod facts;
 pub mod group;
 mod identity;
 pub mod inject;

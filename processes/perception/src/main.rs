@@ -153,6 +153,7 @@ fn main() -> ExitCode {
         "caravan-perception",
         |p: Params, identity| {
             p.validate()?;
+            identity.serves_robot(p.robot);
             let initial = p.initial(identity)?;
             let wheels = match (&p.urdf, p.mode) {
                 (Some(urdf), _) => {

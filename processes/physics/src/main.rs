@@ -57,6 +57,8 @@ fn setup(params: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     let checked = setup::check(&params, &identity.launch_dir).map_err(|e| e.0)?;
     let starts = checked.place().map_err(|e| e.0)?;
     let sim = setup::build(&checked, &starts, params.sim_config(dt_ns)).map_err(|e| e.0)?;
+    // The launcher finds every other node's `robot` among these.
+    identity.simulates_robots(sim.robot_count());
     let mut scene = caravan_world::scene::scene_of(&checked.world);
     // Robots of the one-kind form whose description the differential-drive model fits get
     // their bodies drawn; others (arms, tracks, aircraft) are drawn by their frames alone.

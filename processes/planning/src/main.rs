@@ -75,6 +75,7 @@ fn main() -> ExitCode {
         "caravan-planning",
         |mut p: Params, identity| {
             p.validate()?;
+            identity.serves_robot(p.robot);
             if let Some(file) = &p.world {
                 caravan_world::load_world(&identity.resolve_path(file))
                     .map_err(|e| format!("key 'world': world file {e}"))?

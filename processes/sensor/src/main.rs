@@ -45,6 +45,7 @@ fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     let world = caravan_world::load_world(&identity.resolve_path(&p.world))
         .map_err(|e| format!("key 'world': world file {e}"))?;
     world.check_robot(&p.world, p.robot)?;
+    identity.serves_robot(p.robot);
     let urdf = identity.resolve_path(&p.urdf);
     let robot = match &p.link {
         // Without `link` the sensors ride on a wheeled robot's base: a description that is

@@ -80,6 +80,33 @@ fn a_drive_for_robot_9_on_a_one_robot_world_is_refused() {
     assert!(err.contains("robot 9 is not one of the group's 1"), "{err}");
 }
 
+/// `count` is the launch file's word for the robots the physics simulates: raised with the
+/// robot, the drive's (the driver's, the IMU sensor's) own check passes, and the launcher finds robot 9 missing from what the
+/// physics' check says it simulates (`caravan::facts`).
+#[test]
+fn a_drive_whose_count_is_raised_with_its_robot_is_refused_by_what_the_physics_simulates() {
+    let cases = [
+        ("tracked/flat.toml", "drive"),
+        ("tracked/flat.toml", "driver"),
+        ("imu/tilt.toml", "imu"),
+    ];
+    for (file, process) in cases {
+        let sets = [
+            format!("process.{process}.params.count=10"),
+            format!("process.{process}.params.robot=9"),
+        ];
+        let err = refused(file, &[&sets[0], &sets[1]]);
+        for part in [
+            format!("process '{process}'"),
+            "key 'robot'".into(),
+            "robot 9 is not simulated (process 'physics' simulates one robot, robot 0".into(),
+            sets[1].clone(),
+        ] {
+            assert!(err.contains(&part), "expected '{part}' in: {err}");
+        }
+    }
+}
+
 #[test]
 fn a_driver_for_robot_9_on_a_one_robot_world_is_refused() {
     refused_naming(

@@ -26,6 +26,7 @@ pub fn setup(
     identity: &caravan::NodeIdentity,
 ) -> Result<(Params, Geometry), String> {
     p.validate()?;
+    identity.serves_robot(p.robot);
     let robot = caravan_world::load_robot(&identity.resolve_path(&p.urdf))
         .map_err(|e| format!("key 'urdf': robot description {e}"))?;
     p.follower.footprint_half_m = [robot.chassis_half_extents[0], robot.chassis_half_extents[1]];

@@ -65,6 +65,7 @@ struct Ready {
 
 fn setup(p: Params, identity: &NodeIdentity) -> Result<Ready, String> {
     caravan_tracked::params::robot_index(p.robot, p.count)?;
+    identity.serves_robot(p.robot);
     caravan_tracked::params::FLIPPER_ANGLE_RAD.check("flipper_angle_rad", p.flipper_angle_rad)?;
     let radius_given = p.limits.wheel_radius_m != 0.0;
     let d = load_description(&identity.resolve_path(&p.urdf))

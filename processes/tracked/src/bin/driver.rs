@@ -64,9 +64,10 @@ fn never() -> f64 {
     f64::INFINITY
 }
 
-fn setup(p: Params, _: &NodeIdentity) -> Result<Params, String> {
+fn setup(p: Params, identity: &NodeIdentity) -> Result<Params, String> {
     use caravan_tracked::params::{SPEED_M_S, TIME_S, robot_index, show_exact};
     robot_index(p.robot, p.count)?;
+    identity.serves_robot(p.robot);
     SPEED_M_S.check("speed_m_s", p.speed_m_s)?;
     TIME_S.check("start_s", p.start_s)?;
     if p.stop_s != f64::INFINITY {

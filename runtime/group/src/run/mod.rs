@@ -9,6 +9,7 @@ mod facts;
 mod network;
 pub mod output;
 pub mod preflight;
+mod robots;
 pub mod supervisor;
 
 use anyhow::Result;

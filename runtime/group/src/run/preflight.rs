@@ -95,6 +95,7 @@ pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<En
     env.insert(caravan::env_vars::CHECK.into(), "1".into());
     let mut running = Vec::new();
     let mut problems = Vec::new();
+    let mut facts = Vec::new();
     for (index, plan) in super::plan(lf).into_iter().enumerate() {
         if !is_checked(&plan) {
             continue;
@@ -106,11 +107,15 @@ pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<En
         let key = memo.map(|_| memo_key(&cmd));
         let known = memo.zip(key.as_ref()).and_then(|(m, k)| m.processes.get(k));
         if let Some(output) = known {
+            facts.extend(caravan::facts::read(&String::from_utf8_lossy(
+                &output.stdout,
+            )));
             let params = &plan.spec.params;
             problems.extend(judge(index, &name, &plan.program, params, Ok(output)));
             continue;
         }
-        let child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn();
+        // Its standard output holds the facts it states (`caravan::facts`).
+        let child = cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).spawn();
         match child {
             Ok(child) => {
                 let (tx, rx) = bounded(1);
@@ -149,6 +154,11 @@ pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<En
                 if let (Some(memo), Some(key), Ok(output)) = (memo, key, &output) {
                     memo.processes.keep(key, output);
                 }
+                if let Ok(output) = &output {
+                    facts.extend(caravan::facts::read(&String::from_utf8_lossy(
+                        &output.stdout,
+                    )));
+                }
                 output
             }
             Err(RecvTimeoutError::Timeout) => {
@@ -171,6 +181,7 @@ pub fn check_processes_with(lf: &LaunchFile, memo: Option<&CheckMemo>) -> Vec<En
             problems.push(p);
         }
     }
+    problems.extend(super::robots::served_robots_are_simulated(lf, &facts));
     problems
 }
 
