@@ -250,8 +250,13 @@ pub fn parse(text: &str, file: &str, dir: &Path) -> Result<RobotDescription, Des
             ));
         }
     }
-    let urdf =
-        urdf_rs::read_from_string(text).map_err(|e| err(None, format!("not a valid URDF: {e}")))?;
+    let urdf = urdf_rs::read_from_string(text).map_err(|e| {
+        let e = e.to_string();
+        match source::missing_attribute(text, &e) {
+            Some((line, what)) => err(Some(line), format!("{what} (not a valid URDF: {e})")),
+            None => err(None, format!("not a valid URDF: {e}")),
+        }
+    })?;
     let line_of = |element: &str, name: &str| source::line_of(text, element, name);
 
     let mut links = Vec::with_capacity(urdf.links.len());

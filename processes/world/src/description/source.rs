@@ -65,6 +65,42 @@ pub fn line_of(text: &str, element: &str, name: &str) -> Option<usize> {
         .map(|t| t.line)
 }
 
+/// Where the attribute urdf-rs says is missing (`missing field `size``, with no position)
+/// is missing: the line of the first element that needs it and lacks it, and what it is, as
+/// `<box> of link 'base' has no size`.
+pub fn missing_attribute(text: &str, error: &str) -> Option<(usize, String)> {
+    let rest = &error[error.find("missing field ")? + "missing field ".len()..];
+    let quote = rest.chars().next()?;
+    let name = rest[1..].split(quote).next()?;
+    let holders: &[&str] = match name {
+        "size" => &["box"],
+        "radius" => &["cylinder", "sphere", "capsule"],
+        "length" => &["cylinder", "capsule"],
+        "filename" => &["mesh"],
+        "link" => &["parent", "child"],
+        "value" => &["mass"],
+        "ixx" | "ixy" | "ixz" | "iyy" | "iyz" | "izz" => &["inertia"],
+        "name" | "type" => &["link", "joint"],
+        _ => return None,
+    };
+    let lacking = holders
+        .iter()
+        .flat_map(|h| elements(text, h).into_iter().map(move |t| (h, t)))
+        .filter(|(_, t)| t.attribute(name).is_none())
+        .min_by_key(|(_, t)| t.line)?;
+    let (holder, tag) = lacking;
+    // The link or joint it is part of: the last one opened at or before it.
+    let owner = ["link", "joint"]
+        .iter()
+        .flat_map(|e| elements(text, e).into_iter().map(move |t| (e, t)))
+        .filter(|(_, t)| t.line <= tag.line && t.attribute("name").is_some())
+        .max_by_key(|(_, t)| t.line)
+        .filter(|_| !["link", "joint"].contains(holder))
+        .map(|(e, t)| format!(" of {e} '{}'", t.attribute("name").unwrap_or_default()))
+        .unwrap_or_default();
+    Some((tag.line, format!("<{holder}>{owner} has no {name}")))
+}
+
 /// Friction coefficients from Gazebo extensions, `<gazebo reference="link"><mu1>μ</mu1>`:
 /// (line, link, the text of mu1).
 pub fn gazebo_mu1(text: &str) -> Vec<(usize, String, String)> {

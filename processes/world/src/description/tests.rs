@@ -140,6 +140,18 @@ fn missing_and_disconnected_links_are_rejected() {
     );
 }
 
+/// urdf-rs names a missing attribute but not where: the first element lacking it is named,
+/// with its line and its link.
+#[test]
+fn a_missing_attribute_is_named_with_its_element_link_and_line() {
+    let text = "<robot name='x'>\n  <link name='base'>\n    <collision>\n      \
+                <geometry><box/></geometry>\n    </collision>\n  </link>\n</robot>\n";
+    let e = error(text);
+    assert!(e.contains(":4:"), "{e}");
+    assert!(e.contains("<box> of link 'base' has no size"), "{e}");
+    assert!(e.contains("missing field"), "{e}");
+}
+
 #[test]
 fn malformed_xml_is_a_clear_error() {
     let e = error("<robot name='x'><link name='a'>");
