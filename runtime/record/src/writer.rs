@@ -155,6 +155,9 @@ struct Writer {
     schemas: BTreeMap<String, u16>,
     sequences: BTreeMap<u16, u32>,
     live: Option<super::live::LiveView>,
+    /// The JSON text of the message being written, kept between messages: sized for a map
+    /// (a megabyte of cells), it is allocated once, not once per message.
+    text: Vec<u8>,
 }
 
 impl Writer {
@@ -200,6 +203,7 @@ impl Writer {
             sequences: BTreeMap::new(),
             stats: Vec::new(),
             live: None,
+            text: Vec::new(),
         })
     }
 
@@ -335,24 +339,12 @@ impl Writer {
             Vec::new()
         };
         let header = schema::header_json(&msg.header, !self.lockstep);
-        let mut bytes = Vec::with_capacity(msg.bytes.len() * 2);
-        msg.descriptor
-            .write_json(&msg.bytes, Some(("header", &header)), &mut bytes)
-            .map_err(|e| anyhow!("topic '{topic}': cannot convert to JSON: {e}"))?;
-        if let Some(live) = &mut self.live {
-            live.log(&topic, stamp_ns, &bytes);
-            for view in &views {
-                live.log(&view.topic, stamp_ns, &view.bytes);
-            }
-        }
-        // Discovery gave every recorded topic its channel; the others are served live only.
-        let Some(&channel) = self.channels.get(&*topic) else {
+        let mut bytes = std::mem::take(&mut self.text);
+        bytes.clear();
+        let recorded = self.write_text(&topic, &msg, &header, views, &mut bytes);
+        self.text = bytes;
+        if !recorded? {
             return Ok(());
-        };
-        self.write_message(channel, stamp_ns, &bytes)?;
-        for view in views {
-            let channel = self.scene_channel(&view.topic, view.schema)?;
-            self.write_message(channel, stamp_ns, &view.bytes)?;
         }
         let stats = self.stats[drained.id].get_or_insert_with(|| TopicStats::new(type_name));
         stats
@@ -362,6 +354,38 @@ impl Writer {
             .latency
             .saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));
         Ok(())
+    }
+
+    /// Writes `msg` as JSON text (into `bytes`) and its `views` to the live view and, when its
+    /// topic is recorded, to the file: whether it was.
+    fn write_text(
+        &mut self,
+        topic: &str,
+        msg: &caravan::tap::Tapped,
+        header: &serde_json::Value,
+        views: Vec<scene::View>,
+        bytes: &mut Vec<u8>,
+    ) -> Result<bool> {
+        let stamp_ns = msg.header.stamp_ns;
+        msg.descriptor
+            .write_json(&msg.bytes, Some(("header", header)), bytes)
+            .map_err(|e| anyhow!("topic '{topic}': cannot convert to JSON: {e}"))?;
+        if let Some(live) = &mut self.live {
+            live.log(topic, stamp_ns, bytes);
+            for view in &views {
+                live.log(&view.topic, stamp_ns, &view.bytes);
+            }
+        }
+        // Discovery gave every recorded topic its channel; the others are served live only.
+        let Some(&channel) = self.channels.get(topic) else {
+            return Ok(false);
+        };
+        self.write_message(channel, stamp_ns, bytes)?;
+        for view in views {
+            let channel = self.scene_channel(&view.topic, view.schema)?;
+            self.write_message(channel, stamp_ns, &view.bytes)?;
+        }
+        Ok(true)
     }
 
     /// Writes the summary and flushes the file.
