@@ -262,10 +262,15 @@ pub fn start(mut lf: LaunchFile, options: &RunOptions) -> Result<Launched> {
             let bridge = caravan_bridge::Bridge::open(&lf, host)?;
             console.say(&format!("host '{host}' of group '{group}' is up"));
             let interrupter = bridge.interrupter();
-            let waited = signals.during(
+            let (waited, signal) = signals.during(
                 |signal| interrupter.interrupt(signal),
                 || bridge.wait_for_hosts(lf.group.join_timeout, |m| console.say(m)),
             );
+            // A signal that came as the last host joined stops the launch all the same.
+            let waited = match (waited, signal) {
+                (Ok(()), Some(signal)) => Err(caravan_bridge::Interrupted(signal).into()),
+                (waited, _) => waited,
+            };
             if let Err(e) = waited {
                 eprintln!("caravan: {e:#}");
                 bridge.close();

@@ -34,21 +34,28 @@ impl Signals {
     }
 
     /// Runs `wait`, handing the first signal that comes before it returns to `on_signal` (on
-    /// another thread), which is to make `wait` return.
-    pub fn during<T>(&self, on_signal: impl FnOnce(i32) + Send, wait: impl FnOnce() -> T) -> T {
+    /// another thread), which is to make `wait` return. Returns what `wait` returned, and the
+    /// signal taken meanwhile, if any: one that came as `wait` returned by itself is taken
+    /// too, and the caller must still act on it.
+    pub fn during<T>(
+        &self,
+        on_signal: impl FnOnce(i32) + Send,
+        wait: impl FnOnce() -> T,
+    ) -> (T, Option<i32>) {
         let (done, finished) = bounded::<()>(0);
         std::thread::scope(|s| {
-            s.spawn(|| {
+            let watcher = s.spawn(|| {
                 select! {
-                    recv(self.received) -> signal => if let Ok(signal) = signal {
-                        on_signal(signal)
-                    },
-                    recv(finished) -> _ => {}
+                    recv(self.received) -> signal => signal.ok().inspect(|&signal| on_signal(signal)),
+                    recv(finished) -> _ => None,
                 }
             });
             let out = wait();
             drop(done);
-            out
+            (
+                out,
+                watcher.join().expect("the signal watcher does not panic"),
+            )
         })
     }
 }
@@ -67,7 +74,7 @@ mod tests {
     fn a_signal_during_a_wait_is_handed_over_and_one_after_it_is_kept() {
         let signals = Signals::watch().unwrap();
         let (tx, rx) = bounded(1);
-        let got = signals.during(
+        let (got, taken) = signals.during(
             move |s| tx.send(s).unwrap(),
             || {
                 // SAFETY: raising a signal this process watches.
@@ -75,9 +82,10 @@ mod tests {
                 rx.recv().unwrap()
             },
         );
-        assert_eq!(got, libc::SIGTERM);
+        assert_eq!((got, taken), (libc::SIGTERM, Some(libc::SIGTERM)));
         // A wait that ends by itself leaves the next signal for the run.
-        signals.during(|_| panic!("no signal came during this wait"), || ());
+        let ((), taken) = signals.during(|_| panic!("no signal came during this wait"), || ());
+        assert_eq!(taken, None);
         unsafe { libc::raise(libc::SIGINT) };
         assert_eq!(signals.received().recv().unwrap(), libc::SIGINT);
     }
