@@ -29,28 +29,29 @@ fn waiting_launcher(s: &Scenario) -> std::process::Child {
     child
 }
 
+/// SIGTERM, and Ctrl-C (SIGINT, which said "did not join within 60s" before).
 #[test]
-fn a_host_launcher_stopped_by_sigterm_while_it_waits_for_the_others_removes_its_lock() {
-    let s = Scenario::new("hosts-sigterm", &two_hosts("realtime", ""));
-    let child = waiting_launcher(&s);
-    // The group is taken while its launcher waits: not another's to clean.
-    let out = caravan(&["clean", "--group", &s.group.name]);
-    assert_eq!(out.status.code(), Some(2), "{:?}", out);
-    // SAFETY: signalling the child this test started.
-    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
-    let out = child.wait_with_output().unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(128 + libc::SIGTERM), "{err}");
-    assert!(
-        err.contains("stopped by signal 15 while waiting for the other hosts"),
-        "{err}"
-    );
-    assert!(!err.contains("did not join"), "{err}");
-    for f in group_files(&s) {
-        assert!(!f.exists(), "{} left behind", f.display());
+fn a_host_launcher_stopped_by_a_signal_while_it_waits_for_the_others_removes_its_lock() {
+    for signal in [libc::SIGTERM, libc::SIGINT] {
+        let s = Scenario::new("hosts-signal", &two_hosts("realtime", ""));
+        let child = waiting_launcher(&s);
+        // The group is taken while its launcher waits: not another's to clean.
+        let out = caravan(&["clean", "--group", &s.group.name]);
+        assert_eq!(out.status.code(), Some(2), "{:?}", out);
+        // SAFETY: signalling the child this test started.
+        unsafe { libc::kill(child.id() as i32, signal) };
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(128 + signal), "{err}");
+        let said = format!("stopped by signal {signal} while waiting for the other hosts");
+        assert!(err.contains(&said), "{err}");
+        assert!(!err.contains("did not join"), "{err}");
+        for f in group_files(&s) {
+            assert!(!f.exists(), "{} left behind", f.display());
+        }
+        assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
+        assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
     }
-    assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
-    assert!(s.shm_entries().is_empty(), "{:?}", s.shm_entries());
 }
 
 #[test]
