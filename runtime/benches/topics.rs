@@ -1,6 +1,7 @@
 //! The runtime's hot paths, in one process: publishing and receiving a small message and a
 //! laser scan through Caravan topics (iceoryx2 shared memory underneath), and deciding one
-//! message's fate on an emulated link.
+//! message's fate on an emulated link; and a recording's JSON text of a full map (the
+//! writer's `write_json`, beside `serde_json` of the same view).
 //!
 //!     cargo bench -p caravan --bench topics
 
@@ -81,5 +82,40 @@ fn link(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, topics, link);
+/// A full 512 × 512 map's JSON text, as the recording writer makes it and as `serde_json`
+/// makes it of the view: the same text (a test holds them equal), two ways.
+fn record_json(c: &mut Criterion) {
+    use caravan_schemas::{OccupancyGrid, descriptor::Descriptor, from_json::write_message};
+    let descriptor = Descriptor::of::<OccupancyGrid>();
+    let mut bytes = descriptor.default_bytes().expect("a default map");
+    // Unknown, free and occupied, as a SLAM map has them.
+    let cells: Vec<i8> = (0..512 * 512)
+        .map(|i| [-1, 0, 0, 0, 100, 37][i % 6])
+        .collect();
+    let map = serde_json::json!({"width": 512, "height": 512, "data": cells});
+    write_message(descriptor.type_name(), &map, &mut bytes).expect("a 512 x 512 map");
+    let header = serde_json::json!({"stamp_ns": 1, "seq": 2});
+    let mut g = c.benchmark_group("record_json");
+    g.measurement_time(Duration::from_secs(5));
+    let mut out = Vec::new();
+    g.bench_function("map 512x512: write_json", |b| {
+        b.iter(|| {
+            out.clear();
+            descriptor
+                .write_json(&bytes, Some(("header", &header)), &mut out)
+                .unwrap();
+            black_box(out.len());
+        })
+    });
+    g.bench_function("map 512x512: serde_json of the view", |b| {
+        b.iter(|| {
+            let mut view = descriptor.view(&bytes).unwrap();
+            view["header"] = header.clone();
+            black_box(serde_json::to_vec(&view).unwrap().len());
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, topics, link, record_json);
 criterion_main!(benches);

@@ -31,6 +31,7 @@ mod status;
 mod topic;
 pub mod topics;
 mod view;
+mod view_text;
 pub mod wire;
 pub mod wire_size;
 

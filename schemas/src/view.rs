@@ -27,11 +27,12 @@ impl Descriptor {
         out: &mut Vec<u8>,
     ) -> Result<(), String> {
         self.check_size(bytes.len())?;
-        serde_json::to_writer(Bytes(out), &self.object(self.layout(), bytes, extra))
+        self.object(self.layout(), bytes, extra)
+            .write_text(out)
             .map_err(|e| e.to_string())
     }
 
-    fn object<'a>(
+    pub(crate) fn object<'a>(
         &'a self,
         layout: &'a TypeLayout,
         bytes: &'a [u8],
@@ -47,22 +48,24 @@ impl Descriptor {
 }
 
 /// A struct's fields as a JSON object, serialised from its bytes.
-struct Object<'a> {
-    d: &'a Descriptor,
-    layout: &'a TypeLayout,
-    bytes: &'a [u8],
+pub(crate) struct Object<'a> {
+    pub(crate) d: &'a Descriptor,
+    pub(crate) layout: &'a TypeLayout,
+    pub(crate) bytes: &'a [u8],
     /// One more key, written over a field of that name.
-    extra: Option<(&'a str, &'a Value)>,
+    pub(crate) extra: Option<(&'a str, &'a Value)>,
 }
 
 /// One value of an [`Object`].
-enum Item<'a> {
+pub(crate) enum Item<'a> {
     Field(&'a Field),
     Extra(&'a Value),
 }
 
-impl Serialize for Object<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+impl<'a> Object<'a> {
+    /// The object's keys and values in the order JSON has them: `serde_json::Map` is a
+    /// `BTreeMap`, so its keys come out in byte order.
+    pub(crate) fn items(&self) -> Vec<(&'a str, Item<'a>)> {
         let layout = self.layout;
         let mut items: Vec<(&str, Item)> = layout
             .fields
@@ -74,8 +77,14 @@ impl Serialize for Object<'_> {
         if let Some((key, value)) = self.extra {
             items.push((key, Item::Extra(value)));
         }
-        // `serde_json::Map` is a `BTreeMap`: its keys come out in byte order.
         items.sort_by(|a, b| a.0.cmp(b.0));
+        items
+    }
+}
+
+impl Serialize for Object<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let items = self.items();
         let mut map = s.serialize_map(Some(items.len()))?;
         for (name, item) in items {
             match item {
@@ -88,7 +97,7 @@ impl Serialize for Object<'_> {
 }
 
 impl<'a> Object<'a> {
-    fn field(&self, f: &'a Field) -> FieldValue<'a> {
+    pub(crate) fn field(&self, f: &'a Field) -> FieldValue<'a> {
         let slot = &self.bytes[f.offset..f.offset + f.size];
         match f.kind {
             Kind::Scalar(s) => FieldValue::Scalar(s, slot),
@@ -112,7 +121,7 @@ impl<'a> Object<'a> {
         }
     }
 
-    fn nested(&self, name: &str, bytes: &'a [u8]) -> FieldValue<'a> {
+    pub(crate) fn nested(&self, name: &str, bytes: &'a [u8]) -> FieldValue<'a> {
         match self.d.struct_layout(name) {
             Some(layout) => FieldValue::Struct(self.d.object(layout, bytes, None)),
             // A checked descriptor describes every struct it holds.
@@ -122,7 +131,7 @@ impl<'a> Object<'a> {
 }
 
 /// One field's value, serialised from its bytes.
-enum FieldValue<'a> {
+pub(crate) enum FieldValue<'a> {
     Scalar(Scalar, &'a [u8]),
     Struct(Object<'a>),
     Text(&'a str),
@@ -206,7 +215,7 @@ pub(crate) fn count_value(kind: Scalar, slot: &[u8]) -> u64 {
 /// One number, as `serde_json::to_value` of the number gives it (a non-finite float is
 /// `null`). An `f32` is written as the `f64` it widens to, as a `Value` holds it: the
 /// recordings have always had `0.10000000149011612` for `0.1f32`.
-fn scalar<S: Serializer>(kind: Scalar, b: &[u8], s: S) -> Result<S::Ok, S::Error> {
+pub(crate) fn scalar<S: Serializer>(kind: Scalar, b: &[u8], s: S) -> Result<S::Ok, S::Error> {
     fn to<const N: usize>(b: &[u8]) -> [u8; N] {
         b.try_into().unwrap_or([0; N])
     }
@@ -249,7 +258,7 @@ fn scalars<S: SerializeSeq>(seq: &mut S, kind: Scalar, items: &[u8]) -> Result<(
 
 /// A `Vec` written to a byte at a time where serde_json writes a few (a comma, a digit or
 /// three), which `extend_from_slice` would copy with a call each.
-struct Bytes<'a>(&'a mut Vec<u8>);
+pub(crate) struct Bytes<'a>(pub(crate) &'a mut Vec<u8>);
 
 impl std::io::Write for Bytes<'_> {
     #[inline]
