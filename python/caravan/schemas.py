@@ -804,6 +804,7 @@ class Hello(Message):
     _fields_ = [
         ("node_len", ctypes.c_uint32),
         ("node", ctypes.c_uint8 * 64),
+        ("container", ctypes.c_uint32),
         ("period_ns", ctypes.c_uint64),
         ("triggers_len", ctypes.c_uint32),
         ("triggers", ctypes.c_uint64 * 512),
@@ -819,6 +820,7 @@ class Hello(Message):
     OFFSETS = {
         "node_len": 0,
         "node": 4,
+        "container": 68,
         "period_ns": 72,
         "triggers_len": 80,
         "triggers": 88,

@@ -5,7 +5,9 @@
 //! one `container` run in one process instead (like ROS 2's component containers), each on a
 //! stack of its own (a stackful coroutine). Where a node would sleep until its next grant it
 //! *parks*, and the container's one thread sleeps in `poll(2)` on every member's grant
-//! socket: grants that arrive together are stepped after one wake-up.
+//! socket: grants that arrive together are stepped after one wake-up. Whenever the container
+//! wakes, every parked member looks for its grant, so the scheduler wakes a container once for
+//! a batch of grants to its members, not once per member.
 //!
 //! Each member stays a node of its own to the group: its name, params, ports, lockstep
 //! grants, status and report row. What members share is the process: they start, fail and
@@ -85,36 +87,60 @@ struct Park {
     deadline: Instant,
 }
 
-type Coro<'a> = ScopedCoroutine<'a, bool, Park, Result<(), Error>, DefaultStack>;
+/// How a member's [`park`] ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Unparked {
+    /// SIGTERM or SIGINT came meanwhile.
+    pub terminated: bool,
+    /// Neither its `fd` nor its deadline: another member's wake-up, which may have brought
+    /// this member's grant too (the scheduler wakes a container once per batch). Its `fd`
+    /// holds no event to take.
+    pub peeked: bool,
+}
+
+type Coro<'a> = ScopedCoroutine<'a, Unparked, Park, Result<(), Error>, DefaultStack>;
 type MemberRef<'r> =
-    corosensei::ScopedCoroutineRef<'r, bool, Park, Result<(), Error>, DefaultStack>;
+    corosensei::ScopedCoroutineRef<'r, Unparked, Park, Result<(), Error>, DefaultStack>;
 
 thread_local! {
     /// The yielder of the member running now; null outside a container's member.
-    static CURRENT: Cell<*const Yielder<bool, Park>> = const { Cell::new(std::ptr::null()) };
+    static CURRENT: Cell<*const Yielder<Unparked, Park>> = const { Cell::new(std::ptr::null()) };
 }
 
-/// Inside a container's member: gives the thread to the other members until `fd` is readable
-/// or `timeout` passed, and returns whether SIGTERM or SIGINT came meanwhile. Outside a
-/// container: `None`, and the caller waits as it would.
-pub(crate) fn park(fd: i32, timeout: Duration) -> Option<bool> {
+/// Inside a container's member: gives the thread to the other members until `fd` is readable,
+/// `timeout` passed or another member's `fd` was readable (see [`Unparked::peeked`]). Outside
+/// a container: `None`, and the caller waits as it would.
+pub(crate) fn park(fd: i32, timeout: Duration) -> Option<Unparked> {
     let yielder = CURRENT.with(Cell::get);
     if yielder.is_null() {
         return None;
     }
     if timeout.is_zero() {
-        return Some(termination_requested());
+        return Some(Unparked {
+            terminated: termination_requested(),
+            peeked: false,
+        });
     }
     // SAFETY: `CURRENT` is set only by a member's own body (below) to its yielder, which lives
     // on the member's stack for as long as the member runs, and this code runs on that stack.
     let y = unsafe { &*yielder };
-    let terminated = y.suspend(Park {
+    let unparked = y.suspend(Park {
         fd,
         deadline: Instant::now() + timeout,
     });
     // Other members ran meanwhile and set their own.
     CURRENT.with(|c| c.set(yielder));
-    Some(terminated)
+    Some(unparked)
+}
+
+/// This process's id if the caller is a container's member (on its stack), else 0: what a
+/// member's hello says, so that the scheduler wakes the container once per batch of grants.
+pub(crate) fn id() -> u32 {
+    if CURRENT.with(Cell::get).is_null() {
+        0
+    } else {
+        std::process::id()
+    }
 }
 
 fn termination_requested() -> bool {
@@ -136,7 +162,7 @@ pub fn run<'a>(members: Vec<(String, Body<'a>)>) -> Result<(), (String, Error)> 
         names.push(name);
         coroutines.push(Coro::with_stack(
             stack,
-            move |yielder: &Yielder<bool, Park>, _| {
+            move |yielder: &Yielder<Unparked, Park>, _| {
                 CURRENT.with(|c| c.set(yielder));
                 body()
             },
@@ -171,12 +197,15 @@ fn in_scopes<'a, R>(
 fn schedule(names: &[String], members: &mut [MemberRef<'_>]) -> Result<(), (String, Error)> {
     let mut parked: Vec<Option<Park>> = Vec::new();
     let mut live = vec![true; members.len()];
-    let mut ready: Vec<usize> = (0..members.len()).collect();
-    let mut terminated = false;
+    let start = Unparked {
+        terminated: false,
+        peeked: false,
+    };
+    let mut ready: Vec<(usize, Unparked)> = (0..members.len()).map(|i| (i, start)).collect();
     parked.resize_with(members.len(), || None);
     loop {
-        for &i in &ready {
-            let result = members[i].as_mut().resume(terminated);
+        for &(i, unparked) in &ready {
+            let result = members[i].as_mut().resume(unparked);
             CURRENT.with(|c| c.set(std::ptr::null()));
             match result {
                 CoroutineResult::Yield(park) => parked[i] = Some(park),
@@ -221,17 +250,23 @@ fn schedule(names: &[String], members: &mut [MemberRef<'_>]) -> Result<(), (Stri
                 ));
             }
         }
-        terminated = termination_requested();
+        let terminated = termination_requested();
         let now = Instant::now();
+        // A wake-up for one member may bring the others' grants: all look (`Unparked::peeked`).
+        let woken = fds.iter().any(|fd| fd.revents != 0);
         ready = waiting
             .iter()
             .zip(&fds)
-            .filter(|(i, fd)| {
-                terminated
-                    || fd.revents != 0
-                    || parked[**i].as_ref().is_none_or(|p| p.deadline <= now)
+            .filter_map(|(&i, fd)| {
+                let own = fd.revents != 0 || parked[i].as_ref().is_none_or(|p| p.deadline <= now);
+                (terminated || woken || own).then_some((
+                    i,
+                    Unparked {
+                        terminated,
+                        peeked: !own && !terminated,
+                    },
+                ))
             })
-            .map(|(&i, _)| i)
             .collect();
     }
 }
@@ -257,10 +292,11 @@ mod tests {
         assert_eq!(back, vec![m]);
     }
 
-    /// Two members parked on pipes: each resumes only when its own pipe is written, and the
-    /// container ends when both have returned.
+    /// Two members parked on pipes: each goes on when its own pipe is written, peeks (is
+    /// resumed as `peeked`, and parks again) when the other's is, and the container ends when
+    /// both have returned.
     #[test]
-    fn members_take_turns_on_their_own_wake_ups() {
+    fn members_take_turns_on_their_own_wake_ups_and_peek_at_the_others() {
         let pipe = || {
             let mut fds = [0; 2];
             // SAFETY: `fds` has room for the two descriptors pipe(2) writes.
@@ -274,7 +310,14 @@ mod tests {
             Box::new(move || {
                 for round in 0..2 {
                     log.borrow_mut().push(format!("{name} waits {round}"));
-                    assert_eq!(park(read, Duration::from_secs(10)), Some(false));
+                    loop {
+                        let unparked = park(read, Duration::from_secs(10)).unwrap();
+                        assert!(!unparked.terminated);
+                        if !unparked.peeked {
+                            break;
+                        }
+                        log.borrow_mut().push(format!("{name} peeks {round}"));
+                    }
                     let mut byte = 0u8;
                     // SAFETY: reads one byte into `byte` from a pipe we own.
                     unsafe { libc::read(read, (&mut byte as *mut u8).cast(), 1) };
@@ -300,9 +343,12 @@ mod tests {
                 "b waits 0",
                 "a woke 0",
                 "a waits 1",
+                "b peeks 0",
+                "a peeks 1",
                 "b woke 0",
                 "b waits 1",
                 "a woke 1",
+                "b peeks 1",
                 "b woke 1"
             ]
         );

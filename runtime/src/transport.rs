@@ -161,6 +161,21 @@ pub(crate) fn open_pubsub<T: Message>(
     topic: &str,
     delivery: crate::Delivery,
 ) -> Result<PubSubFactory<ipc::Service, T, Header>, Error> {
+    open_pubsub_shaped(iox, topic, delivery, |b| b)
+}
+
+/// The publish-subscribe builder of a topic, as [`open_pubsub_shaped`] hands it to its `shape`.
+pub(crate) type PubSubBuilder<T> =
+    iceoryx2::service::builder::publish_subscribe::Builder<T, Header, ipc::Service>;
+
+/// [`open_pubsub`], the builder first given to `shape` (to size the service); a value `shape`
+/// sets is also what an existing service must at least support.
+pub(crate) fn open_pubsub_shaped<T: Message>(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    delivery: crate::Delivery,
+    shape: impl Fn(PubSubBuilder<T>) -> PubSubBuilder<T>,
+) -> Result<PubSubFactory<ipc::Service, T, Header>, Error> {
     use iceoryx2::service::builder::publish_subscribe::{
         PublishSubscribeOpenError as Open, PublishSubscribeOpenOrCreateError as Either,
     };
@@ -168,7 +183,7 @@ pub(crate) fn open_pubsub<T: Message>(
     crate::types::register_type::<T>(iox.config()).map_err(|e| Error::topic(topic, e))?;
     repairing_hung(
         iox,
-        || with_contract(pubsub_builder::<T>(iox, &name), delivery).open_or_create(),
+        || shape(with_contract(pubsub_builder::<T>(iox, &name), delivery)).open_or_create(),
         |e| matches!(e, Either::PublishSubscribeOpenError(Open::HangsInCreation)),
     )
     .map_err(|e| {
@@ -188,13 +203,26 @@ fn open_event(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
 ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
+    open_event_shaped(iox, topic, |b| b)
+}
+
+/// The event builder of a topic, as [`open_event_shaped`] hands it to its `shape`.
+pub(crate) type EventBuilder = iceoryx2::service::builder::event::Builder<ipc::Service>;
+
+/// Opens (or creates) a topic's event service, its builder first given to `shape` (to size
+/// it); a value `shape` sets is also what an existing service must at least support.
+pub(crate) fn open_event_shaped(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    shape: impl Fn(EventBuilder) -> EventBuilder,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
     use iceoryx2::service::builder::event::{
         EventOpenError as Open, EventOpenOrCreateError as Either,
     };
     let name = service_name(topic)?;
     repairing_hung(
         iox,
-        || iox.service_builder(&name).event().open_or_create(),
+        || shape(iox.service_builder(&name).event()).open_or_create(),
         |e| matches!(e, Either::EventOpenError(Open::HangsInCreation)),
     )
     .map_err(|e| Error::topic(topic, format!("cannot open its event service: {e:?}")))

@@ -27,6 +27,10 @@ const _: () = {
     assert!(size_of::<ForceTorque>() == 64 + 2 * 24);
     assert!(offset_of!(LaserScan, ranges) == 32);
     assert!(offset_of!(OccupancyGrid, data) == 40);
+    // `container` took what was padding: a Hello of a build before it is read the same.
+    assert!(size_of::<lockstep::Hello>() == 12400);
+    assert!(offset_of!(lockstep::Hello, container) == 68);
+    assert!(offset_of!(lockstep::Hello, period_ns) == 72);
 };
 
 #[test]

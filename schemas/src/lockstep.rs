@@ -40,6 +40,11 @@ pub const fn name_hash(name: &str) -> u64 {
 #[type_name("caravan::lockstep::Hello")]
 pub struct Hello {
     pub node: FixedString<64>,
+    /// The process id of the container the node is a member of, 0 for a node that is not.
+    /// A container's members all look for their grants when one of them is woken, so the
+    /// scheduler wakes a container once per batch of grants. (It sits in what was padding:
+    /// the layout is otherwise unchanged.)
+    pub container: u32,
     /// Period of a periodic node, ns; 0 for a node stepped only by messages.
     pub period_ns: u64,
     /// Hashes of the topics whose messages wake this node.

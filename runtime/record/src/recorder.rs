@@ -25,6 +25,9 @@ use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
+/// The lockstep hash of the nodes' status topic (`caravan_schemas::topics::status`).
+const STATUS_HASH: u64 = caravan_schemas::lockstep::name_hash("status");
+
 /// What a finished recording leaves for the report.
 pub struct Recording {
     pub topics: BTreeMap<String, TopicStats>,
@@ -235,7 +238,7 @@ impl Recorder {
     /// ([`caravan::lockstep::Advance::overlapping`]): nothing on them belongs to the time
     /// that ended, and they are drained once theirs ends, so each batch holds one time.
     pub fn drain_except(&mut self, later: &[u64]) -> Result<()> {
-        self.drain_taps(|hash| !later.contains(&hash))
+        self.drain_taps(|hash| !later.contains(&hash), true)
     }
 
     /// Like [`Self::drain_except`], but looks only at `published` (sorted hashes: the topics
@@ -243,10 +246,15 @@ impl Recorder {
     /// the others have nothing new, and asking each of dozens of taps at every advance was
     /// a good part of the launcher's work per tick.
     pub fn drain_published(&mut self, published: &[u64], later: &[u64]) -> Result<()> {
-        self.drain_taps(|hash| published.binary_search(&hash).is_ok() && !later.contains(&hash))
+        // A node publishes its status once a second: most advances have none.
+        let status = published.binary_search(&STATUS_HASH).is_ok();
+        self.drain_taps(
+            |hash| published.binary_search(&hash).is_ok() && !later.contains(&hash),
+            status,
+        )
     }
 
-    fn drain_taps(&mut self, wanted: impl Fn(u64) -> bool) -> Result<()> {
+    fn drain_taps(&mut self, wanted: impl Fn(u64) -> bool, status: bool) -> Result<()> {
         let now_wall = caravan::wall_clock_ns();
         let mut batch = Vec::new();
         let mut messages = Vec::new();
@@ -261,7 +269,7 @@ impl Recorder {
                 message,
             }));
         }
-        if let Some(tap) = &self.status_tap {
+        if let Some(tap) = self.status_tap.as_ref().filter(|_| status) {
             tap.drain(&mut batch)?;
         }
         for m in batch.drain(..) {
@@ -333,5 +341,16 @@ impl Recorder {
             node_status: self.node_status,
             status_series: self.status_series,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_status_hash_is_the_status_topics() {
+        assert_eq!(
+            super::STATUS_HASH,
+            caravan_schemas::topics::status().name_hash()
+        );
     }
 }

@@ -1,8 +1,8 @@
 //! The node side of the protocol.
 
-use super::{Pub, Sub, publisher, send, subscriber};
+use super::{Pub, Sub, listener, notifier, publisher, send, subscriber};
 use crate::Error;
-use crate::transport::{self, Shared};
+use crate::transport::Shared;
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
 use caravan_schemas::{FixedString, FixedVec};
 use iceoryx2::port::listener::Listener;
@@ -52,6 +52,7 @@ impl Client {
         let grant_name = proto::grant_service(node);
         let mut hello = Hello {
             node: FixedString::new(node),
+            container: crate::container::id(),
             period_ns: period.map_or(0, |p| p.as_nanos() as u64),
             triggers: FixedVec::new(),
             inputs: FixedVec::new(),
@@ -84,11 +85,11 @@ impl Client {
         let client = Self {
             node_hash: shared.node_hash,
             grants: subscriber::<Grant>(iox, &grant_name)?,
-            grant_listener: transport::listener(iox, &grant_name)?,
+            grant_listener: listener(iox, &grant_name)?,
             done: publisher::<Done>(iox, proto::DONE)?,
-            done_notifier: transport::notifier(iox, proto::DONE)?,
+            done_notifier: notifier(iox, proto::DONE)?,
             _hello: publisher::<Hello>(iox, proto::HELLO)?,
-            hello_notifier: transport::notifier(iox, proto::HELLO)?,
+            hello_notifier: notifier(iox, proto::HELLO)?,
             hello,
             last_done: std::cell::RefCell::new(None),
             pending,
@@ -142,38 +143,45 @@ impl Client {
                     }
                 }
             }
-            // Whether SIGTERM or SIGINT came, after waiting up to `timeout` for a grant.
-            let terminated = |timeout| -> Result<bool, Error> {
+            // Waits up to `timeout` for a grant: whether SIGTERM or SIGINT came, and whether the
+            // wait ended for this node (its event, or the time), not for another member of its
+            // container, whose wake-up may have brought this node's grant too.
+            let wait = |timeout| -> Result<(bool, bool), Error> {
                 // In a container the thread goes to the other members meanwhile.
                 // SAFETY: the descriptor is only polled, while the listener lives.
                 let fd = unsafe { self.grant_listener.file_descriptor().native_handle() };
-                if let Some(terminated) = crate::container::park(fd, timeout) {
-                    return Ok(terminated);
+                if let Some(unparked) = crate::container::park(fd, timeout) {
+                    return Ok((unparked.terminated, !unparked.peeked));
                 }
                 let result = waitset
                     .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, timeout)
                     .map_err(|e| Error::transport("lockstep grant wait", e))?;
-                Ok(matches!(
-                    result,
-                    WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
+                Ok((
+                    matches!(
+                        result,
+                        WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
+                    ),
+                    true,
                 ))
             };
             if super::spin_on(&self.grants, &self.grant_listener, spin, "grant")? {
                 // A node that keeps finding grants never sleeps in its WaitSet, which is where
                 // a signal is noticed: look without waiting.
-                if terminated(Duration::ZERO)? {
+                if wait(Duration::ZERO)?.0 {
                     return Ok(GrantOutcome::Terminated);
                 }
                 continue;
             }
-            let stop = terminated(Duration::from_secs(1))?;
-            self.grant_listener
-                .try_wait(|_| {})
-                .map_err(|e| Error::transport("grant", e))?;
+            let (stop, own) = wait(Duration::from_secs(1))?;
+            if own {
+                self.grant_listener
+                    .try_wait(|_| {})
+                    .map_err(|e| Error::transport("grant", e))?;
+            }
             if stop {
                 return Ok(GrantOutcome::Terminated);
             }
-            if self.last_done.borrow().is_none() {
+            if own && self.last_done.borrow().is_none() {
                 self.say_hello()?;
             }
         }

@@ -34,6 +34,9 @@ pub(super) struct Member {
     /// It holds the scheduler's count of quiet steps (`pending.rs`): its steps are granted
     /// quiet.
     pub(super) quiet: bool,
+    /// The process id of its container on this machine (its hello's), 0 if none: a
+    /// container's members are woken once per batch of grants.
+    pub(super) container: u32,
     pub(super) grant: Pub<Grant>,
     pub(super) grant_notifier: Notifier<ipc::Service>,
 }

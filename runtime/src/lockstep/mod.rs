@@ -16,6 +16,7 @@
 //! [`Grant`]: caravan_schemas::lockstep::Grant
 //! [`Done`]: caravan_schemas::lockstep::Done
 
+mod admission;
 mod advance;
 mod client;
 mod members;
@@ -36,6 +37,22 @@ use iceoryx2::prelude::*;
 type Pub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>;
 type Sub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>;
 
+/// Room in a grant service (`grant/<node>`) for each kind of port: its one sender (the
+/// scheduler, or the bridge for a node on another host) and its one reader (the node), with
+/// room for a restarted node's ports while iceoryx2 cleans up the dead one's. iceoryx2 walks
+/// every slot of a service at each loan, send, receive and notify; sized as a topic (80 slots),
+/// those walks were a fifth of the scheduler's time (docs/benchmarks.md, "Fourth round").
+const GRANT_PORTS: usize = 4;
+
+/// The largest event id a control event carries. Notifications carry the default id, 0; a
+/// listener clears a counter for every possible id at each wait, 256 by default.
+const CONTROL_EVENT_IDS: usize = 1;
+
+/// Whether `name` is a grant service, sized by [`GRANT_PORTS`].
+fn is_grant(name: &str) -> bool {
+    name != caravan_schemas::lockstep::HELLO && name != caravan_schemas::lockstep::DONE
+}
+
 fn control_topic<T: caravan_schemas::Message>(
     iox: &iceoryx2::node::Node<ipc::Service>,
     name: &str,
@@ -44,7 +61,49 @@ fn control_topic<T: caravan_schemas::Message>(
     Error,
 > {
     // Control messages must never be lost; queues are deep enough that nobody waits in practice.
-    transport::open_pubsub::<T>(iox, name, crate::Delivery::Lossless { depth: 256 })
+    let delivery = crate::Delivery::Lossless { depth: 256 };
+    transport::open_pubsub_shaped::<T>(iox, name, delivery, |b| {
+        if is_grant(name) {
+            b.max_publishers(GRANT_PORTS).max_subscribers(GRANT_PORTS)
+        } else {
+            b
+        }
+    })
+}
+
+/// The event service of a control topic: sized as [`control_topic`]'s, with one event id.
+fn control_event(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
+    transport::open_event_shaped(iox, name, |b| {
+        let b = b.event_id_max_value(CONTROL_EVENT_IDS);
+        if is_grant(name) {
+            b.max_notifiers(GRANT_PORTS).max_listeners(GRANT_PORTS)
+        } else {
+            b
+        }
+    })
+}
+
+fn listener(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<iceoryx2::port::listener::Listener<ipc::Service>, Error> {
+    control_event(iox, name)?
+        .listener_builder()
+        .create()
+        .map_err(|e| Error::topic(name, format!("cannot create listener: {e:?}")))
+}
+
+fn notifier(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    name: &str,
+) -> Result<iceoryx2::port::notifier::Notifier<ipc::Service>, Error> {
+    control_event(iox, name)?
+        .notifier_builder()
+        .create()
+        .map_err(|e| Error::topic(name, format!("cannot create notifier: {e:?}")))
 }
 
 fn publisher<T: caravan_schemas::Message>(

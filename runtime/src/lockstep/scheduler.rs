@@ -4,7 +4,7 @@ use super::advance::{Advance, ScheduleStats, Watchdog};
 use super::members::{Flight, Member};
 use super::overlap::{self, Footprint};
 use super::pending::Pending;
-use super::{Sub, publisher, spin_on, subscriber};
+use super::{Sub, listener, spin_on, subscriber};
 use crate::Error;
 use crate::transport;
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
@@ -16,37 +16,43 @@ use std::time::{Duration, Instant};
 /// How long a node may take to report a step before its grant is repeated.
 const REGRANT_AFTER: Duration = Duration::from_secs(1);
 
+/// How often a wait for reports looks for hellos (a restarted node's): each look reads a
+/// service with a slot for every node, several times per tick otherwise.
+const HELLO_EVERY: Duration = Duration::from_millis(10);
+
 /// Owns simulated time for a group. The launcher runs one; tests can run one directly.
 pub struct Scheduler {
-    iox: iceoryx2::node::Node<ipc::Service>,
-    tick_ns: u64,
-    hello: Sub<Hello>,
-    hello_listener: Listener<ipc::Service>,
-    done: Sub<Done>,
-    done_listener: Listener<ipc::Service>,
-    members: Vec<Member>,
-    by_hash: BTreeMap<u64, usize>,
+    pub(super) iox: iceoryx2::node::Node<ipc::Service>,
+    pub(super) tick_ns: u64,
+    pub(super) hello: Sub<Hello>,
+    pub(super) hello_listener: Listener<ipc::Service>,
+    pub(super) done: Sub<Done>,
+    pub(super) done_listener: Listener<ipc::Service>,
+    pub(super) members: Vec<Member>,
+    pub(super) by_hash: BTreeMap<u64, usize>,
     /// topic hash → members it wakes
-    subscribers: BTreeMap<u64, Vec<usize>>,
+    pub(super) subscribers: BTreeMap<u64, Vec<usize>>,
     /// event time → members due then, for times not being stepped yet
-    queue: BTreeMap<u64, BTreeSet<usize>>,
+    pub(super) queue: BTreeMap<u64, BTreeSet<usize>>,
     /// Times being stepped, oldest first: one, or two when the next overlaps.
-    flights: VecDeque<Flight>,
+    pub(super) flights: VecDeque<Flight>,
     /// Latest time that may start before the one before it has finished; `None`: none.
-    overlap_until: Option<u64>,
+    pub(super) overlap_until: Option<u64>,
     /// Topics a node may publish to while an earlier time runs (see [`Self::know_topics`]).
-    known_topics: BTreeSet<u64>,
+    pub(super) known_topics: BTreeSet<u64>,
     /// How long one wait may last before `watchdog` is consulted.
-    poll: Duration,
+    pub(super) poll: Duration,
     /// How long a wait for reports spins before it sleeps ([`crate::spin`]).
-    spin: Duration,
-    now_ns: u64,
+    pub(super) spin: Duration,
+    pub(super) now_ns: u64,
     /// The last time that finished.
-    last_finished_ns: Option<u64>,
-    stats: ScheduleStats,
+    pub(super) last_finished_ns: Option<u64>,
+    pub(super) stats: ScheduleStats,
     /// The count of quiet steps its members on this machine share (`pending.rs`); `None`
     /// if it could not be made (every report then notifies, as a node of another machine's).
-    pending: Option<Pending>,
+    pub(super) pending: Option<Pending>,
+    /// When a wait for reports last looked for hellos.
+    pub(super) hello_looked: Instant,
 }
 
 impl Scheduler {
@@ -71,9 +77,9 @@ impl Scheduler {
             .map_err(|e| Error::transport("scheduler node", e))?;
         Ok(Self {
             hello: subscriber::<Hello>(&iox, proto::HELLO)?,
-            hello_listener: transport::listener(&iox, proto::HELLO)?,
+            hello_listener: listener(&iox, proto::HELLO)?,
             done: subscriber::<Done>(&iox, proto::DONE)?,
-            done_listener: transport::listener(&iox, proto::DONE)?,
+            done_listener: listener(&iox, proto::DONE)?,
             tick_ns: tick.as_nanos().max(1) as u64,
             iox,
             members: Vec::new(),
@@ -89,6 +95,7 @@ impl Scheduler {
             last_finished_ns: None,
             stats: ScheduleStats::default(),
             pending,
+            hello_looked: Instant::now(),
         })
     }
 
@@ -119,113 +126,6 @@ impl Scheduler {
     /// its tap while no later time runs.
     pub fn know_topics(&mut self, topics: impl IntoIterator<Item = u64>) {
         self.known_topics.extend(topics);
-    }
-
-    /// Waits until every node in `expected` said hello. `watchdog` runs between waits; an `Err`
-    /// from it (a member died, a timeout) aborts the wait.
-    pub fn wait_for_nodes(
-        &mut self,
-        expected: &[String],
-        mut watchdog: impl Watchdog,
-    ) -> Result<(), Error> {
-        let mut expected: BTreeSet<&str> = expected.iter().map(String::as_str).collect();
-        loop {
-            self.admit_new()?;
-            let joined: BTreeSet<&str> = self.members.iter().map(|m| &*m.name).collect();
-            if expected.is_subset(&joined) {
-                return Ok(());
-            }
-            let missing: Vec<&str> = expected.difference(&joined).copied().collect();
-            let dead = watchdog(&missing).map_err(|why| {
-                Error::Lockstep(format!(
-                    "waiting for {} to start: {why}",
-                    missing.join(", ")
-                ))
-            })?;
-            // A process that died before joining is the supervisor's business (restart,
-            // or stop the group if it was required); a restarted one joins later.
-            for name in &dead {
-                expected.remove(name.as_str());
-            }
-            self.wait_on(true)?;
-        }
-    }
-
-    fn admit_new(&mut self) -> Result<(), Error> {
-        while let Some(sample) = self
-            .hello
-            .receive()
-            .map_err(|e| Error::transport("hello", e))?
-        {
-            self.admit(sample.payload())?;
-        }
-        Ok(())
-    }
-
-    fn footprint(&self, hello: &Hello) -> Footprint {
-        // A period off the tick would put an event between two overlapping times.
-        let declared = hello.declared != 0
-            && hello.period_ns.is_multiple_of(self.tick_ns)
-            && hello
-                .triggers
-                .as_slice()
-                .iter()
-                .all(|t| hello.inputs.as_slice().contains(t));
-        Footprint::new(declared, hello.inputs.as_slice(), hello.outputs.as_slice())
-    }
-
-    /// Whether the node of `hello` holds this scheduler's count of quiet steps (a token is
-    /// never 0: one of another machine or an earlier run differs).
-    fn holds_count(&self, hello: &Hello) -> bool {
-        (self.pending.as_ref()).is_some_and(|p| p.token() == hello.quiet)
-    }
-
-    fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
-        let name = hello.node.as_str().to_string();
-        let hash = proto::name_hash(&name);
-        if let Some(&i) = self.by_hash.get(&hash) {
-            // A restarted process rejoins at the next tick.
-            if !self.members[i].active {
-                let footprint = self.footprint(hello);
-                let quiet = self.holds_count(hello);
-                let member = &mut self.members[i];
-                member.active = true;
-                member.quiet = quiet;
-                member.footprint = footprint;
-                member.steps = 0;
-                member.overlapped = false;
-                if member.steps_on_joining {
-                    self.insert(self.now_ns + self.tick_ns, i)?;
-                }
-            }
-            return Ok(());
-        }
-        let index = self.members.len();
-        let grant_name = proto::grant_service(&name);
-        self.members.push(Member {
-            active: true,
-            grant: publisher::<Grant>(&self.iox, &grant_name)?,
-            grant_notifier: transport::notifier(&self.iox, &grant_name)?,
-            period_ns: hello.period_ns,
-            steps_on_joining: hello.period_ns > 0 || hello.triggers.as_slice().is_empty(),
-            footprint: self.footprint(hello),
-            quiet: self.holds_count(hello),
-            steps: 0,
-            overlapped: false,
-            granted_at: Instant::now(),
-            last_step: Duration::ZERO,
-            name: name.into(),
-        });
-        self.by_hash.insert(hash, index);
-        for topic in hello.triggers.as_slice() {
-            self.subscribers.entry(*topic).or_default().push(index);
-        }
-        if self.members[index].steps_on_joining {
-            // A node joining mid-run steps at the latest time being stepped.
-            let at = self.flights.back().map_or(self.now_ns, |f| f.now_ns);
-            self.insert(at, index)?;
-        }
-        Ok(())
     }
 
     /// Time of the next event, if any node is due at all: the oldest time being stepped, or
@@ -269,7 +169,10 @@ impl Scheduler {
                 ))
             })?;
             self.mark_dead(&dead);
-            self.admit_new()?;
+            if self.hello_looked.elapsed() >= HELLO_EVERY {
+                self.hello_looked = Instant::now();
+                self.admit_new()?;
+            }
             self.regrant_overdue()?;
             self.wait_on(false)?;
         }
@@ -414,8 +317,20 @@ impl Scheduler {
             self.flights[f].waiting.insert(i);
             self.stats.steps += 1;
         }
+        // One wake-up per container: its members all look for their grants whenever it wakes
+        // (`container.rs`). A container is known by its process id on this machine, so only
+        // members holding this machine's count are taken together.
+        let mut woken: Vec<u32> = Vec::new();
         for &i in &nodes {
-            self.members[i].wake()?;
+            let member = &self.members[i];
+            let container = if member.quiet { member.container } else { 0 };
+            if container != 0 {
+                if woken.contains(&container) {
+                    continue;
+                }
+                woken.push(container);
+            }
+            member.wake()?;
         }
         Ok(())
     }
@@ -478,7 +393,7 @@ impl Scheduler {
     }
 
     /// Queues `i` at `time_ns`, or adds it to that time if it is being stepped.
-    fn insert(&mut self, time_ns: u64, i: usize) -> Result<(), Error> {
+    pub(super) fn insert(&mut self, time_ns: u64, i: usize) -> Result<(), Error> {
         if let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == time_ns) {
             if f.due.insert(i) {
                 f.held.insert(i);
@@ -581,7 +496,7 @@ impl Scheduler {
         Ok(())
     }
 
-    fn wait_on(&self, hello: bool) -> Result<(), Error> {
+    pub(super) fn wait_on(&self, hello: bool) -> Result<(), Error> {
         if !hello && spin_on(&self.done, &self.done_listener, self.spin, proto::DONE)? {
             return Ok(());
         }
