@@ -37,18 +37,21 @@ use iceoryx2::prelude::*;
 type Pub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>;
 type Sub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>;
 
-/// Room in a grant service (`grant/<node>`) for each kind of port: its one sender (the
-/// scheduler, or the bridge for a node on another host) and its one reader (the node), with
-/// room for a restarted node's ports while iceoryx2 cleans up the dead one's. iceoryx2 walks
-/// every slot of a service at each loan, send, receive and notify; sized as a topic (80 slots),
-/// those walks were a fifth of the scheduler's time (docs/benchmarks.md, "Fourth round").
-const GRANT_PORTS: usize = 4;
+/// Room in a control service for its readers (subscribers and listeners): the scheduler, for
+/// hellos and reports, or the node, for its grants; the bridge that relays them to another
+/// host; a restarted node's while iceoryx2 cleans up the dead one's; a tool looking on. And in
+/// a grant service for its writers too: the scheduler, or the bridge for a node on another
+/// host. (Hellos and reports have a writer per node: those stay a topic's 80.) iceoryx2 walks
+/// every slot of a service at each loan, send and notify; sized as a topic (80 slots), those
+/// walks were a seventh of the scheduler's time (docs/benchmarks.md, "Fourth round"), and
+/// every node's report walked 80 slots too.
+const CONTROL_PORTS: usize = 4;
 
 /// The largest event id a control event carries. Notifications carry the default id, 0; a
 /// listener clears a counter for every possible id at each wait, 256 by default.
 const CONTROL_EVENT_IDS: usize = 1;
 
-/// Whether `name` is a grant service, sized by [`GRANT_PORTS`].
+/// Whether `name` is a grant service (one writer), not hellos' or reports' (one per node).
 fn is_grant(name: &str) -> bool {
     name != caravan_schemas::lockstep::HELLO && name != caravan_schemas::lockstep::DONE
 }
@@ -63,8 +66,9 @@ fn control_topic<T: caravan_schemas::Message>(
     // Control messages must never be lost; queues are deep enough that nobody waits in practice.
     let delivery = crate::Delivery::Lossless { depth: 256 };
     transport::open_pubsub_shaped::<T>(iox, name, delivery, |b| {
+        let b = b.max_subscribers(CONTROL_PORTS);
         if is_grant(name) {
-            b.max_publishers(GRANT_PORTS).max_subscribers(GRANT_PORTS)
+            b.max_publishers(CONTROL_PORTS)
         } else {
             b
         }
@@ -77,9 +81,11 @@ fn control_event(
     name: &str,
 ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
     transport::open_event_shaped(iox, name, |b| {
-        let b = b.event_id_max_value(CONTROL_EVENT_IDS);
+        let b = b
+            .event_id_max_value(CONTROL_EVENT_IDS)
+            .max_listeners(CONTROL_PORTS);
         if is_grant(name) {
-            b.max_notifiers(GRANT_PORTS).max_listeners(GRANT_PORTS)
+            b.max_notifiers(CONTROL_PORTS)
         } else {
             b
         }
