@@ -6,14 +6,17 @@
 
 use crate::describe::{Element, Field, Kind, Scalar, TypeLayout};
 use crate::descriptor::{Descriptor, is_hidden_count};
-use serde::ser::{Serialize, SerializeMap, SerializeSeq, Serializer};
+use serde::ser::Serializer;
 use serde_json::Value;
 
 impl Descriptor {
     /// The JSON view of one message of this type, from its `size` bytes.
     pub fn view(&self, bytes: &[u8]) -> Result<Value, String> {
-        self.check_size(bytes.len())?;
-        serde_json::to_value(self.object(self.layout(), bytes, None)).map_err(|e| e.to_string())
+        // Read back from its text: one walk of the layout serves both (`view_text.rs`). A
+        // float's text reads back as the same float (serde_json's `float_roundtrip`).
+        let mut text = Vec::new();
+        self.write_json(bytes, None, &mut text)?;
+        serde_json::from_slice(&text).map_err(|e| e.to_string())
     }
 
     /// Appends the JSON text of [`Self::view`] to `out`, with `extra` as one more key (over a
@@ -82,20 +85,6 @@ impl<'a> Object<'a> {
     }
 }
 
-impl Serialize for Object<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let items = self.items();
-        let mut map = s.serialize_map(Some(items.len()))?;
-        for (name, item) in items {
-            match item {
-                Item::Extra(value) => map.serialize_entry(name, value)?,
-                Item::Field(f) => map.serialize_entry(name, &self.field(f))?,
-            }
-        }
-        map.end()
-    }
-}
-
 impl<'a> Object<'a> {
     pub(crate) fn field(&self, f: &'a Field) -> FieldValue<'a> {
         let slot = &self.bytes[f.offset..f.offset + f.size];
@@ -144,35 +133,6 @@ pub(crate) enum FieldValue<'a> {
         stride: usize,
     },
     Null,
-}
-
-impl Serialize for FieldValue<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        match self {
-            FieldValue::Scalar(kind, bytes) => scalar(*kind, bytes, s),
-            FieldValue::Struct(object) => object.serialize(s),
-            FieldValue::Text(text) => s.serialize_str(text),
-            FieldValue::Null => s.serialize_unit(),
-            FieldValue::Array {
-                owner,
-                element,
-                items,
-                stride,
-            } => {
-                let stride = (*stride).max(1);
-                let mut seq = s.serialize_seq(Some(items.len() / stride))?;
-                match element {
-                    Element::Scalar(kind) => scalars(&mut seq, *kind, items)?,
-                    Element::Struct(name) => {
-                        for item in items.chunks_exact(stride) {
-                            seq.serialize_element(&owner.nested(name, item))?
-                        }
-                    }
-                }
-                seq.end()
-            }
-        }
-    }
 }
 
 /// How many items of array field `f` of `layout` are valid in `bytes` (the struct's): all,
@@ -228,31 +188,6 @@ pub(crate) fn scalar<S: Serializer>(kind: Scalar, b: &[u8], s: S) -> Result<S::O
         Scalar::I32 => s.serialize_i32(i32::from_ne_bytes(to(b))),
         Scalar::U8 => s.serialize_u8(b[0]),
         Scalar::I8 => s.serialize_i8(b[0] as i8),
-    }
-}
-
-/// An array's numbers, `items` their bytes, each as [`scalar`] gives it: the kind is matched
-/// once per array, not once per item (a map's quarter of a million cells).
-fn scalars<S: SerializeSeq>(seq: &mut S, kind: Scalar, items: &[u8]) -> Result<(), S::Error> {
-    fn each<const N: usize, T: Serialize, S: SerializeSeq>(
-        seq: &mut S,
-        items: &[u8],
-        value: impl Fn([u8; N]) -> T,
-    ) -> Result<(), S::Error> {
-        for item in items.chunks_exact(N) {
-            seq.serialize_element(&value(item.try_into().expect("N bytes")))?;
-        }
-        Ok(())
-    }
-    match kind {
-        Scalar::F64 => each(seq, items, f64::from_ne_bytes),
-        Scalar::F32 => each(seq, items, |b| f32::from_ne_bytes(b) as f64),
-        Scalar::U64 => each(seq, items, u64::from_ne_bytes),
-        Scalar::I64 => each(seq, items, i64::from_ne_bytes),
-        Scalar::U32 => each(seq, items, u32::from_ne_bytes),
-        Scalar::I32 => each(seq, items, i32::from_ne_bytes),
-        Scalar::U8 => each(seq, items, |[b]: [u8; 1]| b),
-        Scalar::I8 => each(seq, items, |[b]: [u8; 1]| b as i8),
     }
 }
 

@@ -106,21 +106,7 @@ fn the_view_is_what_serialize_writes_for_every_message_type() {
         for _ in 0..24 {
             let mut bytes = vec![0u8; d.layout().size];
             fill(d, d.layout(), &mut bytes, &mut rng);
-            let serde = crate::with_message_type!(name, |T| {
-                let mut value = Box::<T>::new_uninit();
-                // SAFETY: every field of a message type is a number or an array of numbers, so
-                // any bytes of the right length are a valid value.
-                let value = unsafe {
-                    std::ptr::copy_nonoverlapping(
-                        bytes.as_ptr(),
-                        value.as_mut_ptr().cast::<u8>(),
-                        bytes.len(),
-                    );
-                    value.assume_init()
-                };
-                serde_json::to_value(value.as_ref()).unwrap()
-            })
-            .unwrap();
+            let serde = typed_value(name, &bytes);
             assert_eq!(d.view(&bytes).unwrap(), serde, "{name}");
         }
     }
@@ -136,8 +122,28 @@ fn a_view_of_the_wrong_length_is_refused() {
     );
 }
 
-/// `write_json` writes the very text the recorder wrote before it existed: the view, with the
-/// header inserted as a key, through `serde_json::to_vec` (so recordings keep their bytes).
+/// The JSON `Value` serde gives of `bytes` as the catalog type `name`.
+fn typed_value(name: &str, bytes: &[u8]) -> serde_json::Value {
+    crate::with_message_type!(name, |T| {
+        let mut value = Box::<T>::new_uninit();
+        // SAFETY: every field of a message type is a number or an array of numbers, so any
+        // bytes of the right length are a valid value.
+        let value = unsafe {
+            std::ptr::copy_nonoverlapping(
+                bytes.as_ptr(),
+                value.as_mut_ptr().cast::<u8>(),
+                bytes.len(),
+            );
+            value.assume_init()
+        };
+        serde_json::to_value(value.as_ref()).unwrap()
+    })
+    .unwrap()
+}
+
+/// `write_json` writes the very text the recorder wrote before it existed: the type's serde
+/// `Value`, with the header inserted as a key, through `serde_json::to_vec` (so recordings
+/// keep their bytes).
 #[test]
 fn write_json_is_the_text_of_the_view_with_the_header_inserted() {
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
@@ -147,19 +153,20 @@ fn write_json_is_the_text_of_the_view_with_the_header_inserted() {
         for _ in 0..24 {
             let mut bytes = vec![0u8; d.layout().size];
             fill(d, d.layout(), &mut bytes, &mut rng);
-            let mut view = d.view(&bytes).unwrap();
-            view["header"] = header.clone();
+            let mut value = typed_value(name, &bytes);
+            let plain_text = serde_json::to_vec(&value).unwrap();
+            value["header"] = header.clone();
             let mut written = Vec::new();
             d.write_json(&bytes, Some(("header", &header)), &mut written)
                 .unwrap();
             assert_eq!(
                 String::from_utf8(written).unwrap(),
-                String::from_utf8(serde_json::to_vec(&view).unwrap()).unwrap(),
+                String::from_utf8(serde_json::to_vec(&value).unwrap()).unwrap(),
                 "{name}"
             );
             let mut plain = Vec::new();
             d.write_json(&bytes, None, &mut plain).unwrap();
-            assert_eq!(plain, serde_json::to_vec(&d.view(&bytes).unwrap()).unwrap());
+            assert_eq!(plain, plain_text, "{name}");
         }
     }
 }

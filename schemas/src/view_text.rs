@@ -1,8 +1,8 @@
 //! The JSON text of a view written straight into a buffer: the recording writer's path.
 //!
-//! The text is exactly what `serde_json::to_vec` gives of the view (the tests hold it to that
-//! for every catalog type), but objects and arrays are written here rather than through
-//! serde's per-element calls, and a byte array (a map's quarter of a million cells) is written
+//! The text is exactly what `serde_json::to_vec` gives of the type's serde value (the tests
+//! hold it to that for every catalog type), and the view is read back from it. Objects and
+//! arrays are written here rather than through serde's per-element calls, and a byte array (a map's quarter of a million cells) is written
 //! from a table of the 256 numbers' texts. Numbers and strings still go through serde_json,
 //! one at a time, so their text cannot drift from it.
 
@@ -53,28 +53,34 @@ impl FieldValue<'_> {
                 match element {
                     Element::Scalar(Scalar::U8) => bytes_text(items, false, out),
                     Element::Scalar(Scalar::I8) => bytes_text(items, true, out),
-                    Element::Scalar(kind) => {
-                        for (n, item) in items.chunks_exact(stride).enumerate() {
-                            if n > 0 {
-                                out.push(b',');
-                            }
-                            scalar(*kind, item, &mut Json::new(Bytes(out)))?;
-                        }
-                    }
-                    Element::Struct(name) => {
-                        for (n, item) in items.chunks_exact(stride).enumerate() {
-                            if n > 0 {
-                                out.push(b',');
-                            }
-                            owner.nested(name, item).write_text(out)?;
-                        }
-                    }
+                    Element::Scalar(kind) => each(items, stride, out, |item, out| {
+                        scalar(*kind, item, &mut Json::new(Bytes(out)))
+                    })?,
+                    Element::Struct(name) => each(items, stride, out, |item, out| {
+                        owner.nested(name, item).write_text(out)
+                    })?,
                 }
                 out.push(b']');
                 Ok(())
             }
         }
     }
+}
+
+/// Appends `write` of each item of `stride` bytes, separated by commas.
+fn each(
+    items: &[u8],
+    stride: usize,
+    out: &mut Vec<u8>,
+    write: impl Fn(&[u8], &mut Vec<u8>) -> Result<(), serde_json::Error>,
+) -> Result<(), serde_json::Error> {
+    for (n, item) in items.chunks_exact(stride).enumerate() {
+        if n > 0 {
+            out.push(b',');
+        }
+        write(item, out)?;
+    }
+    Ok(())
 }
 
 /// The texts of −128 … 255 (`TEXTS[v + 128]`), each followed by a comma, with its length:
