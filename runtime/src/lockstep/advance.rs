@@ -25,6 +25,10 @@ pub struct ScheduleStats {
     pub steps: u64,
     /// Steps granted while the time before was still running ([`super::Scheduler::overlap_until`]).
     pub overlapped_steps: u64,
+    /// Wake-ups sent with grants: one per node granted, but one per batch for a container's
+    /// members. (Absent from a report of a build before it: 0.)
+    #[serde(default)]
+    pub wake_ups: u64,
 }
 
 /// Consulted while the scheduler waits, with the names of the nodes it waits for: returns the

@@ -331,6 +331,7 @@ impl Scheduler {
                 woken.push(container);
             }
             member.wake()?;
+            self.stats.wake_ups += 1;
         }
         Ok(())
     }

@@ -34,6 +34,24 @@ fn a_convoy_in_containers_records_what_a_process_per_node_records() {
     assert!(!logs.join("sensor-3.log").exists());
     let md = std::fs::read_to_string(contained.dir.join("report.md")).unwrap();
     assert!(md.contains("exited 0 (container agents-localhost)"), "{md}");
+    // A batch of grants wakes a container once, a process per node once per step.
+    let schedule = |r: &serde_json::Value| {
+        let s = &r["run"]["schedule"];
+        (
+            s["steps"].as_u64().unwrap(),
+            s["wake_ups"].as_u64().unwrap(),
+        )
+    };
+    let ((steps, plain_wakes), (c_steps, c_wakes)) = (schedule(p), schedule(c));
+    assert_eq!((steps, plain_wakes), (c_steps, steps), "{p}");
+    assert!(
+        c_wakes * 10 < c_steps * 7,
+        "{c_wakes} wake-ups for {c_steps} steps"
+    );
+    assert!(
+        md.contains(&format!("{c_wakes} wake-ups sent with the grants")),
+        "{md}"
+    );
 }
 
 /// A lockstep group of two demo processes, `a` and `b`, with `extra` after `b`'s table.
