@@ -34,7 +34,8 @@ pub struct Loan<'p, T: Message> {
 
 impl<T: Message> Publisher<T> {
     pub(crate) fn new(shared: Rc<Shared>, topic: &Topic<T>) -> Result<Self, Error> {
-        let service = transport::open_pubsub::<T>(&shared.iox, topic.name(), topic.delivery())?;
+        let service =
+            transport::open_pubsub::<T>(&shared.iox, topic.name(), topic.delivery(), |b| b)?;
         let port = service
             .publisher_builder()
             .backpressure_strategy(transport::backpressure(topic.delivery().is_lossless()))

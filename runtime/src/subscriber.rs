@@ -79,7 +79,8 @@ pub struct Subscriber<T: Message> {
 
 impl<T: Message> Subscriber<T> {
     pub(crate) fn new(shared: Rc<Shared>, topic: &Topic<T>) -> Result<Self, Error> {
-        let service = transport::open_pubsub::<T>(&shared.iox, topic.name(), topic.delivery())?;
+        let service =
+            transport::open_pubsub::<T>(&shared.iox, topic.name(), topic.delivery(), |b| b)?;
         let port = service
             .subscriber_builder()
             .buffer_size(topic.delivery().depth())

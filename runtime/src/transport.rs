@@ -155,22 +155,14 @@ pub(crate) fn backpressure(lossless: bool) -> BackpressureStrategy {
     }
 }
 
-/// Opens (or creates) the publish-subscribe service of a topic with its delivery contract.
-pub(crate) fn open_pubsub<T: Message>(
-    iox: &iceoryx2::node::Node<ipc::Service>,
-    topic: &str,
-    delivery: crate::Delivery,
-) -> Result<PubSubFactory<ipc::Service, T, Header>, Error> {
-    open_pubsub_shaped(iox, topic, delivery, |b| b)
-}
-
-/// The publish-subscribe builder of a topic, as [`open_pubsub_shaped`] hands it to its `shape`.
+/// The publish-subscribe builder of a topic, as [`open_pubsub`] hands it to its `shape`.
 pub(crate) type PubSubBuilder<T> =
     iceoryx2::service::builder::publish_subscribe::Builder<T, Header, ipc::Service>;
 
-/// [`open_pubsub`], the builder first given to `shape` (to size the service); a value `shape`
-/// sets is also what an existing service must at least support.
-pub(crate) fn open_pubsub_shaped<T: Message>(
+/// Opens (or creates) the publish-subscribe service of a topic with its delivery contract, the
+/// builder first given to `shape` (to size the service: a value `shape` sets is also what an
+/// existing service must at least support).
+pub(crate) fn open_pubsub<T: Message>(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
     delivery: crate::Delivery,
@@ -199,19 +191,12 @@ pub(crate) fn open_pubsub_shaped<T: Message>(
     })
 }
 
-fn open_event(
-    iox: &iceoryx2::node::Node<ipc::Service>,
-    topic: &str,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
-    open_event_shaped(iox, topic, |b| b)
-}
-
-/// The event builder of a topic, as [`open_event_shaped`] hands it to its `shape`.
+/// The event builder of a topic, as [`open_event`] hands it to its `shape`.
 pub(crate) type EventBuilder = iceoryx2::service::builder::event::Builder<ipc::Service>;
 
 /// Opens (or creates) a topic's event service, its builder first given to `shape` (to size
 /// it); a value `shape` sets is also what an existing service must at least support.
-pub(crate) fn open_event_shaped(
+pub(crate) fn open_event(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
     shape: impl Fn(EventBuilder) -> EventBuilder,
@@ -256,7 +241,7 @@ pub(crate) fn notifier(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
 ) -> Result<Notifier<ipc::Service>, Error> {
-    open_event(iox, topic)?
+    open_event(iox, topic, |b| b)?
         .notifier_builder()
         .create()
         .map_err(|e| Error::topic(topic, format!("cannot create notifier: {e:?}")))
@@ -267,7 +252,7 @@ pub(crate) fn listener(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
 ) -> Result<Listener<ipc::Service>, Error> {
-    open_event(iox, topic)?
+    open_event(iox, topic, |b| b)?
         .listener_builder()
         .create()
         .map_err(|e| Error::topic(topic, format!("cannot create listener: {e:?}")))
@@ -336,7 +321,7 @@ mod tests {
         };
         // Made and dropped, the service leaves nothing; its description's name is kept.
         let before = files();
-        let made = open_event(&iox, "t/hung").unwrap();
+        let made = open_event(&iox, "t/hung", |b| b).unwrap();
         let description = files().difference(&before).next().unwrap().clone();
         drop(made);
         assert!(!description.exists());

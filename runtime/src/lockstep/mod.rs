@@ -37,24 +37,13 @@ use iceoryx2::prelude::*;
 type Pub<T> = iceoryx2::port::publisher::Publisher<ipc::Service, T, Header>;
 type Sub<T> = iceoryx2::port::subscriber::Subscriber<ipc::Service, T, Header>;
 
-/// Room in a control service for its readers (subscribers and listeners): the scheduler, for
-/// hellos and reports, or the node, for its grants; the bridge that relays them to another
-/// host; a restarted node's while iceoryx2 cleans up the dead one's; a tool looking on. And in
-/// a grant service for its writers too: the scheduler, or the bridge for a node on another
-/// host. (Hellos and reports have a writer per node: those stay a topic's 80.) iceoryx2 walks
-/// every slot of a service at each loan, send and notify; sized as a topic (80 slots), those
-/// walks were a seventh of the scheduler's time (docs/benchmarks.md, "Fourth round"), and
-/// every node's report walked 80 slots too.
-const CONTROL_PORTS: usize = 4;
-
-/// The largest event id a control event carries. Notifications carry the default id, 0; a
-/// listener clears a counter for every possible id at each wait, 256 by default.
-const CONTROL_EVENT_IDS: usize = 1;
-
-/// Whether `name` is a grant service (one writer), not hellos' or reports' (one per node).
-fn is_grant(name: &str) -> bool {
-    name != caravan_schemas::lockstep::HELLO && name != caravan_schemas::lockstep::DONE
-}
+/// Room in a control service for its readers (subscribers and listeners): the scheduler (of
+/// hellos and reports) or the node (of its grants), the bridge relaying them to another host,
+/// a restarted node's while iceoryx2 cleans up the dead one's, a tool looking on. iceoryx2
+/// walks every reader's slot at each loan, send and notify: sized as a topic's (80), those
+/// walks were a seventh of the scheduler's time, and every node's report walked 80 slots too
+/// (docs/benchmarks.md, "Fourth round").
+const CONTROL_READERS: usize = 4;
 
 fn control_topic<T: caravan_schemas::Message>(
     iox: &iceoryx2::node::Node<ipc::Service>,
@@ -65,30 +54,18 @@ fn control_topic<T: caravan_schemas::Message>(
 > {
     // Control messages must never be lost; queues are deep enough that nobody waits in practice.
     let delivery = crate::Delivery::Lossless { depth: 256 };
-    transport::open_pubsub_shaped::<T>(iox, name, delivery, |b| {
-        let b = b.max_subscribers(CONTROL_PORTS);
-        if is_grant(name) {
-            b.max_publishers(CONTROL_PORTS)
-        } else {
-            b
-        }
-    })
+    transport::open_pubsub::<T>(iox, name, delivery, |b| b.max_subscribers(CONTROL_READERS))
 }
 
-/// The event service of a control topic: sized as [`control_topic`]'s, with one event id.
+/// The event service of a control topic: its readers as [`control_topic`]'s, and one event id
+/// (notifications carry the default, 0; a listener clears a counter for every possible id at
+/// each wait, 256 by default).
 fn control_event(
     iox: &iceoryx2::node::Node<ipc::Service>,
     name: &str,
 ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
-    transport::open_event_shaped(iox, name, |b| {
-        let b = b
-            .event_id_max_value(CONTROL_EVENT_IDS)
-            .max_listeners(CONTROL_PORTS);
-        if is_grant(name) {
-            b.max_notifiers(CONTROL_PORTS)
-        } else {
-            b
-        }
+    transport::open_event(iox, name, |b| {
+        b.event_id_max_value(1).max_listeners(CONTROL_READERS)
     })
 }
 
