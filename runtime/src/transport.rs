@@ -241,7 +241,16 @@ pub(crate) fn notifier(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
 ) -> Result<Notifier<ipc::Service>, Error> {
-    open_event(iox, topic, |b| b)?
+    notifier_shaped(iox, topic, |b| b)
+}
+
+/// [`notifier`] on an event service that `shape` sizes (see [`open_event`]).
+pub(crate) fn notifier_shaped(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    shape: impl Fn(EventBuilder) -> EventBuilder,
+) -> Result<Notifier<ipc::Service>, Error> {
+    open_event(iox, topic, shape)?
         .notifier_builder()
         .create()
         .map_err(|e| Error::topic(topic, format!("cannot create notifier: {e:?}")))
@@ -252,7 +261,16 @@ pub(crate) fn listener(
     iox: &iceoryx2::node::Node<ipc::Service>,
     topic: &str,
 ) -> Result<Listener<ipc::Service>, Error> {
-    open_event(iox, topic, |b| b)?
+    listener_shaped(iox, topic, |b| b)
+}
+
+/// [`listener`] on an event service that `shape` sizes (see [`open_event`]).
+pub(crate) fn listener_shaped(
+    iox: &iceoryx2::node::Node<ipc::Service>,
+    topic: &str,
+    shape: impl Fn(EventBuilder) -> EventBuilder,
+) -> Result<Listener<ipc::Service>, Error> {
+    open_event(iox, topic, shape)?
         .listener_builder()
         .create()
         .map_err(|e| Error::topic(topic, format!("cannot create listener: {e:?}")))

@@ -2,9 +2,9 @@
 //!
 //! The text is exactly what `serde_json::to_vec` gives of the type's serde value (the tests
 //! hold it to that for every catalog type), and the view is read back from it. Objects and
-//! arrays are written here rather than through serde's per-element calls, and a byte array (a map's quarter of a million cells) is written
-//! from a table of the 256 numbers' texts. Numbers and strings still go through serde_json,
-//! one at a time, so their text cannot drift from it.
+//! arrays are written here rather than through serde's per-element calls, and a byte array
+//! (a map's quarter of a million cells) from a table of the 256 numbers' texts. Numbers and
+//! strings still go through serde_json, one at a time, so their text cannot drift from it.
 
 use crate::describe::{Element, Scalar};
 use crate::view::{Bytes, FieldValue, Item, Object, scalar};

@@ -57,36 +57,25 @@ fn control_topic<T: caravan_schemas::Message>(
     transport::open_pubsub::<T>(iox, name, delivery, |b| b.max_subscribers(CONTROL_READERS))
 }
 
-/// The event service of a control topic: its readers as [`control_topic`]'s, and one event id
-/// (notifications carry the default, 0; a listener clears a counter for every possible id at
-/// each wait, 256 by default).
-fn control_event(
-    iox: &iceoryx2::node::Node<ipc::Service>,
-    name: &str,
-) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
-    transport::open_event(iox, name, |b| {
-        b.event_id_max_value(1).max_listeners(CONTROL_READERS)
-    })
+/// How a control topic's event service is made: its readers as [`control_topic`]'s, and one
+/// event id (notifications carry the default, 0; a listener clears a counter for every
+/// possible id at each wait, 256 by default).
+fn control_event(b: transport::EventBuilder) -> transport::EventBuilder {
+    b.event_id_max_value(1).max_listeners(CONTROL_READERS)
 }
 
 fn listener(
     iox: &iceoryx2::node::Node<ipc::Service>,
     name: &str,
 ) -> Result<iceoryx2::port::listener::Listener<ipc::Service>, Error> {
-    control_event(iox, name)?
-        .listener_builder()
-        .create()
-        .map_err(|e| Error::topic(name, format!("cannot create listener: {e:?}")))
+    transport::listener_shaped(iox, name, control_event)
 }
 
 fn notifier(
     iox: &iceoryx2::node::Node<ipc::Service>,
     name: &str,
 ) -> Result<iceoryx2::port::notifier::Notifier<ipc::Service>, Error> {
-    control_event(iox, name)?
-        .notifier_builder()
-        .create()
-        .map_err(|e| Error::topic(name, format!("cannot create notifier: {e:?}")))
+    transport::notifier_shaped(iox, name, control_event)
 }
 
 fn publisher<T: caravan_schemas::Message>(
