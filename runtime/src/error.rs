@@ -30,7 +30,7 @@ impl Error {
         }
     }
 
-    pub(crate) fn transport(context: &str, what: impl core::fmt::Debug) -> Self {
+    pub fn transport(context: &str, what: impl core::fmt::Debug) -> Self {
         Error::Transport(format!("{context}: {what:?}"))
     }
 }

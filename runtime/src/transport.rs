@@ -285,7 +285,7 @@ pub(crate) fn wake(notifier: &Notifier<ipc::Service>) {
 /// Sleeps until `listener` has an event or `timeout` passed, then takes its events. The same
 /// as iceoryx2's `timed_wait`, without the three system calls that set its socket's timeout and
 /// blocking mode at every wait (the lockstep scheduler waits several times per tick).
-pub(crate) fn wait_events(
+pub fn wait_events(
     listener: &Listener<ipc::Service>,
     timeout: std::time::Duration,
 ) -> Result<(), Error> {

@@ -1,6 +1,6 @@
 //! The runtime foundation across real processes and real shared memory.
 
-use caravan::lockstep::Scheduler;
+use caravan_lockstep::Scheduler;
 use caravan_tests::{TestGroup, terminate, test_node, wait_with_cpu};
 use serde_json::json;
 use std::io::{BufRead, BufReader};

@@ -235,14 +235,14 @@ impl Recorder {
 
     /// Reads every waiting message, except on `later` topics (hashes), and hands them to the
     /// writer. In lockstep, `later` are the topics of nodes already stepping at the next time
-    /// ([`caravan::lockstep::Advance::overlapping`]): nothing on them belongs to the time
+    /// (`caravan_lockstep::Advance::overlapping`): nothing on them belongs to the time
     /// that ended, and they are drained once theirs ends, so each batch holds one time.
     pub fn drain_except(&mut self, later: &[u64]) -> Result<()> {
         self.drain_taps(|hash| !later.contains(&hash), true)
     }
 
     /// Like [`Self::drain_except`], but looks only at `published` (sorted hashes: the topics
-    /// the nodes said they published at the time that ended, [`caravan::lockstep::Advance`]):
+    /// the nodes said they published at the time that ended, `caravan_lockstep::Advance`):
     /// the others have nothing new, and asking each of dozens of taps at every advance was
     /// a good part of the launcher's work per tick.
     pub fn drain_published(&mut self, published: &[u64], later: &[u64]) -> Result<()> {

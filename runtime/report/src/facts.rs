@@ -176,7 +176,7 @@ pub struct RunFacts {
     pub warnings: Vec<String>,
     /// Lockstep: what the scheduler did.
     #[serde(default)]
-    pub schedule: Option<caravan::lockstep::ScheduleStats>,
+    pub schedule: Option<caravan_lockstep::ScheduleStats>,
     /// A lockstep group across machines, seen from a host other than its clock host: the
     /// host that kept simulated time and recorded the group (this host did neither).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -1,6 +1,6 @@
 //! The node side of the protocol.
 
-use super::{Pub, Sub, listener, notifier, publisher, send, subscriber};
+use super::control::{Pub, Sub, listener, notifier, publisher, send, subscriber};
 use crate::Error;
 use crate::transport::Shared;
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
@@ -164,7 +164,7 @@ impl Client {
                     true,
                 ))
             };
-            if super::spin_on(&self.grants, &self.grant_listener, spin, "grant")? {
+            if super::control::spin_on(&self.grants, &self.grant_listener, spin, "grant")? {
                 // A node that keeps finding grants never sleeps in its WaitSet, which is where
                 // a signal is noticed: look without waiting.
                 if wait(Duration::ZERO)?.0 {

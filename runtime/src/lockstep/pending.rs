@@ -120,7 +120,7 @@ impl Pending {
     /// The scheduler is about to grant `quiet` quiet steps (counted before the grants go out,
     /// so no report can take the count below); `idle`: no step is outstanding, so a count
     /// above 0 is drift (a node died in a quiet step). Returns the token to grant them under.
-    pub(crate) fn granting(&self, quiet: usize, idle: bool) -> u32 {
+    pub fn granting(&self, quiet: usize, idle: bool) -> u32 {
         if idle {
             self.reset();
         }

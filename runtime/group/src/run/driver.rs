@@ -4,7 +4,7 @@
 use super::supervisor::Event;
 use anyhow::{Result, anyhow};
 use caravan::discovery::{discovery_interval, listen_until};
-use caravan::lockstep::Scheduler;
+use caravan_lockstep::Scheduler;
 use caravan_record::{Recorder, Recording, RecordingMeta};
 use crossbeam::channel::{Receiver, Sender};
 use iceoryx2::prelude::*;
@@ -60,7 +60,7 @@ pub struct DriverOutcome {
     pub recording: Recording,
     pub sim_time_ns: u64,
     /// Lockstep: what the scheduler did.
-    pub schedule: Option<caravan::lockstep::ScheduleStats>,
+    pub schedule: Option<caravan_lockstep::ScheduleStats>,
 }
 
 /// Runs the driver on its own thread (iceoryx2 ports stay on the thread that made them).
@@ -159,7 +159,7 @@ fn run_lockstep(
     control: &Control,
     events: &Sender<Event>,
     finish: &Receiver<()>,
-) -> Result<(u64, caravan::lockstep::ScheduleStats)> {
+) -> Result<(u64, caravan_lockstep::ScheduleStats)> {
     let mut scheduler = Scheduler::with_pending(&cfg.iceoryx, cfg.tick, cfg.pending.take())?;
     scheduler.set_spin(cfg.spin);
     // A node that died in its step never reported what it published: the next drain looks

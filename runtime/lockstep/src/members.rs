@@ -1,8 +1,8 @@
 //! What the scheduler keeps of each node and of each time being stepped.
 
-use super::Pub;
-use super::overlap::Footprint;
-use crate::Error;
+use crate::overlap::Footprint;
+use caravan::Error;
+use caravan::lockstep::control::Pub;
 use caravan_schemas::lockstep::Grant;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
@@ -10,41 +10,41 @@ use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 
 /// A node in the schedule.
-pub(super) struct Member {
-    /// Shared with every [`super::Advance`] that names it.
-    pub(super) name: std::sync::Arc<str>,
+pub(crate) struct Member {
+    /// Shared with every [`crate::Advance`] that names it.
+    pub(crate) name: std::sync::Arc<str>,
     /// False after the process died, until it says hello again (a restart).
-    pub(super) active: bool,
-    pub(super) period_ns: u64,
+    pub(crate) active: bool,
+    pub(crate) period_ns: u64,
     /// Whether it steps when it joins: it has a period, or (neither a period nor triggers)
     /// it is scheduled by its own wake-ups and steps once to ask for the first.
-    pub(super) steps_on_joining: bool,
+    pub(crate) steps_on_joining: bool,
     /// The topics it touches, for overlapping it with nodes of another time.
-    pub(super) footprint: Footprint,
+    pub(crate) footprint: Footprint,
     /// Steps reported since it joined: a node overlaps only after its first, in which many
     /// nodes still open ports.
-    pub(super) steps: u64,
+    pub(crate) steps: u64,
     /// A node of a later time started while this one stepped.
-    pub(super) overlapped: bool,
+    pub(crate) overlapped: bool,
     /// When it was last granted a step (wall clock).
-    pub(super) granted_at: Instant,
+    pub(crate) granted_at: Instant,
     /// Wall time from its last grant to its report: the longest-running nodes are granted
     /// first, so the step that bounds the advance starts soonest.
-    pub(super) last_step: Duration,
+    pub(crate) last_step: Duration,
     /// It holds the scheduler's count of quiet steps (`pending.rs`): its steps are granted
     /// quiet.
-    pub(super) quiet: bool,
+    pub(crate) quiet: bool,
     /// The process id of its container on this machine (its hello's), 0 if none: a
     /// container's members are woken once per batch of grants.
-    pub(super) container: u32,
-    pub(super) grant: Pub<Grant>,
-    pub(super) grant_notifier: Notifier<ipc::Service>,
+    pub(crate) container: u32,
+    pub(crate) grant: Pub<Grant>,
+    pub(crate) grant_notifier: Notifier<ipc::Service>,
 }
 
 impl Member {
     /// Its grant of a step at `now_ns`: quiet, under `token`, if it holds the count of quiet
     /// steps (`pending.rs`).
-    pub(super) fn step_grant(&self, now_ns: u64, tick_ns: u64, token: Option<u32>) -> Grant {
+    pub(crate) fn step_grant(&self, now_ns: u64, tick_ns: u64, token: Option<u32>) -> Grant {
         let grant = Grant::step(now_ns, tick_ns);
         match token {
             Some(token) if self.quiet => grant.quiet(token),
@@ -53,13 +53,13 @@ impl Member {
     }
 
     /// Publishes its grant, without waking it ([`Self::wake`]).
-    pub(super) fn send(&mut self, grant: Grant) -> Result<(), Error> {
+    pub(crate) fn send(&mut self, grant: Grant) -> Result<(), Error> {
         self.granted_at = Instant::now();
-        super::send(&self.grant, grant, &self.name)
+        caravan::lockstep::control::send(&self.grant, grant, &self.name)
     }
 
     /// Wakes it for the grant it was sent.
-    pub(super) fn wake(&self) -> Result<(), Error> {
+    pub(crate) fn wake(&self) -> Result<(), Error> {
         self.grant_notifier
             .notify()
             .map_err(|e| Error::transport(&self.name, e))?;
@@ -68,15 +68,15 @@ impl Member {
 }
 
 /// One time being stepped.
-pub(super) struct Flight {
-    pub(super) now_ns: u64,
+pub(crate) struct Flight {
+    pub(crate) now_ns: u64,
     /// Every node stepping at this time.
-    pub(super) due: BTreeSet<usize>,
+    pub(crate) due: BTreeSet<usize>,
     /// Due, not granted yet: waiting for nodes of the earlier time it shares topics with.
-    pub(super) held: BTreeSet<usize>,
+    pub(crate) held: BTreeSet<usize>,
     /// Granted, report not in yet.
-    pub(super) waiting: BTreeSet<usize>,
-    pub(super) published: BTreeSet<u64>,
+    pub(crate) waiting: BTreeSet<usize>,
+    pub(crate) published: BTreeSet<u64>,
     /// Last (re)grant of the waiting nodes, for repeating lost grants.
-    pub(super) granted_at: Instant,
+    pub(crate) granted_at: Instant,
 }

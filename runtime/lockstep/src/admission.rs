@@ -1,10 +1,11 @@
 //! Admission: the scheduler takes in the nodes that say hello, at the start and on restarts.
 
-use super::members::Member;
-use super::overlap::Footprint;
-use super::scheduler::Scheduler;
-use super::{Watchdog, notifier, publisher};
-use crate::Error;
+use crate::Watchdog;
+use crate::members::Member;
+use crate::overlap::Footprint;
+use crate::scheduler::Scheduler;
+use caravan::Error;
+use caravan::lockstep::control::{notifier, publisher};
 use caravan_schemas::lockstep::{self as proto, Grant, Hello};
 use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
@@ -40,7 +41,7 @@ impl Scheduler {
         }
     }
 
-    pub(super) fn admit_new(&mut self) -> Result<(), Error> {
+    pub(crate) fn admit_new(&mut self) -> Result<(), Error> {
         while let Some(sample) = self
             .hello
             .receive()

@@ -1,12 +1,12 @@
 //! The scheduler: owns simulated time, grants steps and collects their reports.
 
-use super::advance::{Advance, ScheduleStats, Watchdog};
-use super::members::{Flight, Member};
-use super::overlap::{self, Footprint};
-use super::pending::Pending;
-use super::{Sub, listener, spin_on, subscriber};
-use crate::Error;
-use crate::transport;
+use crate::advance::{Advance, ScheduleStats, Watchdog};
+use crate::members::{Flight, Member};
+use crate::overlap::{self, Footprint};
+use caravan::Error;
+use caravan::lockstep::Pending;
+use caravan::lockstep::control::{Sub, listener, spin_on, subscriber, wait_events};
+
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
@@ -22,37 +22,37 @@ const HELLO_EVERY: Duration = Duration::from_millis(10);
 
 /// Owns simulated time for a group. The launcher runs one; tests can run one directly.
 pub struct Scheduler {
-    pub(super) iox: iceoryx2::node::Node<ipc::Service>,
-    pub(super) tick_ns: u64,
-    pub(super) hello: Sub<Hello>,
-    pub(super) hello_listener: Listener<ipc::Service>,
-    pub(super) done: Sub<Done>,
-    pub(super) done_listener: Listener<ipc::Service>,
-    pub(super) members: Vec<Member>,
-    pub(super) by_hash: BTreeMap<u64, usize>,
+    pub(crate) iox: iceoryx2::node::Node<ipc::Service>,
+    pub(crate) tick_ns: u64,
+    pub(crate) hello: Sub<Hello>,
+    pub(crate) hello_listener: Listener<ipc::Service>,
+    pub(crate) done: Sub<Done>,
+    pub(crate) done_listener: Listener<ipc::Service>,
+    pub(crate) members: Vec<Member>,
+    pub(crate) by_hash: BTreeMap<u64, usize>,
     /// topic hash → members it wakes
-    pub(super) subscribers: BTreeMap<u64, Vec<usize>>,
+    pub(crate) subscribers: BTreeMap<u64, Vec<usize>>,
     /// event time → members due then, for times not being stepped yet
-    pub(super) queue: BTreeMap<u64, BTreeSet<usize>>,
+    pub(crate) queue: BTreeMap<u64, BTreeSet<usize>>,
     /// Times being stepped, oldest first: one, or two when the next overlaps.
-    pub(super) flights: VecDeque<Flight>,
+    pub(crate) flights: VecDeque<Flight>,
     /// Latest time that may start before the one before it has finished; `None`: none.
-    pub(super) overlap_until: Option<u64>,
+    pub(crate) overlap_until: Option<u64>,
     /// Topics a node may publish to while an earlier time runs (see [`Self::know_topics`]).
-    pub(super) known_topics: BTreeSet<u64>,
+    pub(crate) known_topics: BTreeSet<u64>,
     /// How long one wait may last before `watchdog` is consulted.
-    pub(super) poll: Duration,
-    /// How long a wait for reports spins before it sleeps ([`crate::spin`]).
-    pub(super) spin: Duration,
-    pub(super) now_ns: u64,
+    pub(crate) poll: Duration,
+    /// How long a wait for reports spins before it sleeps ([`caravan::spin`]).
+    pub(crate) spin: Duration,
+    pub(crate) now_ns: u64,
     /// The last time that finished.
-    pub(super) last_finished_ns: Option<u64>,
-    pub(super) stats: ScheduleStats,
+    pub(crate) last_finished_ns: Option<u64>,
+    pub(crate) stats: ScheduleStats,
     /// The count of quiet steps its members on this machine share (`pending.rs`); `None`
     /// if it could not be made (every report then notifies, as a node of another machine's).
-    pub(super) pending: Option<Pending>,
+    pub(crate) pending: Option<Pending>,
     /// When a wait for reports last looked for hellos.
-    pub(super) hello_looked: Instant,
+    pub(crate) hello_looked: Instant,
 }
 
 impl Scheduler {
@@ -69,7 +69,7 @@ impl Scheduler {
         tick: Duration,
         pending: Option<Pending>,
     ) -> Result<Self, Error> {
-        crate::log::init("caravan");
+        caravan::log::init("caravan");
         let iox = NodeBuilder::new()
             .config(config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
@@ -99,9 +99,9 @@ impl Scheduler {
         })
     }
 
-    /// Spins up to `spin` for the nodes' reports before sleeping (at most [`crate::MAX_SPIN`]).
+    /// Spins up to `spin` for the nodes' reports before sleeping (at most [`caravan::MAX_SPIN`]).
     pub fn set_spin(&mut self, spin: Duration) {
-        self.spin = spin.min(crate::MAX_SPIN);
+        self.spin = spin.min(caravan::MAX_SPIN);
     }
 
     pub fn tick_ns(&self) -> u64 {
@@ -114,7 +114,7 @@ impl Scheduler {
     }
 
     /// Lets nodes due at a time ≤ `end_ns` start while the time one tick earlier still runs,
-    /// when they share no topic with its unfinished nodes (`lockstep/overlap.rs`). The caller then
+    /// when they share no topic with its unfinished nodes (`overlap.rs`). The caller then
     /// advances until [`Self::next_time_ns`] is past `end_ns`: a time that started early
     /// is finished by a later [`Self::advance`].
     pub fn overlap_until(&mut self, end_ns: u64) {
@@ -394,7 +394,7 @@ impl Scheduler {
     }
 
     /// Queues `i` at `time_ns`, or adds it to that time if it is being stepped.
-    pub(super) fn insert(&mut self, time_ns: u64, i: usize) -> Result<(), Error> {
+    pub(crate) fn insert(&mut self, time_ns: u64, i: usize) -> Result<(), Error> {
         if let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == time_ns) {
             if f.due.insert(i) {
                 f.held.insert(i);
@@ -497,7 +497,7 @@ impl Scheduler {
         Ok(())
     }
 
-    pub(super) fn wait_on(&self, hello: bool) -> Result<(), Error> {
+    pub(crate) fn wait_on(&self, hello: bool) -> Result<(), Error> {
         if !hello && spin_on(&self.done, &self.done_listener, self.spin, proto::DONE)? {
             return Ok(());
         }
@@ -506,6 +506,6 @@ impl Scheduler {
         } else {
             &self.done_listener
         };
-        transport::wait_events(listener, self.poll)
+        wait_events(listener, self.poll)
     }
 }

@@ -11,7 +11,7 @@ pub struct Advance {
     /// Hashes of the topics published in this step, sorted.
     pub published: Vec<u64>,
     /// Topics (hashes) published by nodes already stepping at the next time (see
-    /// [`super::Scheduler::overlap_until`]): none of their messages belongs to `now_ns`, and the
+    /// [`crate::Scheduler::overlap_until`]): none of their messages belongs to `now_ns`, and the
     /// caller must leave them to that time.
     pub overlapping: Vec<u64>,
 }
@@ -23,7 +23,7 @@ pub struct ScheduleStats {
     pub advances: u64,
     /// Steps granted (all nodes, all times).
     pub steps: u64,
-    /// Steps granted while the time before was still running ([`super::Scheduler::overlap_until`]).
+    /// Steps granted while the time before was still running ([`crate::Scheduler::overlap_until`]).
     pub overlapped_steps: u64,
     /// Wake-ups sent with grants: one per node granted, but one per batch for a container's
     /// members. (Absent from a report of a build before it: 0.)
