@@ -70,6 +70,13 @@ impl Scheduler {
         (self.pending.as_ref()).is_some_and(|p| p.token() == hello.quiet)
     }
 
+    /// The report slot of the node of `hello` (`caravan::lockstep::Pending::give_slot`): one
+    /// holding the count reports into it.
+    fn slot(&self, hello: &Hello, hash: u64) -> Option<usize> {
+        let pending = self.pending.as_ref().filter(|_| self.holds_count(hello))?;
+        pending.give_slot(hash)
+    }
+
     fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
         let name = hello.node.as_str().to_string();
         let hash = proto::name_hash(&name);
@@ -78,10 +85,12 @@ impl Scheduler {
             if !self.members[i].active {
                 let footprint = self.footprint(hello);
                 let quiet = self.holds_count(hello);
+                let slot = self.slot(hello, hash);
                 let member = &mut self.members[i];
                 member.active = true;
                 member.quiet = quiet;
                 member.container = hello.container;
+                member.slot = slot;
                 member.footprint = footprint;
                 member.steps = 0;
                 member.overlapped = false;
@@ -102,6 +111,7 @@ impl Scheduler {
             footprint: self.footprint(hello),
             quiet: self.holds_count(hello),
             container: hello.container,
+            slot: self.slot(hello, hash),
             steps: 0,
             overlapped: false,
             granted_at: Instant::now(),

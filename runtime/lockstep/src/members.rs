@@ -37,6 +37,9 @@ pub(crate) struct Member {
     /// The process id of its container on this machine (its hello's), 0 if none: a
     /// container's members are woken once per batch of grants.
     pub(crate) container: u32,
+    /// Its report slot in the page of quiet steps (`caravan::lockstep::Pending::give_slot`),
+    /// if it holds the page and a slot was free.
+    pub(crate) slot: Option<usize>,
     pub(crate) grant: Pub<Grant>,
     pub(crate) grant_notifier: Notifier<ipc::Service>,
 }

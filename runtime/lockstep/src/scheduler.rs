@@ -5,7 +5,8 @@ use crate::members::{Flight, Member};
 use crate::overlap::{self, Footprint};
 use caravan::Error;
 use caravan::lockstep::Pending;
-use caravan::lockstep::control::{Sub, listener, spin_on, subscriber, wait_events};
+use caravan::lockstep::Report;
+use caravan::lockstep::control::{Sub, listener, subscriber, wait_events};
 
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
 use iceoryx2::port::listener::Listener;
@@ -53,6 +54,8 @@ pub struct Scheduler {
     pub(crate) pending: Option<Pending>,
     /// When a wait for reports last looked for hellos.
     pub(crate) hello_looked: Instant,
+    /// The topics of the report being read from a slot, kept between reports.
+    topics: Vec<u64>,
 }
 
 impl Scheduler {
@@ -96,6 +99,7 @@ impl Scheduler {
             stats: ScheduleStats::default(),
             pending,
             hello_looked: Instant::now(),
+            topics: Vec::with_capacity(proto::MAX_TOPICS),
         })
     }
 
@@ -347,48 +351,106 @@ impl Scheduler {
             let Some(&i) = self.by_hash.get(&done.node_hash) else {
                 continue;
             };
-            let newest = self.flights.back().map_or(self.now_ns, |f| f.now_ns);
-            if done.now_ns > newest {
+            let report = Report {
+                now_ns: done.now_ns,
+                wake_ns: done.wake_ns,
+                undeclared: done.undeclared,
+                published: done.published.as_slice(),
+            };
+            self.take_report(i, &report)?;
+        }
+        self.read_slots()
+    }
+
+    /// The steps reported in the page's slots (`caravan::lockstep::Report`): looked for only
+    /// in the slots of the nodes waited for.
+    fn read_slots(&mut self) -> Result<(), Error> {
+        let Some(pending) = &self.pending else {
+            return Ok(());
+        };
+        let mut reported: Vec<(usize, u64)> = Vec::new();
+        for f in &self.flights {
+            for &i in &f.waiting {
+                if let Some(slot) = self.members[i].slot
+                    && pending.has_report(slot, f.now_ns)
+                {
+                    reported.push((i, f.now_ns));
+                }
+            }
+        }
+        let mut topics = std::mem::take(&mut self.topics);
+        for (i, now_ns) in reported {
+            let slot = self.members[i].slot.expect("a slot");
+            let pending = self.pending.as_ref().expect("the page");
+            if let Some(report) = pending.read_report(slot, now_ns, &mut topics) {
+                self.take_report(i, &report)?;
+            }
+        }
+        self.topics = topics;
+        Ok(())
+    }
+
+    /// Whether a report is in (a `Done` sample, or a slot of a node waited for).
+    fn reports_in(&self) -> Result<bool, Error> {
+        if self
+            .done
+            .has_samples()
+            .map_err(|e| Error::transport("done", e))?
+        {
+            return Ok(true);
+        }
+        let Some(pending) = &self.pending else {
+            return Ok(false);
+        };
+        Ok(self.flights.iter().any(|f| {
+            f.waiting.iter().any(|&i| {
+                (self.members[i].slot).is_some_and(|slot| pending.has_report(slot, f.now_ns))
+            })
+        }))
+    }
+
+    /// Takes node `i`'s report of a step: schedules what it woke and what it asked for.
+    fn take_report(&mut self, i: usize, report: &Report) -> Result<(), Error> {
+        let newest = self.flights.back().map_or(self.now_ns, |f| f.now_ns);
+        if report.now_ns > newest {
+            return Err(Error::Lockstep(format!(
+                "node '{}' reported a step at {} ns, but time is {} ns",
+                self.members[i].name, report.now_ns, newest
+            )));
+        }
+        // Repeats of reports (answers to repeated grants) are expected; skip them.
+        let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == report.now_ns) else {
+            return Ok(());
+        };
+        if !f.waiting.remove(&i) {
+            return Ok(());
+        }
+        f.published.extend(report.published.iter().copied());
+        let now_ns = f.now_ns;
+        let member = &mut self.members[i];
+        member.last_step = member.granted_at.elapsed();
+        member.steps += 1;
+        if report.undeclared != 0 && member.footprint.declared {
+            member.footprint.declared = false;
+            if member.overlapped {
                 return Err(Error::Lockstep(format!(
-                    "node '{}' reported a step at {} ns, but time is {} ns",
-                    self.members[i].name, done.now_ns, newest
+                    "node '{}' opened a topic in its step at {now_ns} ns, after it joined \
+                     the schedule, while nodes of another time stepped beside it: a rerun \
+                     could differ. Open a node's publishers and subscribers before its step \
+                     loop",
+                    member.name
                 )));
             }
-            // Repeats of reports (answers to repeated grants) are expected; skip them.
-            let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == done.now_ns) else {
-                continue;
-            };
-            if !f.waiting.remove(&i) {
-                continue;
-            }
-            f.published
-                .extend(done.published.as_slice().iter().copied());
-            let now_ns = f.now_ns;
-            let member = &mut self.members[i];
-            member.last_step = member.granted_at.elapsed();
-            member.steps += 1;
-            if done.undeclared != 0 && member.footprint.declared {
-                member.footprint.declared = false;
-                if member.overlapped {
-                    return Err(Error::Lockstep(format!(
-                        "node '{}' opened a topic in its step at {now_ns} ns, after it joined \
-                         the schedule, while nodes of another time stepped beside it: a rerun \
-                         could differ. Open a node's publishers and subscribers before its step \
-                         loop",
-                        member.name
-                    )));
-                }
-                tracing::warn!(
-                    "node '{}' opened a topic in its step at {now_ns} ns, after it joined the \
-                     schedule: it is no longer stepped beside other ticks",
-                    member.name
-                );
-            }
-            member.overlapped = false;
-            self.schedule_after(i, now_ns, done.published.as_slice())?;
-            if done.wake_ns > now_ns {
-                self.insert(done.wake_ns, i)?;
-            }
+            tracing::warn!(
+                "node '{}' opened a topic in its step at {now_ns} ns, after it joined the \
+                 schedule: it is no longer stepped beside other ticks",
+                member.name
+            );
+        }
+        member.overlapped = false;
+        self.schedule_after(i, now_ns, report.published)?;
+        if report.wake_ns > now_ns {
+            self.insert(report.wake_ns, i)?;
         }
         Ok(())
     }
@@ -498,8 +560,14 @@ impl Scheduler {
     }
 
     pub(crate) fn wait_on(&self, hello: bool) -> Result<(), Error> {
-        if !hello && spin_on(&self.done, &self.done_listener, self.spin, proto::DONE)? {
-            return Ok(());
+        if !hello && !self.spin.is_zero() {
+            let ready = || Ok(self.reports_in()?.then_some(()));
+            if caravan::spin::spin_for(self.spin, ready)?.is_some() {
+                // Notifications for what was read are taken: the next wait does not end at once.
+                (self.done_listener.try_wait(|_| {}))
+                    .map_err(|e| Error::transport(proto::DONE, e))?;
+                return Ok(());
+            }
         }
         let listener = if hello {
             &self.hello_listener

@@ -26,7 +26,10 @@ pub struct Client {
     node_hash: u64,
     grants: Sub<Grant>,
     grant_listener: Listener<ipc::Service>,
-    done: Pub<Done>,
+    /// Made when first needed by a node holding the page of quiet steps (it reports into its
+    /// slot), at once by any other: a publisher connected to the report service costs the
+    /// scheduler a look at each receive.
+    done: std::cell::OnceCell<Pub<Done>>,
     done_notifier: Notifier<ipc::Service>,
     /// Kept open: a sample whose publisher is gone before the subscriber attached is lost.
     _hello: Pub<Hello>,
@@ -38,6 +41,10 @@ pub struct Client {
     pending: Option<super::pending::Pending>,
     /// The step being taken was granted quiet.
     quiet_step: std::cell::Cell<bool>,
+    /// Its report slot in `pending` (`slots.rs`), looked for at its first quiet grant.
+    slot: std::cell::OnceCell<Option<usize>>,
+    /// The last report went into the slot (a repeat of it need not be written again).
+    last_in_slot: std::cell::Cell<bool>,
     shared: Rc<Shared>,
 }
 
@@ -86,7 +93,7 @@ impl Client {
             node_hash: shared.node_hash,
             grants: subscriber::<Grant>(iox, &grant_name)?,
             grant_listener: listener(iox, &grant_name)?,
-            done: publisher::<Done>(iox, proto::DONE)?,
+            done: std::cell::OnceCell::new(),
             done_notifier: notifier(iox, proto::DONE)?,
             _hello: publisher::<Hello>(iox, proto::HELLO)?,
             hello_notifier: notifier(iox, proto::HELLO)?,
@@ -94,8 +101,13 @@ impl Client {
             last_done: std::cell::RefCell::new(None),
             pending,
             quiet_step: std::cell::Cell::new(false),
+            slot: std::cell::OnceCell::new(),
+            last_in_slot: std::cell::Cell::new(false),
             shared: shared.clone(),
         };
+        if client.pending.is_none() {
+            client.done_port()?;
+        }
         client.say_hello()?;
         Ok(client)
     }
@@ -127,7 +139,9 @@ impl Client {
                 match *self.last_done.borrow() {
                     // A repeat is never quiet: it was not counted.
                     Some(done) if grant.now_ns == done.now_ns => {
-                        send(&self.done, done, proto::DONE)?;
+                        if !self.last_in_slot.get() {
+                            send(self.done_port()?, done, proto::DONE)?;
+                        }
                         self.notify_done(true)?
                     }
                     Some(done) if grant.now_ns < done.now_ns => {}
@@ -221,16 +235,45 @@ impl Client {
             }
         }
         *self.last_done.borrow_mut() = Some(done);
-        send(&self.done, done, proto::DONE)?;
+        let quiet = self.quiet_step.replace(false);
+        let slot = match &self.pending {
+            Some(pending) if quiet => {
+                let slot = self.slot.get_or_init(|| pending.find_slot(self.node_hash));
+                slot.map(|slot| (pending, slot))
+            }
+            _ => None,
+        };
+        self.last_in_slot.set(slot.is_some());
+        match slot {
+            Some((pending, slot)) => pending.write_report(
+                slot,
+                &super::Report {
+                    now_ns,
+                    wake_ns,
+                    undeclared: done.undeclared,
+                    published: done.published.as_slice(),
+                },
+            ),
+            None => send(self.done_port()?, done, proto::DONE)?,
+        }
         // Taken off the count after the report is out: the last quiet step to end then comes
         // after every report, so none waits unread for the scheduler's poll. (The scheduler may
         // read this report and set the count to 0 before it is taken off: the count goes to
         // −1, which only means more notifications until the next reset.)
-        let notify = match (&self.pending, self.quiet_step.replace(false)) {
+        let notify = match (&self.pending, quiet) {
             (Some(pending), true) => pending.finish(),
             _ => true,
         };
         self.notify_done(notify)
+    }
+
+    /// The report service's publisher, made at its first use.
+    fn done_port(&self) -> Result<&Pub<Done>, Error> {
+        if let Some(port) = self.done.get() {
+            return Ok(port);
+        }
+        let port = publisher::<Done>(&self.shared.iox, proto::DONE)?;
+        Ok(self.done.get_or_init(|| port))
     }
 
     /// Wakes the scheduler for a report sent, if `notify` (else it reads the report when a

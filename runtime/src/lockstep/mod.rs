@@ -23,6 +23,8 @@
 mod client;
 pub mod control;
 mod pending;
+mod slots;
 
 pub(crate) use client::{Client, GrantOutcome};
 pub use pending::Pending;
+pub use slots::Report;

@@ -12,9 +12,10 @@
 //! the `done` service whenever the scheduler wakes; what they say, and so every recording, is
 //! the same.
 //!
-//! The count is a 16-byte file in /dev/shm named with the group's prefix (so `caravan clean`
-//! removes it), mode 0600: a token (u32, never 0) that tells a node of another machine's
-//! group, or of an earlier run, from one of this run, and the count (i64). A count that
+//! The count is the head of a file in /dev/shm named with the group's prefix (so `caravan
+//! clean` removes it), mode 0600: a token (u32, never 0) that tells a node of another
+//! machine's group, or of an earlier run, from one of this run, and the count (i64). The rest
+//! of the file is a report slot for each node of this machine (`slots.rs`). A count that
 //! drifts (a node died in a quiet step) is set back to 0 whenever no step is outstanding;
 //! until then it only costs wake-ups (too low: more notifications) or a wait of the
 //! scheduler's poll (too high by two or more).
@@ -26,10 +27,14 @@ use std::sync::atomic::{AtomicI64, AtomicU32, Ordering};
 /// Quiet steps left after which a report notifies: the slowest node alone (1) or none (0).
 const NOTIFY_AT_OR_BELOW: i64 = 1;
 
+/// Bytes of the file: the token and the count in the first 64, then the report slots.
+pub(super) const SIZE: usize = super::slots::END;
+
 /// The shared count of quiet steps outstanding.
 pub struct Pending {
-    /// Written through raw pointers only (atomics), never through a reference to its bytes.
-    map: memmap2::MmapRaw,
+    /// Written through raw pointers only (atomics and the slots' copies), never through a
+    /// reference to its bytes.
+    pub(super) map: memmap2::MmapRaw,
     /// The scheduler's side removes the file when dropped.
     owned: Option<PathBuf>,
 }
@@ -54,7 +59,7 @@ impl Pending {
             .create_new(true)
             .mode(0o600)
             .open(&path)
-            .and_then(|f| f.set_len(16).map(|_| f))
+            .and_then(|f| f.set_len(SIZE as u64).map(|_| f))
             .map_err(|e| Error::Lockstep(format!("cannot create {}: {e}", path.display())))?;
         let map = memmap2::MmapRaw::map_raw(&file)
             .map_err(|e| Error::Lockstep(format!("cannot map {}: {e}", path.display())))?;
@@ -79,7 +84,7 @@ impl Pending {
     }
 
     /// Opens the count of the group of `config` (a node's side), if this machine has one: a
-    /// regular file of this user's, private to it, of the count's size (not a link, nor a file
+    /// regular file of this user's, private to it, of the page's size (not a link, nor a file
     /// another user put there first).
     pub fn open(config: &iceoryx2::config::Config) -> Option<Self> {
         use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
@@ -92,7 +97,7 @@ impl Pending {
         let meta = file.metadata().ok()?;
         // SAFETY: geteuid has no preconditions.
         let own = meta.uid() == unsafe { libc::geteuid() };
-        if !(meta.is_file() && own && meta.mode() & 0o077 == 0 && meta.len() == 16) {
+        if !(meta.is_file() && own && meta.mode() & 0o077 == 0 && meta.len() == SIZE as u64) {
             return None;
         }
         let map = memmap2::MmapRaw::map_raw(&file).ok()?;
@@ -100,7 +105,7 @@ impl Pending {
     }
 
     fn token_cell(&self) -> &AtomicU32 {
-        // SAFETY: the map is 16 bytes (checked when made or opened), page-aligned, writable,
+        // SAFETY: the map is SIZE bytes (checked when made or opened), page-aligned, writable,
         // lives as long as `self`, and is only ever accessed through these atomics. (A process
         // of the same user that shortens the file makes the next access fault: that user can
         // stop the group anyway.)
@@ -179,13 +184,13 @@ mod tests {
         let config = config("foreign");
         let at = path(&config);
         // Readable by others: not the group's own.
-        std::fs::write(&at, [0u8; 16]).unwrap();
+        std::fs::write(&at, vec![0u8; SIZE]).unwrap();
         std::fs::set_permissions(&at, std::fs::Permissions::from_mode(0o644)).unwrap();
         assert!(Pending::open(&config).is_none());
         std::fs::remove_file(&at).unwrap();
         // A link to a file of the right shape.
         let target = std::env::temp_dir().join(format!("pending-target-{}", std::process::id()));
-        std::fs::write(&target, [0u8; 16]).unwrap();
+        std::fs::write(&target, vec![0u8; SIZE]).unwrap();
         std::fs::set_permissions(&target, std::fs::Permissions::from_mode(0o600)).unwrap();
         std::os::unix::fs::symlink(&target, &at).unwrap();
         assert!(Pending::open(&config).is_none());

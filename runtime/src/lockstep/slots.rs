@@ -1,0 +1,212 @@
+//! Report slots: a node of the scheduler's machine writes its report of a quiet step into a
+//! slot of the shared page (`pending.rs`) instead of publishing a `Done` sample.
+//!
+//! A `Done` sample is a loan and a send for the node and, for the scheduler, a receive that
+//! looks at every node's publisher connected to the report service: a sixth of the
+//! scheduler's thread in the convoy (docs/benchmarks.md, "Fifth round"). A slot is a plain
+//! copy in shared memory, read by the scheduler only for the nodes it waits for. The
+//! wake-up is unchanged: a report notifies when the count of quiet steps says it must.
+//!
+//! The scheduler gives each node holding the page a slot when it joins (the page's directory
+//! maps slot to node hash); the node finds its slot at its first quiet grant. A step's slot
+//! is written by the node only after it was granted and read by the scheduler only until it
+//! took the report, so the two never touch it at once: the report's `ready` word, written
+//! last (release) and read first (acquire), orders the rest. Nodes without a slot (Python
+//! nodes, another machine's, more nodes than slots) publish `Done` samples as before; the
+//! scheduler reads both.
+
+use super::pending::Pending;
+use caravan_schemas::lockstep::MAX_TOPICS;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+
+/// Nodes of one machine that get a slot; more report through `Done` samples.
+pub const SLOTS: usize = 512;
+/// The directory: a node hash for each slot (0: free), after the page's 64-byte head.
+const DIRECTORY: usize = 64;
+/// The first slot, 64-aligned.
+const FIRST: usize = DIRECTORY + SLOTS * 8;
+/// A slot: 64 bytes kept for a grant, then the report: `ready` (the reported step's time
+/// + 1, 0 for none), `wake_ns`, `undeclared` (u32), the count of topics (u32), the topics.
+const SLOT: usize = (64 + 24 + MAX_TOPICS * 8).next_multiple_of(64);
+const REPORT: usize = 64;
+/// Bytes of the page.
+pub(super) const END: usize = FIRST + SLOTS * SLOT;
+
+/// A finished step, as a slot holds it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Report<'a> {
+    pub now_ns: u64,
+    /// Another step asked for at this time, 0 for none (`Done::wake_ns`).
+    pub wake_ns: u64,
+    /// `Done::undeclared`.
+    pub undeclared: u32,
+    /// Hashes of the topics the step published to (at most `MAX_TOPICS`).
+    pub published: &'a [u64],
+}
+
+impl Pending {
+    fn at(&self, offset: usize) -> *mut u8 {
+        debug_assert!(offset < END);
+        // SAFETY: in bounds of the map (SIZE bytes, checked when made or opened).
+        unsafe { self.map.as_mut_ptr().add(offset) }
+    }
+
+    fn word(&self, offset: usize) -> &AtomicU64 {
+        // SAFETY: an 8-aligned offset in the page (page-aligned), accessed only atomically
+        // or, for the topics, under the `ready` word's ordering (module comment).
+        unsafe { AtomicU64::from_ptr(self.at(offset).cast()) }
+    }
+
+    fn half(&self, offset: usize) -> &AtomicU32 {
+        // SAFETY: as in `word`, 4-aligned.
+        unsafe { AtomicU32::from_ptr(self.at(offset).cast()) }
+    }
+
+    fn entry(&self, slot: usize) -> &AtomicU64 {
+        self.word(DIRECTORY + slot * 8)
+    }
+
+    fn report_at(&self, slot: usize) -> usize {
+        FIRST + slot * SLOT + REPORT
+    }
+
+    /// The scheduler's side: the slot of the node of `node_hash`, given it now (or kept from
+    /// before its restart); `None` when every slot is taken (or for hash 0, the free mark).
+    pub fn give_slot(&self, node_hash: u64) -> Option<usize> {
+        if node_hash == 0 {
+            return None;
+        }
+        if let Some(slot) = self.find_slot(node_hash) {
+            return Some(slot);
+        }
+        let slot = (0..SLOTS).find(|&s| self.entry(s).load(Ordering::Acquire) == 0)?;
+        self.word(self.report_at(slot)).store(0, Ordering::Relaxed);
+        self.entry(slot).store(node_hash, Ordering::Release);
+        Some(slot)
+    }
+
+    /// The node's side: the slot the scheduler gave it, if any.
+    pub fn find_slot(&self, node_hash: u64) -> Option<usize> {
+        (node_hash != 0)
+            .then(|| (0..SLOTS).find(|&s| self.entry(s).load(Ordering::Acquire) == node_hash))
+            .flatten()
+    }
+
+    /// The node's side: writes the report of a step it was granted into its slot.
+    pub fn write_report(&self, slot: usize, report: &Report) {
+        let at = self.report_at(slot);
+        let topics = &report.published[..report.published.len().min(MAX_TOPICS)];
+        self.word(at + 8).store(report.wake_ns, Ordering::Relaxed);
+        self.half(at + 16)
+            .store(report.undeclared, Ordering::Relaxed);
+        self.half(at + 20)
+            .store(topics.len() as u32, Ordering::Relaxed);
+        // SAFETY: the topics' room is MAX_TOPICS words inside the slot; the scheduler reads
+        // it only after `ready` says this step is in (module comment).
+        unsafe {
+            std::ptr::copy_nonoverlapping(topics.as_ptr(), self.at(at + 24).cast(), topics.len())
+        };
+        self.word(at).store(report.now_ns + 1, Ordering::Release);
+    }
+
+    /// The scheduler's side: the report of the step at `now_ns` in `slot`, if it is in, its
+    /// topics read into `topics`.
+    pub fn read_report<'t>(
+        &self,
+        slot: usize,
+        now_ns: u64,
+        topics: &'t mut Vec<u64>,
+    ) -> Option<Report<'t>> {
+        let at = self.report_at(slot);
+        if self.word(at).load(Ordering::Acquire) != now_ns + 1 {
+            return None;
+        }
+        let len = (self.half(at + 20).load(Ordering::Relaxed) as usize).min(MAX_TOPICS);
+        topics.clear();
+        topics.resize(len, 0);
+        // SAFETY: as in `write_report`: written before `ready`, which was read above.
+        unsafe {
+            std::ptr::copy_nonoverlapping(self.at(at + 24).cast::<u64>(), topics.as_mut_ptr(), len)
+        };
+        let topics: &'t Vec<u64> = topics;
+        Some(Report {
+            now_ns,
+            wake_ns: self.word(at + 8).load(Ordering::Relaxed),
+            undeclared: self.half(at + 16).load(Ordering::Relaxed),
+            published: topics,
+        })
+    }
+
+    /// Whether the report of the step at `now_ns` is in `slot`.
+    pub fn has_report(&self, slot: usize, now_ns: u64) -> bool {
+        self.word(self.report_at(slot)).load(Ordering::Acquire) == now_ns + 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config(name: &str) -> iceoryx2::config::Config {
+        let group = format!("slots-{name}-{}", std::process::id());
+        crate::group::config(&group).unwrap()
+    }
+
+    #[test]
+    fn a_report_written_by_a_node_is_read_by_the_scheduler_for_its_step_only() {
+        let config = config("report");
+        let scheduler = Pending::create(&config).unwrap();
+        let node = Pending::open(&config).unwrap();
+        let slot = scheduler.give_slot(42).unwrap();
+        assert_eq!(node.find_slot(42), Some(slot));
+        let mut topics = Vec::new();
+        assert!(scheduler.read_report(slot, 10, &mut topics).is_none());
+        let published = [7, 8, 9];
+        let report = Report {
+            now_ns: 10,
+            wake_ns: 25,
+            undeclared: 1,
+            published: &published,
+        };
+        node.write_report(slot, &report);
+        assert!(scheduler.has_report(slot, 10));
+        // Another step's report is not this one.
+        assert!(scheduler.read_report(slot, 20, &mut topics).is_none());
+        let read = scheduler.read_report(slot, 10, &mut topics).unwrap();
+        assert_eq!(read, report);
+    }
+
+    #[test]
+    fn a_restarted_node_keeps_its_slot_and_slots_run_out() {
+        let config = config("give");
+        let page = Pending::create(&config).unwrap();
+        let first = page.give_slot(1).unwrap();
+        let second = page.give_slot(2).unwrap();
+        assert_ne!(first, second);
+        assert_eq!(page.give_slot(1), Some(first));
+        assert_eq!(page.give_slot(0), None);
+        for hash in 3..=SLOTS as u64 {
+            assert!(page.give_slot(hash).is_some());
+        }
+        assert_eq!(page.give_slot(SLOTS as u64 + 1), None);
+        assert_eq!(page.find_slot(SLOTS as u64 + 1), None);
+    }
+
+    #[test]
+    fn the_most_topics_a_slot_holds_are_kept() {
+        let config = config("full");
+        let page = Pending::create(&config).unwrap();
+        let slot = page.give_slot(5).unwrap();
+        let published: Vec<u64> = (1..=MAX_TOPICS as u64 + 3).collect();
+        let report = Report {
+            now_ns: 0,
+            wake_ns: 0,
+            undeclared: 0,
+            published: &published,
+        };
+        page.write_report(slot, &report);
+        let mut topics = Vec::new();
+        let read = page.read_report(slot, 0, &mut topics).unwrap();
+        assert_eq!(read.published, &published[..MAX_TOPICS]);
+    }
+}
