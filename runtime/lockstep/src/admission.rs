@@ -91,6 +91,7 @@ impl Scheduler {
                 member.quiet = quiet;
                 member.container = hello.container;
                 member.slot = slot;
+                member.slot_grants = false;
                 member.footprint = footprint;
                 member.steps = 0;
                 member.overlapped = false;
@@ -112,6 +113,7 @@ impl Scheduler {
             quiet: self.holds_count(hello),
             container: hello.container,
             slot: self.slot(hello, hash),
+            slot_grants: false,
             steps: 0,
             overlapped: false,
             granted_at: Instant::now(),

@@ -2,6 +2,7 @@
 
 use crate::overlap::Footprint;
 use caravan::Error;
+use caravan::lockstep::Pending;
 use caravan::lockstep::control::Pub;
 use caravan_schemas::lockstep::Grant;
 use iceoryx2::port::notifier::Notifier;
@@ -40,6 +41,8 @@ pub(crate) struct Member {
     /// Its report slot in the page of quiet steps (`caravan::lockstep::Pending::give_slot`),
     /// if it holds the page and a slot was free.
     pub(crate) slot: Option<usize>,
+    /// It reported into its slot, so it knows it: its grants are written there too.
+    pub(crate) slot_grants: bool,
     pub(crate) grant: Pub<Grant>,
     pub(crate) grant_notifier: Notifier<ipc::Service>,
 }
@@ -55,10 +58,17 @@ impl Member {
         }
     }
 
-    /// Publishes its grant, without waking it ([`Self::wake`]).
-    pub(crate) fn send(&mut self, grant: Grant) -> Result<(), Error> {
+    /// Sends its grant, without waking it ([`Self::wake`]): into its slot of `page` once it
+    /// reads grants there, else as a sample.
+    pub(crate) fn send(&mut self, grant: Grant, page: Option<&Pending>) -> Result<(), Error> {
         self.granted_at = Instant::now();
-        caravan::lockstep::control::send(&self.grant, grant, &self.name)
+        match (self.slot, page) {
+            (Some(slot), Some(page)) if self.slot_grants => {
+                page.write_grant(slot, grant);
+                Ok(())
+            }
+            _ => caravan::lockstep::control::send(&self.grant, grant, &self.name),
+        }
     }
 
     /// Wakes it for the grant it was sent.

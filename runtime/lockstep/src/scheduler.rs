@@ -6,7 +6,7 @@ use crate::overlap::{self, Footprint};
 use caravan::Error;
 use caravan::lockstep::Pending;
 use caravan::lockstep::Report;
-use caravan::lockstep::control::{Sub, listener, subscriber, wait_events};
+use caravan::lockstep::control::{Sub, has_samples, listener, spin_on, subscriber, wait_events};
 
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
 use iceoryx2::port::listener::Listener;
@@ -317,7 +317,7 @@ impl Scheduler {
         // then finds the others' grants too, and steps them all before it sleeps again.
         for &i in &nodes {
             let grant = self.members[i].step_grant(now_ns, self.tick_ns, token);
-            self.members[i].send(grant)?;
+            self.members[i].send(grant, self.pending.as_ref())?;
             self.flights[f].waiting.insert(i);
             self.stats.steps += 1;
         }
@@ -383,6 +383,7 @@ impl Scheduler {
             let slot = self.members[i].slot.expect("a slot");
             let pending = self.pending.as_ref().expect("the page");
             if let Some(report) = pending.read_report(slot, now_ns, &mut topics) {
+                self.members[i].slot_grants = true;
                 self.take_report(i, &report)?;
             }
         }
@@ -392,11 +393,7 @@ impl Scheduler {
 
     /// Whether a report is in (a `Done` sample, or a slot of a node waited for).
     fn reports_in(&self) -> Result<bool, Error> {
-        if self
-            .done
-            .has_samples()
-            .map_err(|e| Error::transport("done", e))?
-        {
+        if has_samples(&self.done, proto::DONE)? {
             return Ok(true);
         }
         let Some(pending) = &self.pending else {
@@ -544,7 +541,7 @@ impl Scheduler {
     }
 
     fn grant(&mut self, i: usize, grant: Grant) -> Result<(), Error> {
-        self.members[i].send(grant)?;
+        self.members[i].send(grant, self.pending.as_ref())?;
         self.members[i].wake()
     }
 
@@ -560,14 +557,15 @@ impl Scheduler {
     }
 
     pub(crate) fn wait_on(&self, hello: bool) -> Result<(), Error> {
-        if !hello && !self.spin.is_zero() {
-            let ready = || Ok(self.reports_in()?.then_some(()));
-            if caravan::spin::spin_for(self.spin, ready)?.is_some() {
-                // Notifications for what was read are taken: the next wait does not end at once.
-                (self.done_listener.try_wait(|_| {}))
-                    .map_err(|e| Error::transport(proto::DONE, e))?;
-                return Ok(());
-            }
+        if !hello
+            && spin_on(
+                || self.reports_in(),
+                &self.done_listener,
+                self.spin,
+                proto::DONE,
+            )?
+        {
+            return Ok(());
         }
         let listener = if hello {
             &self.hello_listener

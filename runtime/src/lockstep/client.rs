@@ -1,6 +1,8 @@
 //! The node side of the protocol.
 
-use super::control::{Pub, Sub, listener, notifier, publisher, send, subscriber};
+use super::control::{
+    Pub, Sub, has_samples, listener, notifier, publisher, send, spin_on, subscriber,
+};
 use crate::Error;
 use crate::transport::Shared;
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
@@ -45,6 +47,8 @@ pub struct Client {
     slot: std::cell::OnceCell<Option<usize>>,
     /// The last report went into the slot (a repeat of it need not be written again).
     last_in_slot: std::cell::Cell<bool>,
+    /// The sequence of the last grant read from the slot (`slots.rs`).
+    grant_seen: std::cell::Cell<u64>,
     shared: Rc<Shared>,
 }
 
@@ -103,6 +107,7 @@ impl Client {
             quiet_step: std::cell::Cell::new(false),
             slot: std::cell::OnceCell::new(),
             last_in_slot: std::cell::Cell::new(false),
+            grant_seen: std::cell::Cell::new(0),
             shared: shared.clone(),
         };
         if client.pending.is_none() {
@@ -127,12 +132,7 @@ impl Client {
         spin: Duration,
     ) -> Result<GrantOutcome, Error> {
         loop {
-            while let Some(sample) = self
-                .grants
-                .receive()
-                .map_err(|e| Error::transport("grant", e))?
-            {
-                let grant = *sample.payload();
+            while let Some(grant) = self.next_grant()? {
                 if grant.stop != 0 {
                     return Ok(GrantOutcome::Stop);
                 }
@@ -178,7 +178,7 @@ impl Client {
                     true,
                 ))
             };
-            if super::control::spin_on(&self.grants, &self.grant_listener, spin, "grant")? {
+            if spin_on(|| self.grant_in(), &self.grant_listener, spin, "grant")? {
                 // A node that keeps finding grants never sleeps in its WaitSet, which is where
                 // a signal is noticed: look without waiting.
                 if wait(Duration::ZERO)?.0 {
@@ -199,6 +199,29 @@ impl Client {
                 self.say_hello()?;
             }
         }
+    }
+
+    /// The next grant: from the slot, once the scheduler writes them there (`slots.rs`), else
+    /// a `Grant` sample.
+    fn next_grant(&self) -> Result<Option<Grant>, Error> {
+        if let (Some(pending), Some(&Some(slot))) = (&self.pending, self.slot.get())
+            && let Some((seq, grant)) = pending.read_grant(slot, self.grant_seen.get())
+        {
+            self.grant_seen.set(seq);
+            return Ok(Some(grant));
+        }
+        let sample = (self.grants.receive()).map_err(|e| Error::transport("grant", e))?;
+        Ok(sample.map(|s| *s.payload()))
+    }
+
+    /// Whether a grant is in, without taking it.
+    fn grant_in(&self) -> Result<bool, Error> {
+        if let (Some(pending), Some(&Some(slot))) = (&self.pending, self.slot.get())
+            && pending.grant_sequence(slot) != self.grant_seen.get()
+        {
+            return Ok(true);
+        }
+        has_samples(&self.grants, "grant")
     }
 
     /// The listener a grant wakes.
@@ -238,7 +261,14 @@ impl Client {
         let quiet = self.quiet_step.replace(false);
         let slot = match &self.pending {
             Some(pending) if quiet => {
-                let slot = self.slot.get_or_init(|| pending.find_slot(self.node_hash));
+                let slot = self.slot.get_or_init(|| {
+                    let slot = pending.find_slot(self.node_hash);
+                    // Grants come into the slot only after this report.
+                    if let Some(slot) = slot {
+                        self.grant_seen.set(pending.grant_sequence(slot));
+                    }
+                    slot
+                });
                 slot.map(|slot| (pending, slot))
             }
             _ => None,

@@ -73,11 +73,11 @@ pub fn subscriber<T: caravan_schemas::Message>(
         .map_err(|e| Error::transport(name, e))
 }
 
-/// Spin, then park: looks in shared memory for up to `spin` for something on `sub`; true if it
-/// came, so the caller need not sleep on `listener` (whose notifications are then taken, so
-/// the next wait does not return at once for a message already read).
-pub fn spin_on<T: caravan_schemas::Message>(
-    sub: &Sub<T>,
+/// Spin, then park: looks up to `spin` for `has` to say something came; true if it did, so
+/// the caller need not sleep on `listener` (whose notifications are then taken, so the next
+/// wait does not return at once for a message already read).
+pub fn spin_on(
+    mut has: impl FnMut() -> Result<bool, Error>,
     listener: &iceoryx2::port::listener::Listener<ipc::Service>,
     spin: std::time::Duration,
     name: &str,
@@ -85,18 +85,18 @@ pub fn spin_on<T: caravan_schemas::Message>(
     if spin.is_zero() {
         return Ok(false);
     }
-    let has = || {
-        let has = sub.has_samples();
-        has.map(|h| h.then_some(()))
-            .map_err(|e| Error::transport(name, e))
-    };
-    if crate::spin::spin_for(spin, has)?.is_none() {
+    if crate::spin::spin_for(spin, || Ok(has()?.then_some(())))?.is_none() {
         return Ok(false);
     }
     listener
         .try_wait(|_| {})
         .map_err(|e| Error::transport(name, e))?;
     Ok(true)
+}
+
+/// Whether `sub` holds a sample.
+pub fn has_samples<T: caravan_schemas::Message>(sub: &Sub<T>, name: &str) -> Result<bool, Error> {
+    sub.has_samples().map_err(|e| Error::transport(name, e))
 }
 
 pub fn send<T: caravan_schemas::Message>(port: &Pub<T>, value: T, name: &str) -> Result<(), Error> {

@@ -1,5 +1,6 @@
 //! Report slots: a node of the scheduler's machine writes its report of a quiet step into a
-//! slot of the shared page (`pending.rs`) instead of publishing a `Done` sample.
+//! slot of the shared page (`pending.rs`) instead of publishing a `Done` sample, and the
+//! scheduler then writes its grants there instead of publishing `Grant` samples.
 //!
 //! A `Done` sample is a loan and a send for the node and, for the scheduler, a receive that
 //! looks at every node's publisher connected to the report service: a sixth of the
@@ -14,10 +15,16 @@
 //! last (release) and read first (acquire), orders the rest. Nodes without a slot (Python
 //! nodes, another machine's, more nodes than slots) publish `Done` samples as before; the
 //! scheduler reads both.
+//!
+//! Grants: once a node reported into its slot (so it knows the slot), the scheduler writes
+//! its grants into the slot's first 64 bytes under a sequence number (a seqlock: odd while
+//! being written), and wakes it as before. A grant may be written while the node reads the
+//! last one (a repeat, or the stop), so the node reads until the sequence is even and the
+//! same before and after.
 
 use super::pending::Pending;
-use caravan_schemas::lockstep::MAX_TOPICS;
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use caravan_schemas::lockstep::{Grant, MAX_TOPICS};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering, fence};
 
 /// Nodes of one machine that get a slot; more report through `Done` samples.
 pub const SLOTS: usize = 512;
@@ -90,6 +97,53 @@ impl Pending {
         (node_hash != 0)
             .then(|| (0..SLOTS).find(|&s| self.entry(s).load(Ordering::Acquire) == node_hash))
             .flatten()
+    }
+
+    /// The scheduler's side: writes `grant` into `slot` (the node learns of it when woken).
+    pub fn write_grant(&self, slot: usize, grant: Grant) {
+        let at = FIRST + slot * SLOT;
+        let seq = self.word(at);
+        let odd = seq.load(Ordering::Relaxed) | 1;
+        seq.store(odd, Ordering::Relaxed);
+        fence(Ordering::Release);
+        self.word(at + 8).store(grant.now_ns, Ordering::Relaxed);
+        self.word(at + 16).store(grant.tick_ns, Ordering::Relaxed);
+        self.half(at + 24).store(grant.quiet, Ordering::Relaxed);
+        self.half(at + 28).store(grant.stop, Ordering::Relaxed);
+        seq.store(odd + 1, Ordering::Release);
+    }
+
+    /// The node's side: the grant in `slot` if it is newer than the one of sequence `seen`,
+    /// with its sequence. `seen` is the sequence the slot holds when the node found it
+    /// ([`Self::grant_sequence`]), then the last grant's.
+    pub fn read_grant(&self, slot: usize, seen: u64) -> Option<(u64, Grant)> {
+        let at = FIRST + slot * SLOT;
+        let seq = self.word(at);
+        loop {
+            let before = seq.load(Ordering::Acquire);
+            if before == seen {
+                return None;
+            }
+            if before & 1 == 1 {
+                std::hint::spin_loop();
+                continue;
+            }
+            let grant = Grant {
+                now_ns: self.word(at + 8).load(Ordering::Relaxed),
+                tick_ns: self.word(at + 16).load(Ordering::Relaxed),
+                quiet: self.half(at + 24).load(Ordering::Relaxed),
+                stop: self.half(at + 28).load(Ordering::Relaxed),
+            };
+            fence(Ordering::Acquire);
+            if seq.load(Ordering::Relaxed) == before {
+                return Some((before, grant));
+            }
+        }
+    }
+
+    /// The sequence of the last grant written into `slot` (see [`Self::read_grant`]).
+    pub fn grant_sequence(&self, slot: usize) -> u64 {
+        self.word(FIRST + slot * SLOT).load(Ordering::Acquire)
     }
 
     /// The node's side: writes the report of a step it was granted into its slot.
@@ -174,6 +228,23 @@ mod tests {
         assert!(scheduler.read_report(slot, 20, &mut topics).is_none());
         let read = scheduler.read_report(slot, 10, &mut topics).unwrap();
         assert_eq!(read, report);
+    }
+
+    #[test]
+    fn a_grant_is_read_once_and_the_newest_wins() {
+        let config = config("grant");
+        let scheduler = Pending::create(&config).unwrap();
+        let node = Pending::open(&config).unwrap();
+        let slot = scheduler.give_slot(9).unwrap();
+        let seen = node.grant_sequence(slot);
+        assert!(node.read_grant(slot, seen).is_none());
+        scheduler.write_grant(slot, Grant::step(10, 5).quiet(3));
+        scheduler.write_grant(slot, Grant::step(20, 5).quiet(3));
+        let (seen, grant) = node.read_grant(slot, seen).unwrap();
+        assert_eq!(grant, Grant::step(20, 5).quiet(3));
+        assert!(node.read_grant(slot, seen).is_none());
+        scheduler.write_grant(slot, Grant::stop(20, 5));
+        assert_eq!(node.read_grant(slot, seen).unwrap().1, Grant::stop(20, 5));
     }
 
     #[test]
