@@ -29,6 +29,14 @@ pub struct ScheduleStats {
     /// members. (Absent from a report of a build before it: 0.)
     #[serde(default)]
     pub wake_ups: u64,
+    /// Reports read from the nodes' slots in the shared page rather than from `Done`
+    /// samples (`caravan::lockstep::Report`). (0 when read from a report of a build before it.)
+    #[serde(default)]
+    pub slot_reports: u64,
+    /// Grants written into the nodes' slots rather than sent as samples, stops included.
+    /// (0 when read from a report of a build before it.)
+    #[serde(default)]
+    pub slot_grants: u64,
 }
 
 /// Consulted while the scheduler waits, with the names of the nodes it waits for: returns the

@@ -59,15 +59,15 @@ impl Member {
     }
 
     /// Sends its grant, without waking it ([`Self::wake`]): into its slot of `page` once it
-    /// reads grants there, else as a sample.
-    pub(crate) fn send(&mut self, grant: Grant, page: Option<&Pending>) -> Result<(), Error> {
+    /// reads grants there, else as a sample. True if into its slot.
+    pub(crate) fn send(&mut self, grant: Grant, page: Option<&Pending>) -> Result<bool, Error> {
         self.granted_at = Instant::now();
         match (self.slot, page) {
             (Some(slot), Some(page)) if self.slot_grants => {
                 page.write_grant(slot, grant);
-                Ok(())
+                Ok(true)
             }
-            _ => caravan::lockstep::control::send(&self.grant, grant, &self.name),
+            _ => caravan::lockstep::control::send(&self.grant, grant, &self.name).map(|()| false),
         }
     }
 

@@ -317,7 +317,7 @@ impl Scheduler {
         // then finds the others' grants too, and steps them all before it sleeps again.
         for &i in &nodes {
             let grant = self.members[i].step_grant(now_ns, self.tick_ns, token);
-            self.members[i].send(grant, self.pending.as_ref())?;
+            self.send(i, grant)?;
             self.flights[f].waiting.insert(i);
             self.stats.steps += 1;
         }
@@ -384,6 +384,7 @@ impl Scheduler {
             let pending = self.pending.as_ref().expect("the page");
             if let Some(report) = pending.read_report(slot, now_ns, &mut topics) {
                 self.members[i].slot_grants = true;
+                self.stats.slot_reports += 1;
                 self.take_report(i, &report)?;
             }
         }
@@ -540,8 +541,15 @@ impl Scheduler {
         Ok(())
     }
 
+    /// Sends node `i` its grant, without waking it.
+    fn send(&mut self, i: usize, grant: Grant) -> Result<(), Error> {
+        let in_slot = self.members[i].send(grant, self.pending.as_ref())?;
+        self.stats.slot_grants += in_slot as u64;
+        Ok(())
+    }
+
     fn grant(&mut self, i: usize, grant: Grant) -> Result<(), Error> {
-        self.members[i].send(grant, self.pending.as_ref())?;
+        self.send(i, grant)?;
         self.members[i].wake()
     }
 

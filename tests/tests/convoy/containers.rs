@@ -52,6 +52,15 @@ fn a_convoy_in_containers_records_what_a_process_per_node_records() {
         md.contains(&format!("{c_wakes} wake-ups sent with the grants")),
         "{md}"
     );
+    // Every node runs on the scheduler's machine in Rust: each reports into its slot of the
+    // shared page, and after its first report is granted there too (its first grant, and
+    // after a run's last advance its stop, may not be).
+    for r in [p, c] {
+        let s = &r["run"]["schedule"];
+        let count = |key: &str| s[key].as_u64().unwrap();
+        assert_eq!(count("slot_reports"), count("steps"), "{s}");
+        assert!(count("slot_grants") + 18 >= count("steps"), "{s}");
+    }
 }
 
 /// A lockstep group of two demo processes, `a` and `b`, with `extra` after `b`'s table.

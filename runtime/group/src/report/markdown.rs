@@ -47,12 +47,17 @@ pub fn render(r: &Value) -> String {
         schedule["steps"].as_u64(),
         schedule["overlapped_steps"].as_u64(),
     ) {
-        let wake_ups = schedule["wake_ups"].as_u64().unwrap_or(0);
+        let count = |key: &str| schedule[key].as_u64().unwrap_or(0);
+        let (wake_ups, reports, grants) = (
+            count("wake_ups"),
+            count("slot_reports"),
+            count("slot_grants"),
+        );
         let _ = writeln!(
             md,
             "Lockstep: {advances} advances of simulated time, {steps} node steps, {overlapped} of \
              them started while the tick before was still running; {wake_ups} wake-ups sent \
-             with the grants.\n"
+             with the grants; {reports} reports and {grants} grants through the shared page.\n"
         );
     }
     md.push_str("## Nodes\n\n| node | host | steps | rate Hz | deadline misses | jitter p50/p99/max ms | compute mean/p99/max ms | missed msgs | CPU s | peak MiB | restarts | exit |\n|---|---|---:|---:|---:|---|---|---:|---:|---:|---:|---|\n");
