@@ -9,12 +9,6 @@
 //! wakes, every parked member looks for its grant, so the scheduler wakes a container once for
 //! a batch of grants to its members, not once per member.
 //!
-//! A member's report that would wake the scheduler is held until the members resumed with it
-//! have run ([`defer`]): a later one's report wakes it anyway (the count of quiet steps only
-//! falls), so the container wakes the scheduler once per batch, not once per member. The
-//! scheduler learns of the earlier report a few members' steps later, when the container
-//! would sleep.
-//!
 //! Each member stays a node of its own to the group: its name, params, ports, lockstep
 //! grants, status and report row. What members share is the process: they start, fail and
 //! stop together, and one member's step holds up the others' (they take turns on one core).
@@ -22,7 +16,7 @@
 use crate::{Error, NodeIdentity};
 use corosensei::{CoroutineResult, ScopedCoroutine, Yielder, stack::DefaultStack};
 use serde::{Deserialize, Serialize};
-use std::cell::{Cell, RefCell};
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 /// Stack of each member, bytes: a process's main thread gets as much. Pages are committed only
@@ -108,34 +102,9 @@ type Coro<'a> = ScopedCoroutine<'a, Unparked, Park, Result<(), Error>, DefaultSt
 type MemberRef<'r> =
     corosensei::ScopedCoroutineRef<'r, Unparked, Park, Result<(), Error>, DefaultStack>;
 
-/// A wake-up held back by [`defer`].
-type Owed = Box<dyn FnOnce() -> Result<(), Error>>;
-
 thread_local! {
     /// The yielder of the member running now; null outside a container's member.
     static CURRENT: Cell<*const Yielder<Unparked, Park>> = const { Cell::new(std::ptr::null()) };
-    /// A wake-up of the scheduler held until the members resumed together have run.
-    static OWED: RefCell<Option<Owed>> = const { RefCell::new(None) };
-}
-
-/// Inside a container's member: holds `wake` (a report's notification of the scheduler) until
-/// the members resumed with this one have run, and returns `None`; a wake-up held before is
-/// dropped for this one (they wake the same listener). Outside a container: gives `wake`
-/// back, for the caller to call now.
-pub(crate) fn defer<F: FnOnce() -> Result<(), Error> + 'static>(wake: F) -> Option<F> {
-    if CURRENT.with(Cell::get).is_null() {
-        return Some(wake);
-    }
-    OWED.with(|owed| *owed.borrow_mut() = Some(Box::new(wake)));
-    None
-}
-
-/// Calls the wake-up [`defer`] held, if any.
-fn pay_owed() -> Result<(), Error> {
-    match OWED.with(|owed| owed.borrow_mut().take()) {
-        Some(wake) => wake(),
-        None => Ok(()),
-    }
 }
 
 /// Inside a container's member: gives the thread to the other members until `fd` is readable,
@@ -246,10 +215,6 @@ fn schedule(names: &[String], members: &mut [MemberRef<'_>]) -> Result<(), (Stri
                 }
                 CoroutineResult::Return(Err(e)) => return Err((names[i].clone(), e)),
             }
-        }
-        // Before the thread sleeps, or the container ends.
-        if let Err(e) = pay_owed() {
-            return Err((names[ready.first().map_or(0, |r| r.0)].clone(), e));
         }
         if !live.iter().any(|&l| l) {
             return Ok(());
@@ -388,36 +353,6 @@ mod tests {
             ]
         );
         assert_eq!(park(0, Duration::from_secs(1)), None, "outside a container");
-    }
-
-    /// A wake-up a member defers is made once, after the members resumed with it ran and
-    /// before the container sleeps; a second one deferred meanwhile replaces the first.
-    #[test]
-    fn a_deferred_wake_up_is_made_once_after_the_members_resumed_together() {
-        let log = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
-        let member = |name: &'static str| {
-            let log = log.clone();
-            Box::new(move || {
-                let wake_log = log.clone();
-                let wake = move || {
-                    wake_log.borrow_mut().push(format!("wake from {name}"));
-                    Ok(())
-                };
-                assert!(defer(wake).is_none(), "inside a container");
-                log.borrow_mut().push(format!("{name} stepped"));
-                // Sleeps: the container pays what is owed before.
-                park(-1, Duration::from_millis(1));
-                log.borrow_mut().push(format!("{name} ends"));
-                Ok(())
-            }) as Body<'_>
-        };
-        run(vec![("a".into(), member("a")), ("b".into(), member("b"))]).unwrap();
-        assert_eq!(
-            *log.borrow(),
-            ["a stepped", "b stepped", "wake from b", "a ends", "b ends"]
-        );
-        let outside = || Ok(());
-        assert!(defer(outside).is_some(), "outside a container");
     }
 
     #[test]

@@ -32,8 +32,7 @@ pub struct Client {
     /// slot), at once by any other: a publisher connected to the report service costs the
     /// scheduler a look at each receive.
     done: std::cell::OnceCell<Pub<Done>>,
-    /// Shared with the wake-up a container holds back (`container::defer`).
-    done_notifier: Rc<Notifier<ipc::Service>>,
+    done_notifier: Notifier<ipc::Service>,
     /// Kept open: a sample whose publisher is gone before the subscriber attached is lost.
     _hello: Pub<Hello>,
     hello_notifier: Notifier<ipc::Service>,
@@ -99,7 +98,7 @@ impl Client {
             grants: subscriber::<Grant>(iox, &grant_name)?,
             grant_listener: listener(iox, &grant_name)?,
             done: std::cell::OnceCell::new(),
-            done_notifier: Rc::new(notifier(iox, proto::DONE)?),
+            done_notifier: notifier(iox, proto::DONE)?,
             _hello: publisher::<Hello>(iox, proto::HELLO)?,
             hello_notifier: notifier(iox, proto::HELLO)?,
             hello,
@@ -308,21 +307,13 @@ impl Client {
     }
 
     /// Wakes the scheduler for a report sent, if `notify` (else it reads the report when a
-    /// later one, or the last quiet step, wakes it: see `pending.rs`). A container's member
-    /// leaves it to the container, once the members woken with it have run.
+    /// later one, or the last quiet step, wakes it: see `pending.rs`).
     fn notify_done(&self, notify: bool) -> Result<(), Error> {
-        if !notify {
-            return Ok(());
+        if notify {
+            self.done_notifier
+                .notify()
+                .map_err(|e| Error::transport(proto::DONE, e))?;
         }
-        let notifier = self.done_notifier.clone();
-        let wake = move || {
-            (notifier.notify())
-                .map(|_| ())
-                .map_err(|e| Error::transport(proto::DONE, e))
-        };
-        match crate::container::defer(wake) {
-            Some(wake) => wake(),
-            None => Ok(()),
-        }
+        Ok(())
     }
 }
