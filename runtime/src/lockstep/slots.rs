@@ -4,12 +4,12 @@
 //!
 //! A `Done` sample is a loan and a send for the node and, for the scheduler, a receive that
 //! looks at every node's publisher connected to the report service: a sixth of the
-//! scheduler's thread in the convoy (docs/benchmarks.md, "Fifth round"). A slot is a plain
+//! scheduler's thread in the convoy (docs/benchmarks.md, "Fourth round"). A slot is a plain
 //! copy in shared memory, read by the scheduler only for the nodes it waits for. The
 //! wake-up is unchanged: a report notifies when the count of quiet steps says it must.
 //!
 //! The scheduler gives each node holding the page a slot when it joins (the page's directory
-//! maps slot to node hash); the node finds its slot at its first quiet grant. A step's slot
+//! maps slot to node hash); the node looks for it when it first reports a quiet step. A step's slot
 //! is written by the node only after it was granted and read by the scheduler only until it
 //! took the report, so the two never touch it at once: the report's `ready` word, written
 //! last (release) and read first (acquire), orders the rest. Nodes without a slot (Python
