@@ -9,9 +9,9 @@
 //! wake-up is unchanged: a report notifies when the count of quiet steps says it must.
 //!
 //! The scheduler gives each node holding the page a slot when it joins (the page's directory
-//! maps slot to node hash); the node looks for it when it first reports a quiet step. A step's slot
-//! is written by the node only after it was granted and read by the scheduler only until it
-//! took the report, so the two never touch it at once: the report's `ready` word, written
+//! maps slot to node hash); the node looks for it when it first reports a quiet step. A
+//! step's slot is written by the node only after it was granted and read by the scheduler
+//! only until it took the report, so the two never touch it at once: the `ready` word, written
 //! last (release) and read first (acquire), orders the rest. Nodes without a slot (Python
 //! nodes, another machine's, more nodes than slots) publish `Done` samples as before; the
 //! scheduler reads both.
