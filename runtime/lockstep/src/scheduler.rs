@@ -385,7 +385,10 @@ impl Scheduler {
             if let Some(report) = pending.read_report(slot, now_ns, &mut topics) {
                 self.members[i].slot_grants = true;
                 self.stats.slot_reports += 1;
-                self.take_report(i, &report)?;
+                if let Err(e) = self.take_report(i, &report) {
+                    self.topics = topics;
+                    return Err(e);
+                }
             }
         }
         self.topics = topics;

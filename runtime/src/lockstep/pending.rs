@@ -30,7 +30,8 @@ const NOTIFY_AT_OR_BELOW: i64 = 1;
 /// Bytes of the file: the token and the count in the first 64, then the report slots.
 pub(super) const SIZE: usize = super::slots::END;
 
-/// The shared count of quiet steps outstanding.
+/// The page the scheduler shares with the nodes of its machine: the count of quiet steps
+/// outstanding, and a report slot for each node (`slots.rs`).
 pub struct Pending {
     /// Written through raw pointers only (atomics and the slots' copies), never through a
     /// reference to its bytes.

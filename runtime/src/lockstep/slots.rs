@@ -36,6 +36,9 @@ const FIRST: usize = DIRECTORY + SLOTS * 8;
 /// + 1, 0 for none), `wake_ns`, `undeclared` (u32), the count of topics (u32), the topics.
 const SLOT: usize = (64 + 24 + MAX_TOPICS * 8).next_multiple_of(64);
 const REPORT: usize = 64;
+/// Looks at a grant being written before [`Pending::read_grant`] gives up: a write is two
+/// stores apart, so only a writer stopped between them takes this many.
+const TORN_READS: usize = 1 << 16;
 /// Bytes of the page.
 pub(super) const END: usize = FIRST + SLOTS * SLOT;
 
@@ -53,7 +56,11 @@ pub struct Report<'a> {
 
 impl Pending {
     fn at(&self, offset: usize) -> *mut u8 {
-        debug_assert!(offset < END);
+        // A slot index from outside (these methods are public) must not reach past the map.
+        assert!(
+            offset < END,
+            "offset {offset} outside the page of quiet steps"
+        );
         // SAFETY: in bounds of the map (SIZE bytes, checked when made or opened).
         unsafe { self.map.as_mut_ptr().add(offset) }
     }
@@ -77,17 +84,19 @@ impl Pending {
         FIRST + slot * SLOT + REPORT
     }
 
-    /// The scheduler's side: the slot of the node of `node_hash`, given it now (or kept from
-    /// before its restart); `None` when every slot is taken (or for hash 0, the free mark).
+    /// The scheduler's side, when the node of `node_hash` joins: its slot, given it now (or
+    /// kept from before its restart, its dead process's last report cleared: the new process
+    /// may be granted that report's time again); `None` when every slot is taken (or for hash
+    /// 0, the free mark).
     pub fn give_slot(&self, node_hash: u64) -> Option<usize> {
         if node_hash == 0 {
             return None;
         }
-        if let Some(slot) = self.find_slot(node_hash) {
-            return Some(slot);
-        }
-        let slot = (0..SLOTS).find(|&s| self.entry(s).load(Ordering::Acquire) == 0)?;
-        self.word(self.report_at(slot)).store(0, Ordering::Relaxed);
+        let slot = match self.find_slot(node_hash) {
+            Some(slot) => slot,
+            None => (0..SLOTS).find(|&s| self.entry(s).load(Ordering::Acquire) == 0)?,
+        };
+        self.word(self.report_at(slot)).store(0, Ordering::Release);
         self.entry(slot).store(node_hash, Ordering::Release);
         Some(slot)
     }
@@ -119,7 +128,9 @@ impl Pending {
     pub fn read_grant(&self, slot: usize, seen: u64) -> Option<(u64, Grant)> {
         let at = FIRST + slot * SLOT;
         let seq = self.word(at);
-        loop {
+        // A writer that died between its two stores leaves the sequence odd: give up after a
+        // while (the wait for a grant goes on, and ends at its time limit or the group's stop).
+        for _ in 0..TORN_READS {
             let before = seq.load(Ordering::Acquire);
             if before == seen {
                 return None;
@@ -139,6 +150,7 @@ impl Pending {
                 return Some((before, grant));
             }
         }
+        None
     }
 
     /// The sequence of the last grant written into `slot` (see [`Self::read_grant`]).
@@ -160,7 +172,8 @@ impl Pending {
         unsafe {
             std::ptr::copy_nonoverlapping(topics.as_ptr(), self.at(at + 24).cast(), topics.len())
         };
-        self.word(at).store(report.now_ns + 1, Ordering::Release);
+        self.word(at)
+            .store(report.now_ns.wrapping_add(1), Ordering::Release);
     }
 
     /// The scheduler's side: the report of the step at `now_ns` in `slot`, if it is in, its
@@ -172,7 +185,7 @@ impl Pending {
         topics: &'t mut Vec<u64>,
     ) -> Option<Report<'t>> {
         let at = self.report_at(slot);
-        if self.word(at).load(Ordering::Acquire) != now_ns + 1 {
+        if self.word(at).load(Ordering::Acquire) != now_ns.wrapping_add(1) {
             return None;
         }
         let len = (self.half(at + 20).load(Ordering::Relaxed) as usize).min(MAX_TOPICS);
@@ -193,7 +206,7 @@ impl Pending {
 
     /// Whether the report of the step at `now_ns` is in `slot`.
     pub fn has_report(&self, slot: usize, now_ns: u64) -> bool {
-        self.word(self.report_at(slot)).load(Ordering::Acquire) == now_ns + 1
+        self.word(self.report_at(slot)).load(Ordering::Acquire) == now_ns.wrapping_add(1)
     }
 }
 
@@ -248,13 +261,22 @@ mod tests {
     }
 
     #[test]
-    fn a_restarted_node_keeps_its_slot_and_slots_run_out() {
+    fn a_restarted_node_keeps_its_slot_cleared_and_slots_run_out() {
         let config = config("give");
         let page = Pending::create(&config).unwrap();
         let first = page.give_slot(1).unwrap();
         let second = page.give_slot(2).unwrap();
         assert_ne!(first, second);
+        // The dead process's last report is not the restarted one's, at the same time.
+        let report = Report {
+            now_ns: 30,
+            wake_ns: 0,
+            undeclared: 0,
+            published: &[4],
+        };
+        page.write_report(first, &report);
         assert_eq!(page.give_slot(1), Some(first));
+        assert!(!page.has_report(first, 30));
         assert_eq!(page.give_slot(0), None);
         for hash in 3..=SLOTS as u64 {
             assert!(page.give_slot(hash).is_some());

@@ -53,13 +53,14 @@ fn a_convoy_in_containers_records_what_a_process_per_node_records() {
         "{md}"
     );
     // Every node runs on the scheduler's machine in Rust: each reports into its slot of the
-    // shared page, and after its first report is granted there too (its first grant, and
-    // after a run's last advance its stop, may not be).
+    // shared page, and after its first report is granted there too. So every grant but each
+    // node's first goes into a slot, and so does each node's stop at the end (and a grant
+    // repeated after a slow step, if any): at least as many as the steps.
     for r in [p, c] {
         let s = &r["run"]["schedule"];
         let count = |key: &str| s[key].as_u64().unwrap();
         assert_eq!(count("slot_reports"), count("steps"), "{s}");
-        assert!(count("slot_grants") + 18 >= count("steps"), "{s}");
+        assert!(count("slot_grants") >= count("steps"), "{s}");
     }
 }
 
