@@ -140,6 +140,7 @@ const LAYERS: &[&[&str]] = &[
     &["caravan-schemas"],
     &["caravan-network"],
     &["caravan"],
+    &["caravan-lockstep"],
     &["caravan-report", "caravan-ros2"],
     &["caravan-launch"],
     &["caravan-record"],

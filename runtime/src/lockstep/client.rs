@@ -43,7 +43,7 @@ pub struct Client {
     pending: Option<super::pending::Pending>,
     /// The step being taken was granted quiet.
     quiet_step: std::cell::Cell<bool>,
-    /// Its report slot in `pending` (`slots.rs`), looked for at its first quiet grant.
+    /// Its report slot in `pending` (`slots.rs`), looked for at its first quiet report.
     slot: std::cell::OnceCell<Option<usize>>,
     /// The last report went into the slot (a repeat of it need not be written again).
     last_in_slot: std::cell::Cell<bool>,

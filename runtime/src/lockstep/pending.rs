@@ -27,8 +27,22 @@ use std::sync::atomic::{AtomicI64, AtomicU32, Ordering};
 /// Quiet steps left after which a report notifies: the slowest node alone (1) or none (0).
 const NOTIFY_AT_OR_BELOW: i64 = 1;
 
-/// Bytes of the file: the token and the count in the first 64, then the report slots.
-pub(super) const SIZE: usize = super::slots::END;
+// The page's layout: the token and the count in the first 64 bytes, then the report slots
+// (`slots.rs`).
+/// Nodes of one machine that get a slot; more report through `Done` samples.
+pub const SLOTS: usize = 512;
+/// The directory: a node hash for each slot (0: free), after the page's 64-byte head.
+pub(super) const DIRECTORY: usize = 64;
+/// The first slot, 64-aligned.
+pub(super) const FIRST: usize = DIRECTORY + SLOTS * 8;
+/// A slot: 64 bytes kept for a grant, then the report: `ready` (the reported step's time
+/// + 1, 0 for none), `wake_ns`, `undeclared` (u32), the count of topics (u32), the topics.
+pub(super) const SLOT: usize =
+    (64 + 24 + caravan_schemas::lockstep::MAX_TOPICS * 8).next_multiple_of(64);
+/// Where a slot's report starts.
+pub(super) const REPORT: usize = 64;
+/// Bytes of the page.
+pub(super) const SIZE: usize = FIRST + SLOTS * SLOT;
 
 /// The page the scheduler shares with the nodes of its machine: the count of quiet steps
 /// outstanding, and a report slot for each node (`slots.rs`).

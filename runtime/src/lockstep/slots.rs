@@ -22,25 +22,13 @@
 //! last one (a repeat, or the stop), so the node reads until the sequence is even and the
 //! same before and after.
 
-use super::pending::Pending;
+use super::pending::{DIRECTORY, FIRST, Pending, REPORT, SIZE, SLOT, SLOTS};
 use caravan_schemas::lockstep::{Grant, MAX_TOPICS};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering, fence};
 
-/// Nodes of one machine that get a slot; more report through `Done` samples.
-pub const SLOTS: usize = 512;
-/// The directory: a node hash for each slot (0: free), after the page's 64-byte head.
-const DIRECTORY: usize = 64;
-/// The first slot, 64-aligned.
-const FIRST: usize = DIRECTORY + SLOTS * 8;
-/// A slot: 64 bytes kept for a grant, then the report: `ready` (the reported step's time
-/// + 1, 0 for none), `wake_ns`, `undeclared` (u32), the count of topics (u32), the topics.
-const SLOT: usize = (64 + 24 + MAX_TOPICS * 8).next_multiple_of(64);
-const REPORT: usize = 64;
 /// Looks at a grant being written before [`Pending::read_grant`] gives up: a write is two
 /// stores apart, so only a writer stopped between them takes this many.
 const TORN_READS: usize = 1 << 16;
-/// Bytes of the page.
-pub(super) const END: usize = FIRST + SLOTS * SLOT;
 
 /// A finished step, as a slot holds it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,7 +46,7 @@ impl Pending {
     fn at(&self, offset: usize) -> *mut u8 {
         // A slot index from outside (these methods are public) must not reach past the map.
         assert!(
-            offset < END,
+            offset < SIZE,
             "offset {offset} outside the page of quiet steps"
         );
         // SAFETY: in bounds of the map (SIZE bytes, checked when made or opened).
