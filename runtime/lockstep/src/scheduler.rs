@@ -4,10 +4,8 @@ use crate::advance::{Advance, ScheduleStats, Watchdog};
 use crate::members::{Flight, Member};
 use crate::overlap::{self, Footprint};
 use caravan::Error;
-use caravan::lockstep::Pending;
-use caravan::lockstep::Report;
 use caravan::lockstep::control::{Sub, has_samples, listener, spin_on, subscriber, wait_events};
-
+use caravan::lockstep::{Pending, Report};
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
@@ -365,49 +363,39 @@ impl Scheduler {
     /// The steps reported in the page's slots (`caravan::lockstep::Report`): looked for only
     /// in the slots of the nodes waited for.
     fn read_slots(&mut self) -> Result<(), Error> {
-        let Some(pending) = &self.pending else {
-            return Ok(());
-        };
-        let mut reported: Vec<(usize, u64)> = Vec::new();
-        for f in &self.flights {
-            for &i in &f.waiting {
-                if let Some(slot) = self.members[i].slot
-                    && pending.has_report(slot, f.now_ns)
-                {
-                    reported.push((i, f.now_ns));
-                }
-            }
-        }
+        let reported: Vec<(usize, usize, u64)> = self.slot_reports_in().collect();
         let mut topics = std::mem::take(&mut self.topics);
-        for (i, now_ns) in reported {
-            let slot = self.members[i].slot.expect("a slot");
-            let pending = self.pending.as_ref().expect("the page");
-            if let Some(report) = pending.read_report(slot, now_ns, &mut topics) {
-                self.members[i].slot_grants = true;
-                self.stats.slot_reports += 1;
-                if let Err(e) = self.take_report(i, &report) {
-                    self.topics = topics;
-                    return Err(e);
-                }
+        let mut taken = Ok(());
+        for (i, slot, now_ns) in reported {
+            let pending = self.pending.as_ref().expect("a slot is in the page");
+            let Some(report) = pending.read_report(slot, now_ns, &mut topics) else {
+                continue;
+            };
+            self.members[i].slot_grants = true;
+            self.stats.slot_reports += 1;
+            taken = self.take_report(i, &report);
+            if taken.is_err() {
+                break;
             }
         }
         self.topics = topics;
-        Ok(())
+        taken
+    }
+
+    /// The nodes waited for whose report is in their slot: (member, slot, time).
+    fn slot_reports_in(&self) -> impl Iterator<Item = (usize, usize, u64)> + '_ {
+        let pending = self.pending.as_ref();
+        self.flights.iter().flat_map(move |f| {
+            f.waiting.iter().filter_map(move |&i| {
+                let slot = self.members[i].slot?;
+                (pending?.has_report(slot, f.now_ns)).then_some((i, slot, f.now_ns))
+            })
+        })
     }
 
     /// Whether a report is in (a `Done` sample, or a slot of a node waited for).
     fn reports_in(&self) -> Result<bool, Error> {
-        if has_samples(&self.done, proto::DONE)? {
-            return Ok(true);
-        }
-        let Some(pending) = &self.pending else {
-            return Ok(false);
-        };
-        Ok(self.flights.iter().any(|f| {
-            f.waiting.iter().any(|&i| {
-                (self.members[i].slot).is_some_and(|slot| pending.has_report(slot, f.now_ns))
-            })
-        }))
+        Ok(has_samples(&self.done, proto::DONE)? || self.slot_reports_in().next().is_some())
     }
 
     /// Takes node `i`'s report of a step: schedules what it woke and what it asked for.

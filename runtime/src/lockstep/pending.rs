@@ -173,10 +173,11 @@ impl Drop for Pending {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn config(name: &str) -> iceoryx2::config::Config {
+    /// The config of a group of its own for the test `name` (the slots' tests use it too).
+    pub(in crate::lockstep) fn config(name: &str) -> iceoryx2::config::Config {
         let group = format!("pending-{name}-{}", std::process::id());
         crate::group::config(&group).unwrap()
     }

@@ -200,16 +200,12 @@ impl Pending {
 
 #[cfg(test)]
 mod tests {
+    use super::super::pending::tests::config;
     use super::*;
-
-    fn config(name: &str) -> iceoryx2::config::Config {
-        let group = format!("slots-{name}-{}", std::process::id());
-        crate::group::config(&group).unwrap()
-    }
 
     #[test]
     fn a_report_written_by_a_node_is_read_by_the_scheduler_for_its_step_only() {
-        let config = config("report");
+        let config = config("slot-report");
         let scheduler = Pending::create(&config).unwrap();
         let node = Pending::open(&config).unwrap();
         let slot = scheduler.give_slot(42).unwrap();
@@ -233,7 +229,7 @@ mod tests {
 
     #[test]
     fn a_grant_is_read_once_and_the_newest_wins() {
-        let config = config("grant");
+        let config = config("slot-grant");
         let scheduler = Pending::create(&config).unwrap();
         let node = Pending::open(&config).unwrap();
         let slot = scheduler.give_slot(9).unwrap();
@@ -250,7 +246,7 @@ mod tests {
 
     #[test]
     fn a_restarted_node_keeps_its_slot_cleared_and_slots_run_out() {
-        let config = config("give");
+        let config = config("slot-give");
         let page = Pending::create(&config).unwrap();
         let first = page.give_slot(1).unwrap();
         let second = page.give_slot(2).unwrap();
@@ -275,7 +271,7 @@ mod tests {
 
     #[test]
     fn the_most_topics_a_slot_holds_are_kept() {
-        let config = config("full");
+        let config = config("slot-full");
         let page = Pending::create(&config).unwrap();
         let slot = page.give_slot(5).unwrap();
         let published: Vec<u64> = (1..=MAX_TOPICS as u64 + 3).collect();
