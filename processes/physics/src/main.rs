@@ -210,8 +210,9 @@ impl RobotPorts {
     }
 }
 
-/// Loans a message on `out` (if the robot publishes it), has `fill` write robot `i`'s state
-/// into it in shared memory and sends it: the large per-robot messages are never copied.
+/// Has `fill` write robot `i`'s state in place into a message of `out` (if the robot
+/// publishes it) and sends it: the large per-robot messages are never copied, nor built for
+/// a topic nobody reads.
 fn send_filled<T: caravan_schemas::Message>(
     out: Option<&Publisher<T>>,
     sim: &Simulation,
@@ -219,9 +220,7 @@ fn send_filled<T: caravan_schemas::Message>(
     fill: fn(&Simulation, usize, &mut T),
 ) -> Result<(), caravan::Error> {
     let Some(out) = out else { return Ok(()) };
-    let mut m = out.loan()?;
-    fill(sim, i, &mut m);
-    m.send()
+    out.publish_in_place(|m| fill(sim, i, m))
 }
 
 fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
