@@ -798,6 +798,40 @@ class Metrics(Message):
         return "caravan::Metrics"
 
 
+class RobotState(Message):
+    """``caravan::RobotState``: 72 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("pose", Pose2D),
+        ("twist", Twist),
+    ]
+    SIZE = 72
+    ALIGN = 8
+    OFFSETS = {"pose": 0, "twist": 24}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::RobotState"
+
+
+class RobotStates(Message):
+    """``caravan::RobotStates``: 9224 bytes, aligned to 8."""
+
+    _fields_ = [
+        ("robots_len", ctypes.c_uint32),
+        ("robots", RobotState * 128),
+    ]
+    SIZE = 9224
+    ALIGN = 8
+    OFFSETS = {"robots_len": 0, "robots": 8}
+
+    @classmethod
+    def type_name(cls) -> str:
+        """The name iceoryx2 matches across languages."""
+        return "caravan::RobotStates"
+
+
 class Hello(Message):
     """``caravan::lockstep::Hello``: 12400 bytes, aligned to 8."""
 
@@ -913,6 +947,7 @@ MESSAGE_TYPES = (
     ForceTorques,
     Scene,
     Metrics,
+    RobotStates,
 )
 BY_TYPE_NAME = {t.type_name(): t for t in MESSAGE_TYPES}
 # Every generated structure, the header and lockstep messages included.
@@ -948,6 +983,8 @@ ALL_TYPES = (
     Scene,
     NamedValue,
     Metrics,
+    RobotState,
+    RobotStates,
     Hello,
     Grant,
     Done,
@@ -962,6 +999,7 @@ class topics:
     GOAL = "goal"
     SCENE = "scene"
     COLLISIONS = "collisions"
+    ROBOT_STATES_TRUE = "robots/state_true"
 
     @staticmethod
     def scan(i: int) -> str:

@@ -46,6 +46,7 @@ pub const TOPIC_CONSTANTS: &[(&str, GlobalTopic)] = topic_names![
     GOAL = goal,
     SCENE = scene,
     COLLISIONS = collisions,
+    ROBOT_STATES_TRUE = robot_states_true,
 ];
 
 /// A per-robot topic helper with its message type erased: robot index to topic name.

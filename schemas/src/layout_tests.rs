@@ -25,6 +25,8 @@ const _: () = {
     assert!(size_of::<Contact>() == 64 + 4 + 64 + 4 + 24 + 24 + 8);
     assert!(size_of::<Wrench>() == 64 + 8 + 3 * 24 + 8);
     assert!(size_of::<ForceTorque>() == 64 + 2 * 24);
+    assert!(size_of::<RobotState>() == 24 + 48);
+    assert!(size_of::<RobotStates>() == 8 + 72 * MAX_ROBOT_STATES);
     assert!(offset_of!(LaserScan, ranges) == 32);
     assert!(offset_of!(OccupancyGrid, data) == 40);
     // `container` took what was padding: a Hello of a build before it is read the same.

@@ -44,7 +44,10 @@ pub use geometry::{Pose2D, Pose3D, Quaternion, Twist, Vector3, wrap_angle};
 pub use header::Header;
 pub use map::{Goal, MAP_MAX_CELLS, MAP_MAX_SIDE, OccupancyGrid, PATH_MAX_POSES, Path2D};
 pub use metrics::{MAX_METRICS, Metrics, NamedValue, ShortName};
-pub use robot::{Collision, EncoderTicks, Odometry, WheelSetpoint, WheelState};
+pub use robot::{
+    Collision, EncoderTicks, MAX_ROBOT_STATES, Odometry, RobotState, RobotStates, WheelSetpoint,
+    WheelState,
+};
 pub use scene::{SCENE_MAX_SHAPES, Scene, Shape};
 pub use sensors::{Imu, LaserScan, SCAN_MAX_BEAMS};
 pub use status::NodeStatus;

@@ -12,7 +12,7 @@ macro_rules! message_types {
         $($callback)+!($($args)*
             Pose2D Pose3D Twist Vector3 Quaternion WheelSetpoint WheelState EncoderTicks Odometry
             LaserScan Imu OccupancyGrid Path2D Goal NodeStatus Collision JointState JointCommand
-            LinkStates Contacts Wrench ForceTorques Scene Metrics)
+            LinkStates Contacts Wrench ForceTorques Scene Metrics RobotStates)
     };
 }
 

@@ -1,5 +1,5 @@
 use crate::describe::Describe;
-use crate::{Pose3D, Twist};
+use crate::{FixedVec, Pose2D, Pose3D, Twist};
 use iceoryx2::prelude::{PlacementDefault, ZeroCopySend};
 use serde::Serialize;
 
@@ -81,4 +81,39 @@ pub struct Collision {
     /// 1 when the contact began, 0 when it ended.
     pub started: u32,
     pub _reserved: u32,
+}
+
+/// Most robots a [`RobotStates`] message holds.
+pub const MAX_ROBOT_STATES: usize = 128;
+
+/// One robot's ground truth in [`RobotStates`]: what its `robot/i/pose_true` and
+/// `robot/i/twist_true` carry.
+#[repr(C)]
+#[derive(
+    Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault, Serialize, Describe,
+)]
+#[type_name("caravan::RobotState")]
+pub struct RobotState {
+    /// base_link in the map frame: x, y in m, heading in rad.
+    pub pose: Pose2D,
+    /// base_link origin's linear velocity (m/s) and the angular velocity (rad/s), both in the
+    /// map frame.
+    pub twist: Twist,
+}
+
+/// Every robot's ground truth after a physics step, robot `i` at index `i`
+/// (`robots/state_true`): one message for the whole team where the per-robot topics take two
+/// per robot, as Gazebo's `model_states` beside each model's own topics. The physics sends
+/// it only while someone reads it, and only for up to [`MAX_ROBOT_STATES`] robots.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, PlacementDefault, Serialize, Describe)]
+#[type_name("caravan::RobotStates")]
+pub struct RobotStates {
+    pub robots: FixedVec<RobotState, MAX_ROBOT_STATES>,
+}
+
+impl Default for RobotStates {
+    fn default() -> Self {
+        crate::placement_new()
+    }
 }

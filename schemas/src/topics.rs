@@ -8,8 +8,8 @@
 
 use crate::{
     Collision, Contacts, EncoderTicks, ForceTorques, Goal, Imu, JointCommand, JointState,
-    LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D, Topic,
-    Twist, WheelSetpoint, WheelState, Wrench,
+    LaserScan, LinkStates, NodeStatus, OccupancyGrid, Odometry, Path2D, Pose2D, Pose3D,
+    RobotStates, Topic, Twist, WheelSetpoint, WheelState, Wrench,
 };
 
 /// Per-node execution statistics, published by every node (`status`).
@@ -31,6 +31,11 @@ pub fn goal() -> Topic<Goal> {
 /// Contacts between robots and with obstacles (`collisions`).
 pub fn collisions() -> Topic<Collision> {
     Topic::new("collisions")
+}
+/// Every robot's ground-truth pose and velocity in one message, from the simulator
+/// (`robots/state_true`): what the robots' `pose_true` and `twist_true` carry.
+pub fn robot_states_true() -> Topic<RobotStates> {
+    Topic::new("robots/state_true")
 }
 
 fn robot<T: crate::Message>(i: usize, leaf: &str) -> Topic<T> {
@@ -218,6 +223,7 @@ mod tests {
         check::<OccupancyGrid>(map(), "map");
         check::<Goal>(goal(), "goal");
         check::<Collision>(collisions(), "collisions");
+        check::<RobotStates>(robot_states_true(), "robots/state_true");
         assert_eq!(scan(0).type_name(), "caravan::LaserScan");
     }
 

@@ -1,5 +1,6 @@
 //! Benchmarks run briefly and write their files. They assert nothing about time.
 
+use caravan_tests::recording::{all_messages, assert_same_messages, read};
 use caravan_tests::{children, wait_until, workspace_bin};
 use std::collections::BTreeSet;
 use std::process::Command;
@@ -264,6 +265,43 @@ fn bench_scale_runs_each_clock_and_writes_its_table() {
     }
     assert!(out.join("scale.md").is_file());
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// `--team-states`: the agents read every robot's pose from the physics' one message per
+/// step (`robots/state_true`, agent key `states_topic`) instead of each robot's `pose_true`.
+/// They read the same poses, so the robots drive the same: the recorded set-points match.
+#[test]
+fn bench_scale_with_team_states_drives_as_with_each_robots_topic() {
+    let setpoints = |team: bool| {
+        let out =
+            std::env::temp_dir().join(format!("caravan-bench-team-{team}-{}", std::process::id()));
+        let mut args = vec!["scale", "--followers", "2", "--seconds", "3"];
+        args.extend(["--clocks", "lockstep"]);
+        if team {
+            args.push("--team-states");
+        }
+        run_bench(&args, &out);
+        let runs = out.join("scale-runs");
+        let group = std::fs::read_dir(&runs).unwrap().next().unwrap().unwrap();
+        let run = std::fs::read_dir(group.path().join("runs"))
+            .unwrap()
+            .next()
+            .unwrap()
+            .unwrap();
+        let launch = std::fs::read_to_string(group.path().join("launch.toml")).unwrap();
+        assert_eq!(launch.contains("states_topic"), team, "{launch}");
+        let messages = all_messages(&read(&run.path().join("record.mcap")));
+        let _ = std::fs::remove_dir_all(&out);
+        messages
+    };
+    let (each, team) = (setpoints(false), setpoints(true));
+    // The followers moved: some set-point is not zero.
+    let moving = |m: &(u16, String, u64, Vec<u8>)| {
+        let value: serde_json::Value = serde_json::from_slice(&m.3).unwrap();
+        m.1 == "robot/2/wheel_setpoint" && value["left_rad_s"].as_f64().unwrap() != 0.0
+    };
+    assert!(each.iter().any(moving), "{each:?}");
+    assert_same_messages(&each, &team);
 }
 
 #[test]

@@ -15,8 +15,8 @@ use caravan::{Node, NodeIdentity, Publisher, Subscriber, Trigger};
 use caravan_physics::messages::{self, CommandReader};
 use caravan_physics::{Params, Simulation, setup};
 use caravan_schemas::{
-    Contacts, ForceTorques, JointCommand, JointState, LinkStates, Odometry, Pose2D, Pose3D, Twist,
-    WheelSetpoint, WheelState, Wrench, topics,
+    Contacts, ForceTorques, JointCommand, JointState, LinkStates, MAX_ROBOT_STATES, Odometry,
+    Pose2D, Pose3D, RobotStates, Twist, WheelSetpoint, WheelState, Wrench, topics,
 };
 use std::process::ExitCode;
 use std::time::Duration;
@@ -223,6 +223,23 @@ fn send_filled<T: caravan_schemas::Message>(
     out.publish_in_place(|m| fill(sim, i, m))
 }
 
+/// The publisher of every robot's state in one message, if the team fits in it (sent only
+/// while someone reads it, as every topic here).
+fn team_states(
+    node: &Node,
+    sim: &Simulation,
+) -> Result<Option<Publisher<RobotStates>>, caravan::Error> {
+    if sim.robot_count() > MAX_ROBOT_STATES {
+        eprintln!(
+            "caravan-physics: {} robots; robots/state_true carries at most {MAX_ROBOT_STATES}, \
+             so it is not published (each robot's pose_true and twist_true are)",
+            sim.robot_count()
+        );
+        return Ok(None);
+    }
+    node.publisher(&topics::robot_states_true()).map(Some)
+}
+
 fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
     let Ready {
         mut sim,
@@ -236,6 +253,7 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         .collect::<Result<Vec<_>, _>>()?;
     let collisions = node.publisher(&topics::collisions())?;
     let scene_out = node.publisher(&topics::scene())?;
+    let states_out = team_states(&node, &sim)?;
     let mut next_scene_ns = 0;
     let mut commands = CommandReader::default();
 
@@ -250,6 +268,9 @@ fn run(mut node: Node, ready: Ready) -> Result<(), caravan::Error> {
         slip_ns += target.saturating_sub(sim.time_ns()) / dt_ns * dt_ns;
         for (i, p) in ports.iter().enumerate() {
             p.publish(&sim, i)?;
+        }
+        if let Some(out) = &states_out {
+            out.publish_in_place(|m| messages::robot_states(&sim, m))?;
         }
         for c in sim.take_collisions() {
             collisions.publish(&c)?;

@@ -7,11 +7,25 @@ use crate::simulation::Simulation;
 use crate::wrench::WrenchCommand;
 use caravan_schemas::{
     Contact, Contacts, ForceTorque, ForceTorques, JointCommand, JointState, JointValue, LinkState,
-    LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS, NAME_BYTES, Name, Vector3,
-    Wrench,
+    LinkStates, MAX_CONTACTS, MAX_FORCE_TORQUE, MAX_JOINTS, MAX_LINKS, MAX_ROBOT_STATES,
+    NAME_BYTES, Name, RobotState, RobotStates, Vector3, Wrench,
 };
 use caravan_world::description::RobotDescription;
 use std::collections::HashSet;
+
+/// Writes every robot's pose and velocity into `out` (`robots/state_true`), robot `i` at index
+/// `i`; the caller sends it only for at most [`MAX_ROBOT_STATES`] robots.
+pub fn robot_states(sim: &Simulation, out: &mut RobotStates) {
+    out.robots.clear();
+    for i in 0..sim.robot_count().min(MAX_ROBOT_STATES) {
+        let state = RobotState {
+            pose: sim.pose(i),
+            twist: sim.twist(i),
+        };
+        // Cannot fail: at most MAX_ROBOT_STATES are pushed.
+        let _ = out.robots.push(state);
+    }
+}
 
 /// Checks that robot description `d`'s names and sizes fit the messages its robot would
 /// publish; the error names the link or joint and its line.

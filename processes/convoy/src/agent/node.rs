@@ -5,8 +5,9 @@
 
 use crate::agent::history::PoseHistory;
 use crate::agent::params::{Mode, Params};
+use crate::agent::poses::Poses;
 use crate::agent::{follower, leader};
-use caravan::{Error, Node, Publisher, Subscriber, Topic, Trigger};
+use caravan::{Error, Node, Publisher, Topic, Trigger};
 use caravan_schemas::{Goal, Pose2D, Twist, WheelSetpoint, topics};
 use caravan_world::kinematics::wheel_speeds;
 
@@ -55,11 +56,7 @@ pub fn setup(
 /// Runs the agent `p` describes until the group stops.
 pub fn run(mut node: Node, (p, geometry): (Params, Geometry)) -> Result<(), Error> {
     let i = p.robot;
-    let own_topic = match &p.pose_topic {
-        Some(name) => Topic::new(name),
-        None => topics::pose_true(i),
-    };
-    let own = node.subscriber(&own_topic)?;
+    let poses = Poses::open(&node, &p)?;
     let setpoint = node.publisher(&topics::wheel_setpoint(i))?;
     let wheels = Wheels {
         setpoint,
@@ -67,8 +64,8 @@ pub fn run(mut node: Node, (p, geometry): (Params, Geometry)) -> Result<(), Erro
         separation_m: geometry.wheel_separation_m,
     };
     match p.mode {
-        Mode::Leader => run_leader(&mut node, &p, own, wheels),
-        Mode::Follower => run_follower(&mut node, &p, own, wheels),
+        Mode::Leader => run_leader(&mut node, &p, poses, wheels),
+        Mode::Follower => run_follower(&mut node, &p, poses, wheels),
         Mode::Drive => run_drive(&mut node, &p, wheels),
     }
 }
@@ -90,12 +87,7 @@ impl Wheels {
     }
 }
 
-fn run_leader(
-    node: &mut Node,
-    p: &Params,
-    own: Subscriber<Pose2D>,
-    wheels: Wheels,
-) -> Result<(), Error> {
+fn run_leader(node: &mut Node, p: &Params, poses: Poses, wheels: Wheels) -> Result<(), Error> {
     let goal_pub = node.publisher(&topics::goal())?;
     let planner = match &p.cmd_vel_topic {
         Some(topic) => Some(node.subscriber(&Topic::<Twist>::new(topic))?),
@@ -106,8 +98,8 @@ fn run_leader(
     let mut progress = leader::Progress::default();
     let mut announced = None;
     node.run(Trigger::every_hz(RATE_HZ), |step| {
-        if let Some(msg) = own.latest()? {
-            pose = Some(*msg);
+        if let Some((_, newest)) = poses.read(|_, _| {})? {
+            pose = Some(newest);
         }
         let now = step.now().as_secs_f64();
         let Some(current) = pose else { return Ok(()) };
@@ -174,26 +166,13 @@ fn run_drive(node: &mut Node, p: &Params, wheels: Wheels) -> Result<(), Error> {
     Ok(())
 }
 
-fn run_follower(
-    node: &mut Node,
-    p: &Params,
-    own: Subscriber<Pose2D>,
-    wheels: Wheels,
-) -> Result<(), Error> {
-    let predecessor_topic = match &p.predecessor_topic {
-        Some(name) => Topic::new(name),
-        None => topics::pose_true(p.robot - 1),
-    };
-    let predecessor = node.subscriber(&predecessor_topic)?;
+fn run_follower(node: &mut Node, p: &Params, poses: Poses, wheels: Wheels) -> Result<(), Error> {
     let mut history = PoseHistory::new(p.follower.tau_s + 2.0);
     // The own pose's recent past, for the robot's speed; a step sees the newest pose only.
     let mut own_history = PoseHistory::new(p.follower.speed_window_s + 1.0);
     node.run(Trigger::every_hz(RATE_HZ), |step| {
-        while let Some(msg) = predecessor.receive()? {
-            history.push(msg.header().stamp_ns as f64 * 1e-9, *msg);
-        }
-        if let Some(msg) = own.latest()? {
-            own_history.push(msg.header().stamp_ns as f64 * 1e-9, *msg);
+        if let Some((t, pose)) = poses.read(|t, pose| history.push(t, pose))? {
+            own_history.push(t, pose);
         }
         if own_history.latest().is_none() {
             return Ok(());

@@ -29,6 +29,10 @@ pub struct Params {
     pub pose_topic: Option<String>,
     /// Where a follower learns its predecessor's pose; default `robot/<i−1>/pose_true`.
     pub predecessor_topic: Option<String>,
+    /// Read the own pose and a follower's predecessor's from this one RobotStates topic,
+    /// robot i at index i, instead of `pose_topic` and `predecessor_topic` (not with either):
+    /// `robots/state_true`, the physics' ground truth of the whole team in one message.
+    pub states_topic: Option<String>,
     /// Leader: drive the planner's velocity commands (Twist) from this topic instead of
     /// straight at the goals, e.g. `robot/0/cmd_vel`. Drive: the commands to drive.
     pub cmd_vel_topic: Option<String>,
@@ -57,6 +61,7 @@ impl Default for Params {
             mode: Mode::default(),
             pose_topic: None,
             predecessor_topic: None,
+            states_topic: None,
             cmd_vel_topic: None,
             cmd_vel_timeout_s: 0.5,
             urdf: String::new(),
@@ -72,6 +77,18 @@ impl Params {
     /// predecessor, a leader needs goals.
     pub fn validate(&self) -> Result<(), String> {
         crate::agent::ranges::check(self)?;
+        if self.states_topic.is_some() {
+            for (key, given) in [
+                ("pose_topic", &self.pose_topic),
+                ("predecessor_topic", &self.predecessor_topic),
+            ] {
+                if given.is_some() {
+                    return Err(format!(
+                        "key 'states_topic': the poses come from it, so '{key}' must not be given too"
+                    ));
+                }
+            }
+        }
         match self.mode {
             Mode::Follower if self.robot == 0 && self.predecessor_topic.is_none() => {
                 Err("key 'robot': robot 0 has no predecessor; make it the leader (mode = \"leader\") or set 'predecessor_topic'".into())

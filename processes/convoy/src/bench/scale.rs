@@ -43,6 +43,10 @@ pub struct ScaleArgs {
     /// lockstep only: in realtime each still runs as a process of its own)
     #[arg(long)]
     pub containers: bool,
+    /// The agents read every robot's pose from one message per physics step,
+    /// `robots/state_true` (agent key `states_topic`), instead of each robot's `pose_true`
+    #[arg(long)]
+    pub team_states: bool,
 }
 
 /// One run's measurements.
@@ -87,7 +91,7 @@ pub fn run(args: &ScaleArgs) -> Result<()> {
     for clock in &clocks {
         for &n in &followers {
             bar.set_message(format!("{clock}, {n} followers"));
-            rows.push(measure(&runs_dir, clock, n, seconds, args.containers)?);
+            rows.push(measure(&runs_dir, clock, n, seconds, &args)?);
             bar.inc(1);
         }
     }
@@ -106,13 +110,13 @@ fn measure(
     clock: &str,
     followers: usize,
     seconds: f64,
-    containers: bool,
+    args: &ScaleArgs,
 ) -> Result<Row> {
     let name = format!("bench-scale-{clock}-{followers}-{}", std::process::id());
     let dir = runs_dir.join(&name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir)?;
-    let file = write_scenario(&dir, &name, clock, followers, seconds, containers)?;
+    let file = write_scenario(&dir, &name, clock, followers, seconds, args)?;
     let before = children_cpu_s();
     let status = Command::new(super::caravan()?)
         .arg("launch")
@@ -217,7 +221,7 @@ fn write_scenario(
     clock: &str,
     followers: usize,
     seconds: f64,
-    containers: bool,
+    args: &ScaleArgs,
 ) -> Result<PathBuf> {
     let robots = followers + 1;
     let y = 1.5;
@@ -239,8 +243,13 @@ fn write_scenario(
         .map(|i| format!("[{:.2}, {y}, 0.0]", leader_x - SPACING_M * i as f64))
         .collect();
     let goal_x = leader_x + 0.2 * seconds + 1.0;
-    let container = if containers {
+    let container = if args.containers {
         "container = \"agents\"\n"
+    } else {
+        ""
+    };
+    let states = if args.team_states {
+        ", states_topic = \"robots/state_true\""
     } else {
         ""
     };
@@ -251,13 +260,13 @@ fn write_scenario(
          [[process]]\nname = \"physics\"\nexec = \"caravan-physics\"\nrate = \"100Hz\"\n\
          params = {{ world = \"world.toml\", urdf = \"robot.urdf\", count = {robots}, poses = [{}] }}\n\n\
          [[process]]\nname = \"leader\"\nexec = \"caravan-convoy-agent\"\n\
-         params = {{ robot = 0, urdf = \"robot.urdf\", mode = \"leader\", leader = {{ goals = [[{goal_x:.2}, {y}]] }} }}\n{container}",
+         params = {{ robot = 0, urdf = \"robot.urdf\", mode = \"leader\", leader = {{ goals = [[{goal_x:.2}, {y}]] }}{states} }}\n{container}",
         poses.join(", ")
     );
     for i in 1..robots {
         let _ = write!(
             text,
-            "\n[[process]]\nname = \"follower-{i}\"\nexec = \"caravan-convoy-agent\"\nparams = {{ robot = {i}, urdf = \"robot.urdf\" }}\n{container}"
+            "\n[[process]]\nname = \"follower-{i}\"\nexec = \"caravan-convoy-agent\"\nparams = {{ robot = {i}, urdf = \"robot.urdf\"{states} }}\n{container}"
         );
     }
     let file = dir.join("launch.toml");
