@@ -8,6 +8,8 @@ use caravan::{Error, Node, Subscriber, Topic};
 use caravan_schemas::{Pose2D, RobotStates, topics};
 
 /// The agent's pose inputs.
+// One per agent, made once: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum Poses {
     /// A topic per robot; the predecessor's for a follower only.
     Topics {

@@ -91,7 +91,7 @@ pub fn run(args: &ScaleArgs) -> Result<()> {
     for clock in &clocks {
         for &n in &followers {
             bar.set_message(format!("{clock}, {n} followers"));
-            rows.push(measure(&runs_dir, clock, n, seconds, &args)?);
+            rows.push(measure(&runs_dir, clock, n, seconds, args)?);
             bar.inc(1);
         }
     }
