@@ -270,9 +270,12 @@ fn bench_scale_runs_each_clock_and_writes_its_table() {
 /// `--team-states`: the agents read every robot's pose from the physics' one message per
 /// step (`robots/state_true`, agent key `states_topic`) instead of each robot's `pose_true`.
 /// They read the same poses, so the robots drive the same: the recorded set-points match.
+/// And they read only that topic: the team run's file with a topic nobody publishes named
+/// instead leaves every robot without a pose, and without a set-point.
 #[test]
 fn bench_scale_with_team_states_drives_as_with_each_robots_topic() {
-    let setpoints = |team: bool| {
+    let mut unpublished = Vec::new();
+    let mut setpoints = |team: bool| {
         let out =
             std::env::temp_dir().join(format!("caravan-bench-team-{team}-{}", std::process::id()));
         let mut args = vec!["scale", "--followers", "2", "--seconds", "3"];
@@ -291,6 +294,17 @@ fn bench_scale_with_team_states_drives_as_with_each_robots_topic() {
         let launch = std::fs::read_to_string(group.path().join("launch.toml")).unwrap();
         assert_eq!(launch.contains("states_topic"), team, "{launch}");
         let messages = all_messages(&read(&run.path().join("record.mcap")));
+        if team {
+            let file = group.path().join("nobody.toml");
+            let text = launch.replace("robots/state_true", "robots/nobody");
+            std::fs::write(&file, text).unwrap();
+            let runs = out.join("nobody-runs");
+            let args = ["launch", file.to_str().unwrap(), "--quiet", "--runs-dir"];
+            let ran = caravan_tests::caravan(&[&args[..], &[runs.to_str().unwrap()]].concat());
+            assert!(ran.status.success(), "{ran:?}");
+            let run = std::fs::read_dir(&runs).unwrap().next().unwrap().unwrap();
+            unpublished = all_messages(&read(&run.path().join("record.mcap")));
+        }
         let _ = std::fs::remove_dir_all(&out);
         messages
     };
@@ -302,6 +316,10 @@ fn bench_scale_with_team_states_drives_as_with_each_robots_topic() {
     };
     assert!(each.iter().any(moving), "{each:?}");
     assert_same_messages(&each, &team);
+    assert!(
+        unpublished.iter().all(|m| !m.1.ends_with("wheel_setpoint")),
+        "{unpublished:?}"
+    );
 }
 
 #[test]

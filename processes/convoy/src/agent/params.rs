@@ -2,6 +2,7 @@
 
 use crate::agent::follower::FollowerParams;
 use crate::agent::leader::LeaderParams;
+use caravan_schemas::MAX_ROBOT_STATES;
 use serde::Deserialize;
 
 #[derive(
@@ -87,6 +88,16 @@ impl Params {
                         "key 'states_topic': the poses come from it, so '{key}' must not be given too"
                     ));
                 }
+            }
+            if self.robot >= MAX_ROBOT_STATES {
+                return Err(format!(
+                    "key 'robot': {}, but the message of 'states_topic' holds robots 0 to {}",
+                    self.robot,
+                    MAX_ROBOT_STATES - 1
+                ));
+            }
+            if self.mode == Mode::Follower && self.robot == 0 {
+                return Err("key 'states_topic': robot 0 has no predecessor in it; make it the leader (mode = \"leader\")".into());
             }
         }
         match self.mode {

@@ -6,6 +6,7 @@
 use crate::agent::params::{Mode, Params};
 use caravan::{Error, Node, Subscriber, Topic};
 use caravan_schemas::{Pose2D, RobotStates, topics};
+use std::cell::Cell;
 
 /// The agent's pose inputs.
 // One per agent, made once: the variants' sizes do not matter.
@@ -21,6 +22,8 @@ pub enum Poses {
         states: Subscriber<RobotStates>,
         own: usize,
         predecessor: Option<usize>,
+        /// A message without this robot was met (and said once).
+        missing: Cell<bool>,
     },
 }
 
@@ -34,6 +37,7 @@ impl Poses {
                 states: node.subscriber(&Topic::new(name))?,
                 own: p.robot,
                 predecessor: follower.then(|| p.robot - 1),
+                missing: Cell::new(false),
             });
         }
         let own = match &p.pose_topic {
@@ -74,6 +78,7 @@ impl Poses {
                 states,
                 own,
                 predecessor: before,
+                missing,
             } => {
                 let mut newest = None;
                 while let Some(msg) = states.receive()? {
@@ -82,8 +87,16 @@ impl Poses {
                     if let Some(state) = before.and_then(|j| robots.get(j)) {
                         predecessor(t, state.pose);
                     }
-                    if let Some(state) = robots.get(*own) {
-                        newest = Some((t, state.pose));
+                    match robots.get(*own) {
+                        Some(state) => newest = Some((t, state.pose)),
+                        // A team smaller than the robot's index: it would stand still unsaid.
+                        None if !missing.replace(true) => eprintln!(
+                            "caravan-convoy-agent: {}: a message of {} robots, without robot \
+                             {own}: it gets no pose",
+                            states.topic(),
+                            robots.len()
+                        ),
+                        None => {}
                     }
                 }
                 Ok(newest)
@@ -95,7 +108,7 @@ impl Poses {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use caravan_schemas::{RobotState, Twist};
+    use caravan_schemas::{MAX_ROBOT_STATES, RobotState, Twist};
 
     fn pose(x: f64) -> Pose2D {
         Pose2D {
@@ -153,6 +166,17 @@ mod tests {
         assert_eq!(read(&by_team), expected);
         // Nothing new: no predecessor pose, no own pose.
         assert_eq!(read(&by_team), (vec![], None));
+        // A team message without this robot gives its predecessor's pose, not its own.
+        let mut short = RobotStates::default();
+        for x in [20.0, 21.0] {
+            let state = RobotState {
+                pose: pose(x),
+                twist: Twist::default(),
+            };
+            short.robots.push(state).unwrap();
+        }
+        team.publish(&short).unwrap();
+        assert_eq!(read(&by_team), (vec![21.0], None));
         drop((by_topics, by_team, robots, team, node));
         let _ = caravan::group::remove_resources(&group);
     }
@@ -171,5 +195,21 @@ mod tests {
             let err = p.validate().unwrap_err();
             assert!(err.contains("'states_topic'") && err.contains(key), "{err}");
         }
+        // A robot the message cannot hold, and a follower with no predecessor in it.
+        let team = |robot| Params {
+            states_topic: Some("robots/state_true".into()),
+            ..follower(robot)
+        };
+        let err = team(MAX_ROBOT_STATES).validate().unwrap_err();
+        assert!(
+            err.contains("'robot'") && err.contains("states_topic"),
+            "{err}"
+        );
+        let err = team(0).validate().unwrap_err();
+        assert!(
+            err.contains("'states_topic'") && err.contains("leader"),
+            "{err}"
+        );
+        assert!(team(MAX_ROBOT_STATES - 1).validate().is_ok());
     }
 }
