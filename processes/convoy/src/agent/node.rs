@@ -56,20 +56,23 @@ pub fn setup(
 /// Runs the agent `p` describes until the group stops.
 pub fn run(mut node: Node, (p, geometry): (Params, Geometry)) -> Result<(), Error> {
     let i = p.robot;
-    // A drive reads no pose.
-    let poses = (p.mode != Mode::Drive)
-        .then(|| Poses::open(&node, &p))
-        .transpose()?;
     let setpoint = node.publisher(&topics::wheel_setpoint(i))?;
     let wheels = Wheels {
         setpoint,
         radius_m: geometry.wheel_radius_m,
         separation_m: geometry.wheel_separation_m,
     };
-    match (p.mode, poses) {
-        (Mode::Leader, Some(poses)) => run_leader(&mut node, &p, poses, wheels),
-        (Mode::Follower, Some(poses)) => run_follower(&mut node, &p, poses, wheels),
-        _ => run_drive(&mut node, &p, wheels),
+    // A drive reads no pose.
+    match p.mode {
+        Mode::Leader => {
+            let poses = Poses::open(&node, &p)?;
+            run_leader(&mut node, &p, poses, wheels)
+        }
+        Mode::Follower => {
+            let poses = Poses::open(&node, &p)?;
+            run_follower(&mut node, &p, poses, wheels)
+        }
+        Mode::Drive => run_drive(&mut node, &p, wheels),
     }
 }
 
