@@ -833,7 +833,7 @@ class RobotStates(Message):
 
 
 class Hello(Message):
-    """``caravan::lockstep::Hello``: 12400 bytes, aligned to 8."""
+    """``caravan::lockstep::Hello``: 12408 bytes, aligned to 8."""
 
     _fields_ = [
         ("node_len", ctypes.c_uint32),
@@ -848,8 +848,10 @@ class Hello(Message):
         ("outputs", ctypes.c_uint64 * 512),
         ("declared", ctypes.c_uint32),
         ("quiet", ctypes.c_uint32),
+        ("output_depth", ctypes.c_uint32),
+        ("_reserved", ctypes.c_uint32),
     ]
-    SIZE = 12400
+    SIZE = 12408
     ALIGN = 8
     OFFSETS = {
         "node_len": 0,
@@ -864,6 +866,8 @@ class Hello(Message):
         "outputs": 8296,
         "declared": 12392,
         "quiet": 12396,
+        "output_depth": 12400,
+        "_reserved": 12404,
     }
 
     @classmethod
@@ -873,17 +877,18 @@ class Hello(Message):
 
 
 class Grant(Message):
-    """``caravan::lockstep::Grant``: 24 bytes, aligned to 8."""
+    """``caravan::lockstep::Grant``: 32 bytes, aligned to 8."""
 
     _fields_ = [
         ("now_ns", ctypes.c_uint64),
         ("tick_ns", ctypes.c_uint64),
         ("stop", ctypes.c_uint32),
         ("quiet", ctypes.c_uint32),
+        ("until_ns", ctypes.c_uint64),
     ]
-    SIZE = 24
+    SIZE = 32
     ALIGN = 8
-    OFFSETS = {"now_ns": 0, "tick_ns": 8, "stop": 16, "quiet": 20}
+    OFFSETS = {"now_ns": 0, "tick_ns": 8, "stop": 16, "quiet": 20, "until_ns": 24}
 
     @classmethod
     def type_name(cls) -> str:
@@ -901,7 +906,7 @@ class Done(Message):
         ("published_len", ctypes.c_uint32),
         ("published", ctypes.c_uint64 * 512),
         ("undeclared", ctypes.c_uint32),
-        ("_reserved", ctypes.c_uint32),
+        ("burst", ctypes.c_uint32),
     ]
     SIZE = 4136
     ALIGN = 8
@@ -912,7 +917,7 @@ class Done(Message):
         "published_len": 24,
         "published": 32,
         "undeclared": 4128,
-        "_reserved": 4132,
+        "burst": 4132,
     }
 
     @classmethod

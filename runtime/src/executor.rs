@@ -271,26 +271,32 @@ impl Executor<'_> {
         let mut stats = StepStats::new(trigger.period());
         let mut state = Step::new();
         let mut next_status_ns = 0;
-        let outcome = loop {
+        let period_ns = trigger.period().map_or(0, |p| p.as_nanos() as u64);
+        let outcome = 'run: loop {
             let grant = match client.wait_for_grant(&ws, self.spin)? {
                 GrantOutcome::Step(grant) => grant,
                 GrantOutcome::Stop | GrantOutcome::Terminated => break Ok(()),
             };
-            self.shared.now_ns.set(grant.now_ns);
             self.shared.tick_ns.set(grant.tick_ns);
-            state.now_ns = grant.now_ns;
-            if let Err(e) = self.run_step(
-                &mut step,
-                &mut stats,
-                &mut state,
-                grant.now_ns,
-                grant.now_ns,
-            ) {
-                break Err(e);
-            }
-            if grant.now_ns >= next_status_ns {
-                self.publish_status(&stats, true)?;
-                next_status_ns = grant.now_ns + STATUS_PERIOD_NS;
+            // A grant of several periods: every step as if granted alone, one report.
+            let mut now_ns = grant.now_ns;
+            loop {
+                self.shared.now_ns.set(now_ns);
+                state.now_ns = now_ns;
+                if let Err(e) = self.run_step(&mut step, &mut stats, &mut state, now_ns, now_ns) {
+                    break 'run Err(e);
+                }
+                if now_ns >= next_status_ns {
+                    self.publish_status(&stats, true)?;
+                    next_status_ns = now_ns + STATUS_PERIOD_NS;
+                }
+                // A step that sent a topic two messages ends the grant here: its readers hold
+                // one message per step ahead of them (`Shared::burst`).
+                let burst = self.shared.burst.get();
+                if state.stop || burst || period_ns == 0 || now_ns + period_ns > grant.last_ns() {
+                    break;
+                }
+                now_ns += period_ns;
             }
             // A node stepped by messages asks to step again when a held message arrives.
             let arrival = self.shared.next_arrival_ns.get();
@@ -299,7 +305,7 @@ impl Executor<'_> {
                 Trigger::Scheduled => state.wake_ns.take().unwrap_or(0),
                 _ => 0,
             };
-            client.report_done(grant.now_ns, wake_ns)?;
+            client.report_done(now_ns, wake_ns)?;
             if state.stop {
                 break Ok(());
             }

@@ -45,7 +45,10 @@ impl<T: Message> Publisher<T> {
             .max_loaned_samples(2)
             .create()
             .map_err(|e| Error::topic(topic.name(), format!("cannot create publisher: {e:?}")))?;
-        shared.ports.borrow_mut().output(topic.name_hash());
+        shared
+            .ports
+            .borrow_mut()
+            .output(topic.name_hash(), topic.delivery().depth());
         let notifier = transport::notifier(&shared.iox, topic.name())?;
         Ok(Self {
             topic: topic.name().to_string(),

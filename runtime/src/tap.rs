@@ -76,7 +76,15 @@ pub trait DynTap {
     /// How the topic's messages are laid out.
     fn descriptor(&self) -> &Arc<Descriptor>;
     /// Reads every waiting message, oldest first.
-    fn drain(&self, out: &mut Vec<Tapped>) -> Result<(), Error>;
+    fn drain(&self, out: &mut Vec<Tapped>) -> Result<(), Error> {
+        self.drain_until(u64::MAX, out)
+    }
+    /// Reads the waiting messages stamped up to `until_ns`, oldest first, and keeps the
+    /// others for a later call: in lockstep a node granted several periods at once publishes
+    /// ahead of the time that ends (`caravan_lockstep`, "batches").
+    fn drain_until(&self, until_ns: u64, out: &mut Vec<Tapped>) -> Result<(), Error>;
+    /// Whether it keeps messages stamped later than a drain asked for.
+    fn holds(&self) -> bool;
     /// Messages lost before reaching the tap (sequence gaps).
     fn missed(&self) -> u64;
 }
@@ -95,6 +103,8 @@ struct Tap {
     port: untyped::Subscriber,
     last_seq: std::cell::RefCell<Vec<(u64, u64)>>,
     missed: std::cell::Cell<u64>,
+    /// Read, stamped later than the last drain asked for.
+    held: std::cell::RefCell<std::collections::VecDeque<Tapped>>,
 }
 
 impl DynTap for Tap {
@@ -110,7 +120,18 @@ impl DynTap for Tap {
         &self.descriptor
     }
 
-    fn drain(&self, out: &mut Vec<Tapped>) -> Result<(), Error> {
+    fn holds(&self) -> bool {
+        !self.held.borrow().is_empty()
+    }
+
+    fn drain_until(&self, until_ns: u64, out: &mut Vec<Tapped>) -> Result<(), Error> {
+        let mut held = self.held.borrow_mut();
+        if !held.is_empty() {
+            let (due, later): (Vec<Tapped>, _) =
+                held.drain(..).partition(|m| m.header.stamp_ns <= until_ns);
+            out.extend(due);
+            held.extend(later);
+        }
         let size = self.descriptor.layout().size;
         while let Some(sample) = self
             .port
@@ -127,11 +148,16 @@ impl DynTap for Tap {
                 }
                 None => last_seq.push((header.source_id, header.seq)),
             }
-            out.push(Tapped {
+            let tapped = Tapped {
                 header,
                 bytes: untyped::payload_bytes(sample.payload(), size).into(),
                 descriptor: self.descriptor.clone(),
-            });
+            };
+            if header.stamp_ns <= until_ns {
+                out.push(tapped);
+            } else {
+                held.push_back(tapped);
+            }
         }
         Ok(())
     }
@@ -165,6 +191,7 @@ pub fn open_tap(
         port,
         last_seq: Default::default(),
         missed: Default::default(),
+        held: Default::default(),
     }))
 }
 

@@ -18,8 +18,12 @@ pub(crate) struct Shared {
     /// In lockstep, a message stamped t is visible from t + tick_ns on; 0 in realtime.
     pub tick_ns: Cell<u64>,
     pub lockstep: bool,
-    /// Topic hashes published to in the current step, for the lockstep scheduler.
-    pub published: RefCell<Vec<u64>>,
+    /// Topic hashes published to since the last report (a grant's steps), each with the
+    /// time of the last step that published there, for the lockstep scheduler.
+    pub published: RefCell<Vec<(u64, u64)>>,
+    /// A step published more than one message to one topic since the last report: a grant
+    /// of several periods ends there (its readers' buffers hold one message per step ahead).
+    pub burst: Cell<bool>,
     /// Messages lost by all subscribers (sequence gaps).
     pub missed: Cell<u64>,
     /// Wake-up listeners by topic, created with the first subscriber of each topic so that
@@ -44,6 +48,8 @@ pub(crate) struct Shared {
 pub(crate) struct Ports {
     pub inputs: Vec<u64>,
     pub outputs: Vec<u64>,
+    /// The smallest buffer depth of the topics in `outputs`; 0 while there are none.
+    pub output_depth: usize,
     /// The node joined the schedule: a port opened from now on breaks its declaration.
     pub joined: bool,
     /// The lists are not the whole truth: a port opened after joining, an injector (it may
@@ -66,7 +72,8 @@ impl Ports {
         Self::add(&mut self.inputs, topic_hash);
     }
 
-    pub fn output(&mut self, topic_hash: u64) {
+    /// A publisher of the topic hashed `topic_hash`, whose subscribers hold `depth` messages.
+    pub fn output(&mut self, topic_hash: u64, depth: usize) {
         // Every node publishes its status; the recorder keeps it out of the file and the
         // report reads only the latest, so it does not order nodes.
         if is_status(topic_hash) {
@@ -74,6 +81,10 @@ impl Ports {
         }
         self.undeclared |= self.joined && !self.outputs.contains(&topic_hash);
         Self::add(&mut self.outputs, topic_hash);
+        self.output_depth = match self.output_depth {
+            0 => depth,
+            d => d.min(depth),
+        };
     }
 }
 
@@ -88,9 +99,15 @@ impl Shared {
     /// realtime `notifier` wakes them.
     pub fn sent(&self, topic_hash: u64, notifier: &Notifier<ipc::Service>) {
         if self.lockstep {
+            let now = self.now_ns.get();
             let mut list = self.published.borrow_mut();
-            if !list.contains(&topic_hash) {
-                list.push(topic_hash);
+            match list.iter_mut().find(|(t, _)| *t == topic_hash) {
+                // Outside a step (a node's set-up, its last status) nothing is ahead of anyone.
+                Some((_, at)) if *at == now && self.step_cpu_started_ns.get().is_some() => {
+                    self.burst.set(true)
+                }
+                Some((_, at)) => *at = now,
+                None => list.push((topic_hash, now)),
             }
         } else {
             wake(notifier);

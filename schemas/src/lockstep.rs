@@ -60,9 +60,16 @@ pub struct Hello {
     /// The token of this machine's count of quiet steps (`caravan::lockstep::Pending`), which
     /// the node holds open: it may then be granted quiet steps. 0: always notify.
     pub quiet: u32,
+    /// The smallest buffer depth of the topics it publishes to (messages a subscriber
+    /// holds), 0 if it publishes to none or does not say: a periodic node may be granted
+    /// several periods at once ([`Grant::until_ns`]) only while each of its readers can hold
+    /// what it publishes ahead of them.
+    pub output_depth: u32,
+    pub _reserved: u32,
 }
 
-/// Permission to step once at simulated time `now_ns`.
+/// Permission to step at simulated time `now_ns`, and for a periodic node at every period
+/// after it up to `until_ns`.
 #[repr(C)]
 #[derive(
     Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize, Describe,
@@ -78,6 +85,11 @@ pub struct Grant {
     /// the node takes it off the count before reporting, and notifies only when at most one
     /// quiet step is left. 0: report and notify.
     pub quiet: u32,
+    /// A periodic node's last step of this grant: it steps at `now_ns`, `now_ns` + its period,
+    /// … up to `until_ns`, without waiting for a grant in between, and reports once, for the
+    /// last. The scheduler grants several periods only when none of the node's inputs can
+    /// change meanwhile (`caravan_lockstep`, "batches"). 0 or `now_ns`: one step.
+    pub until_ns: u64,
 }
 
 impl Grant {
@@ -88,7 +100,21 @@ impl Grant {
             tick_ns,
             stop: 0,
             quiet: 0,
+            until_ns: now_ns,
         }
+    }
+
+    /// Permission to step at `now_ns` and every period after it up to `until_ns`.
+    pub fn steps_until(self, until_ns: u64) -> Self {
+        Self {
+            until_ns: until_ns.max(self.now_ns),
+            ..self
+        }
+    }
+
+    /// The time of its last step: the time its report carries.
+    pub fn last_ns(&self) -> u64 {
+        self.until_ns.max(self.now_ns)
     }
 
     /// A quiet step (see [`Grant::quiet`]) counted in the count of `token`.
@@ -106,6 +132,7 @@ impl Grant {
             tick_ns,
             stop: 1,
             quiet: 0,
+            until_ns: now_ns,
         }
     }
 }
@@ -121,10 +148,13 @@ pub struct Done {
     /// becomes visible then: delayed by a link, or stamped later by a compute budget); 0 for
     /// none.
     pub wake_ns: u64,
-    /// Hashes of the topics this step published to.
+    /// Hashes of the topics this step published to (a grant of several steps: all of them).
     pub published: FixedVec<u64, MAX_TOPICS>,
     /// 1: the node's `Hello` declaration no longer holds (it opened a port after joining);
     /// the scheduler stops overlapping it.
     pub undeclared: u32,
-    pub _reserved: u32,
+    /// 1: a step published more than one message to one topic. A grant of several periods
+    /// ended at that step (`now_ns`, maybe before the grant's last), and the scheduler grants
+    /// the node one period at a time from then on. (It was reserved, always 0.)
+    pub burst: u32,
 }

@@ -288,3 +288,118 @@ mod outside_message {
         check(&layout, &[Vector3::layout()]).unwrap();
     }
 }
+
+/// Every `now stamp` line a test node logged.
+fn seen(log: &std::path::Path) -> Vec<(u64, u64)> {
+    std::fs::read_to_string(log)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut it = l.split(' ').map(|n| n.parse::<u64>().unwrap());
+            (it.next().unwrap(), it.next().unwrap())
+        })
+        .collect()
+}
+
+/// A 10 Hz source, a 100 Hz relay `a` of it, and a 100 Hz relay `b` of `a`, stepped for
+/// 500 ms with batches on (`a` sends `per_step` messages a step): the advances, the
+/// scheduler's counts, and what `a` and `b` saw.
+fn relay_chain(
+    tag: &str,
+    per_step: u64,
+) -> (
+    Vec<caravan_lockstep::Advance>,
+    caravan_lockstep::ScheduleStats,
+    Vec<(u64, u64)>,
+    Vec<(u64, u64)>,
+) {
+    let group = TestGroup::new(tag);
+    let group = &group.name;
+    let dir = std::env::temp_dir().join(group);
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = caravan::group::config(group).unwrap();
+    let mut scheduler = Scheduler::new(&config, Duration::from_millis(1)).unwrap();
+    let end = 500_000_000;
+    scheduler.batch_until(end);
+    // As a recorder would say once it has looked at them: a batch publishes only to these.
+    let topics = ["bt/in", "bt/in/relayed", "bt/in/relayed/relayed"];
+    scheduler.know_topics(topics.map(caravan_schemas::lockstep::name_hash));
+    let spawn = |name: &str, mode: &str, params| lockstep_node(group, name, mode, params);
+    let log = |name: &str| dir.join(format!("{name}.log"));
+    let mut children = vec![
+        spawn("source", "lockstep-source", json!({"topic": "bt/in"})),
+        spawn(
+            "a",
+            "lockstep-relay",
+            json!({"topic": "bt/in", "out": log("a"), "count": per_step}),
+        ),
+        spawn(
+            "b",
+            "lockstep-relay",
+            json!({"topic": "bt/in/relayed", "out": log("b")}),
+        ),
+    ];
+    let names = ["source", "a", "b"].map(String::from).to_vec();
+    scheduler.wait_for_nodes(&names, |_| Ok(vec![])).unwrap();
+    let mut advances = Vec::new();
+    while scheduler.next_time_ns().unwrap() <= end {
+        advances.push(scheduler.advance(|_| Ok(vec![])).unwrap().unwrap());
+    }
+    scheduler.stop_all().unwrap();
+    for c in &mut children {
+        assert!(c.wait().unwrap().success());
+    }
+    let (a, b) = (seen(&log("a")), seen(&log("b")));
+    std::fs::remove_dir_all(dir).ok();
+    (advances, scheduler.stats(), a, b)
+}
+
+#[test]
+fn a_node_whose_inputs_cannot_change_takes_several_periods_on_one_grant_and_sees_the_same() {
+    let (advances, stats, a, b) = relay_chain("batch", 1);
+    // `a` reads only the 10 Hz source: between two of its steps `a` takes several periods on
+    // one grant, at most 7 (its topic's depth of 8 less one): 10–70 ms, 80–100, 110–170, …
+    // 480–500, 40 steps within an earlier one's grant. The source reads nothing: 100–500 ms
+    // on one grant (4 more). `b` reads `a`, and follows it: at 20 ms `a` has stepped up to
+    // 70, so `b` takes 20–80 on one grant, and so on.
+    assert!(stats.batched_steps > 40 + 4 + 30, "{stats:?}");
+    assert!(stats.wake_ups * 4 < stats.steps, "{stats:?}");
+    let times = |node: &str| -> Vec<u64> {
+        (advances.iter())
+            .filter(|adv| adv.stepped.contains(&node.into()))
+            .map(|adv| adv.now_ns / 1_000_000)
+            .collect()
+    };
+    let every_10ms: Vec<u64> = (0..=50).map(|k| k * 10).collect();
+    assert_eq!(times("a"), every_10ms);
+    assert_eq!(times("b"), every_10ms);
+    assert_eq!(stats.steps, 6 + 51 + 51, "{stats:?}");
+    // Each saw every message of its input once, at its first step after the message's time:
+    // a batch neither shows a message early nor loses one.
+    let source: Vec<(u64, u64)> = (0..5).map(|k| (k * 100 + 10, k * 100)).collect();
+    let ms = |v: Vec<(u64, u64)>| -> Vec<(u64, u64)> {
+        v.into_iter()
+            .map(|(n, s)| (n / 1_000_000, s / 1_000_000))
+            .collect()
+    };
+    assert_eq!(ms(a), source);
+    let relayed: Vec<(u64, u64)> = (0..50).map(|k| (k * 10 + 10, k * 10)).collect();
+    assert_eq!(ms(b), relayed);
+}
+
+#[test]
+fn a_node_sending_two_messages_to_a_topic_in_a_step_ends_its_batch_and_takes_no_more() {
+    let (advances, stats, _, b) = relay_chain("burst", 2);
+    // `a`'s first step sent two messages: it was never granted several periods. Only the
+    // source was (100–500 ms on one grant).
+    assert_eq!(stats.batched_steps, 4, "{stats:?}");
+    assert_eq!(stats.steps, 6 + 51 + 51, "{stats:?}");
+    assert!(advances.iter().all(|adv| adv.stepped.len() <= 3));
+    // `b` saw both messages of each of `a`'s steps, one period later.
+    let relayed: Vec<(u64, u64)> = (0..50).flat_map(|k| [(k * 10 + 10, k * 10); 2]).collect();
+    let b: Vec<(u64, u64)> = b
+        .into_iter()
+        .map(|(n, s)| (n / 1_000_000, s / 1_000_000))
+        .collect();
+    assert_eq!(b, relayed);
+}

@@ -42,6 +42,10 @@ pub struct GroupSpec {
     /// they share no topic with its unfinished nodes (`caravan::lockstep`). Off, every time
     /// waits for the one before; recordings are the same bytes either way.
     pub overlap: bool,
+    /// Lockstep: a periodic node is granted several periods at once when no node publishing
+    /// to its inputs can step meanwhile (`caravan_lockstep`, "batches"): it wakes once for
+    /// them. Off, every step is granted alone; recordings are the same bytes either way.
+    pub batch: bool,
     /// Topic patterns to record (see [`glob_match`]).
     pub record: Vec<String>,
     /// Time between SIGTERM and SIGKILL when stopping a process.

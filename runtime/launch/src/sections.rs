@@ -23,6 +23,7 @@ pub(crate) const GROUP_KEYS: &[&str] = &[
     "seed",
     "tick",
     "overlap",
+    "batch",
     "record",
     "grace",
     "step_timeout",
@@ -78,6 +79,7 @@ impl Checker<'_> {
             seed: 0,
             tick: GroupSpec::DEFAULT_TICK,
             overlap: true,
+            batch: true,
             record: Vec::new(),
             grace: GroupSpec::DEFAULT_GRACE,
             step_timeout: GroupSpec::DEFAULT_STEP_TIMEOUT,
@@ -106,6 +108,7 @@ impl Checker<'_> {
             .get(&s, "tick", positive_duration)
             .unwrap_or(GroupSpec::DEFAULT_TICK);
         group.overlap = self.get(&s, "overlap", boolean).unwrap_or(true);
+        group.batch = self.get(&s, "batch", boolean).unwrap_or(true);
         group.record = self.get(&s, "record", patterns).unwrap_or_default();
         group.grace = self
             .get(&s, "grace", duration)

@@ -95,6 +95,8 @@ impl Scheduler {
                 member.footprint = footprint;
                 member.steps = 0;
                 member.overlapped = false;
+                member.output_depth = hello.output_depth;
+                member.batch = 0..=0;
                 if member.steps_on_joining {
                     self.insert(self.now_ns + self.tick_ns, i)?;
                 }
@@ -118,6 +120,11 @@ impl Scheduler {
             overlapped: false,
             granted_at: Instant::now(),
             last_step: Duration::ZERO,
+            triggered: !hello.triggers.as_slice().is_empty(),
+            output_depth: hello.output_depth,
+            bursty: false,
+            batch: 0..=0,
+            batch_published: Vec::new(),
             name: name.into(),
         });
         self.by_hash.insert(hash, index);

@@ -37,6 +37,11 @@ pub struct ScheduleStats {
     /// (0 when read from a report of a build before it.)
     #[serde(default)]
     pub slot_grants: u64,
+    /// Steps taken within a grant of an earlier period (a grant of several periods,
+    /// `caravan_lockstep` "batches"), counted in `steps` too. (0 when read from a report of a
+    /// build before it.)
+    #[serde(default)]
+    pub batched_steps: u64,
 }
 
 /// Consulted while the scheduler waits, with the names of the nodes it waits for: returns the

@@ -9,6 +9,7 @@
 
 mod admission;
 mod advance;
+mod batch;
 mod members;
 mod overlap;
 mod scheduler;

@@ -45,13 +45,28 @@ pub(crate) struct Member {
     pub(crate) slot_grants: bool,
     pub(crate) grant: Pub<Grant>,
     pub(crate) grant_notifier: Notifier<ipc::Service>,
+    /// Stepped by messages on a topic (`Hello::triggers`).
+    pub(crate) triggered: bool,
+    /// The smallest buffer depth of its outputs (`Hello::output_depth`), 0 if unknown.
+    pub(crate) output_depth: u32,
+    /// A step of it sent two messages to one topic (`Done::burst`): never batched again.
+    pub(crate) bursty: bool,
+    /// Its last grant's steps, first and last (the same for one step): see `batch.rs`.
+    pub(crate) batch: std::ops::RangeInclusive<u64>,
+    /// The topics of its last report of several periods, for the times of the batch after
+    /// the first.
+    pub(crate) batch_published: Vec<u64>,
 }
 
 impl Member {
     /// Its grant of a step at `now_ns`: quiet, under `token`, if it holds the count of quiet
     /// steps (`pending.rs`).
+    /// A grant of several periods ([`Self::batch`]) if it was granted them at `now_ns`.
     pub(crate) fn step_grant(&self, now_ns: u64, tick_ns: u64, token: Option<u32>) -> Grant {
-        let grant = Grant::step(now_ns, tick_ns);
+        let mut grant = Grant::step(now_ns, tick_ns);
+        if *self.batch.start() == now_ns {
+            grant = grant.steps_until(*self.batch.end());
+        }
         match token {
             Some(token) if self.quiet => grant.quiet(token),
             _ => grant,
@@ -90,6 +105,8 @@ pub(crate) struct Flight {
     /// Granted, report not in yet.
     pub(crate) waiting: BTreeSet<usize>,
     pub(crate) published: BTreeSet<u64>,
+    /// Nodes that step at this time within a grant of an earlier one (`batch.rs`).
+    pub(crate) batched: Vec<usize>,
     /// Last (re)grant of the waiting nodes, for repeating lost grants.
     pub(crate) granted_at: Instant,
 }

@@ -54,6 +54,10 @@ pub struct Scheduler {
     pub(crate) hello_looked: Instant,
     /// The topics of the report being read from a slot, kept between reports.
     topics: Vec<u64>,
+    /// Grants of several periods run up to this time (`batch.rs`); `None`: one at a time.
+    pub(crate) batch_end: Option<u64>,
+    /// Times not being stepped yet → nodes that step then within a grant of an earlier time.
+    pub(crate) ahead: BTreeMap<u64, Vec<usize>>,
 }
 
 impl Scheduler {
@@ -98,6 +102,8 @@ impl Scheduler {
             pending,
             hello_looked: Instant::now(),
             topics: Vec::with_capacity(proto::MAX_TOPICS),
+            batch_end: None,
+            ahead: BTreeMap::new(),
         })
     }
 
@@ -133,10 +139,11 @@ impl Scheduler {
     /// Time of the next event, if any node is due at all: the oldest time being stepped, or
     /// the next one queued.
     pub fn next_time_ns(&self) -> Option<u64> {
-        self.flights
-            .front()
-            .map(|f| f.now_ns)
-            .or_else(|| self.queue.keys().next().copied())
+        self.flights.front().map(|f| f.now_ns).or_else(|| {
+            let queued = self.queue.keys().next().copied();
+            let ahead = self.ahead.keys().next().copied();
+            queued.into_iter().chain(ahead).min()
+        })
     }
 
     /// Steps the next event time: grants every node due then and waits until all are done.
@@ -144,9 +151,11 @@ impl Scheduler {
     /// `None` when no node will ever be due again.
     pub fn advance(&mut self, mut watchdog: impl Watchdog) -> Result<Option<Advance>, Error> {
         if self.flights.is_empty() {
-            let Some((now_ns, due)) = self.queue.pop_first() else {
+            // A time may have only nodes stepping within an earlier grant (`batch.rs`).
+            let Some(now_ns) = self.next_time_ns() else {
                 return Ok(None);
             };
+            let due = self.queue.remove(&now_ns).unwrap_or_default();
             self.open_flight(now_ns, due);
         }
         self.now_ns = self.flights[0].now_ns;
@@ -183,9 +192,8 @@ impl Scheduler {
         self.last_finished_ns = Some(finished.now_ns);
         // The next time's other nodes are granted by the next call, after the caller has
         // looked at what this time published (its recorder finds new topics first).
-        let mut stepped: Vec<std::sync::Arc<str>> = finished
-            .due
-            .iter()
+        let mut stepped: Vec<std::sync::Arc<str>> = (finished.due.iter())
+            .chain(&finished.batched)
             .map(|&i| self.members[i].name.clone())
             .collect();
         stepped.sort();
@@ -214,12 +222,19 @@ impl Scheduler {
             .into_iter()
             .filter(|&i| self.members[i].active)
             .collect();
+        let batched = self.ahead.remove(&now_ns).unwrap_or_default();
+        // What a batch published at this time, if its report is in (else `end_batch` adds it).
+        let published = (batched.iter())
+            .filter(|&&i| !self.flights.iter().any(|f| f.waiting.contains(&i)))
+            .flat_map(|&i| self.members[i].batch_published.iter().copied())
+            .collect();
         self.flights.push_back(Flight {
             now_ns,
             held: due.clone(),
             due,
             waiting: BTreeSet::new(),
-            published: BTreeSet::new(),
+            published,
+            batched,
             granted_at: Instant::now(),
         });
     }
@@ -314,9 +329,18 @@ impl Scheduler {
         // Every grant is out before the first wake-up: a container woken by its first member's
         // then finds the others' grants too, and steps them all before it sleeps again.
         for &i in &nodes {
+            // Only the oldest time's nodes may take several periods: every earlier time has
+            // finished, so the schedule the batch is read from is the same on a rerun.
+            let last_ns = if f == 0 {
+                self.batch_last(i, now_ns)
+            } else {
+                now_ns
+            };
+            self.note_batch(i, now_ns, last_ns);
             let grant = self.members[i].step_grant(now_ns, self.tick_ns, token);
             self.send(i, grant)?;
             self.flights[f].waiting.insert(i);
+            // The later steps of a batch are counted when it reports (it may end early).
             self.stats.steps += 1;
         }
         // One wake-up per container: its members all look for their grants whenever it wakes
@@ -353,6 +377,7 @@ impl Scheduler {
                 now_ns: done.now_ns,
                 wake_ns: done.wake_ns,
                 undeclared: done.undeclared,
+                burst: done.burst,
                 published: done.published.as_slice(),
             };
             self.take_report(i, &report)?;
@@ -388,6 +413,12 @@ impl Scheduler {
         self.flights.iter().flat_map(move |f| {
             f.waiting.iter().filter_map(move |&i| {
                 let slot = self.members[i].slot?;
+                let batch = &self.members[i].batch;
+                if *batch.start() == f.now_ns && batch.start() < batch.end() {
+                    // A batch reports its last step, or the one it ended at.
+                    let at = pending?.report_ns(slot)?;
+                    return batch.contains(&at).then_some((i, slot, at));
+                }
                 (pending?.has_report(slot, f.now_ns)).then_some((i, slot, f.now_ns))
             })
         })
@@ -401,21 +432,24 @@ impl Scheduler {
     /// Takes node `i`'s report of a step: schedules what it woke and what it asked for.
     fn take_report(&mut self, i: usize, report: &Report) -> Result<(), Error> {
         let newest = self.flights.back().map_or(self.now_ns, |f| f.now_ns);
-        if report.now_ns > newest {
+        let granted_ns = self.granted_at(i, report.now_ns);
+        if granted_ns > newest {
             return Err(Error::Lockstep(format!(
                 "node '{}' reported a step at {} ns, but time is {} ns",
                 self.members[i].name, report.now_ns, newest
             )));
         }
         // Repeats of reports (answers to repeated grants) are expected; skip them.
-        let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == report.now_ns) else {
+        let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == granted_ns) else {
             return Ok(());
         };
         if !f.waiting.remove(&i) {
             return Ok(());
         }
         f.published.extend(report.published.iter().copied());
-        let now_ns = f.now_ns;
+        self.end_batch(i, report);
+        // Its last step's time: what comes next is scheduled from there.
+        let now_ns = report.now_ns;
         let member = &mut self.members[i];
         member.last_step = member.granted_at.elapsed();
         member.steps += 1;
@@ -487,7 +521,12 @@ impl Scheduler {
                     if f.waiting.remove(&i) | f.held.remove(&i) {
                         f.due.remove(&i);
                     }
+                    f.batched.retain(|&j| j != i);
                 }
+                self.ahead.retain(|_, nodes| {
+                    nodes.retain(|&j| j != i);
+                    !nodes.is_empty()
+                });
             }
         }
     }

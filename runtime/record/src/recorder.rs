@@ -230,45 +230,60 @@ impl Recorder {
 
     /// Reads every waiting message and hands them to the writer.
     pub fn drain(&mut self) -> Result<()> {
-        self.drain_except(&[])
+        self.drain_except(&[], u64::MAX)
     }
 
-    /// Reads every waiting message, except on `later` topics (hashes), and hands them to the
-    /// writer. In lockstep, `later` are the topics of nodes already stepping at the next time
-    /// (`caravan_lockstep::Advance::overlapping`): nothing on them belongs to the time
-    /// that ended, and they are drained once theirs ends, so each batch holds one time.
-    pub fn drain_except(&mut self, later: &[u64]) -> Result<()> {
-        self.drain_taps(|hash| !later.contains(&hash), true)
+    /// Reads every waiting message stamped up to `until_ns`, except on `later` topics
+    /// (hashes), and hands them to the writer. In lockstep, `later` are the topics of nodes
+    /// already stepping at the next time (`caravan_lockstep::Advance::overlapping`): nothing
+    /// on them belongs to the time that ended, and they are drained once theirs ends, so each
+    /// batch holds one time. A message stamped after `until_ns` (published ahead by a node
+    /// granted several periods) waits in its tap until a drain reaches its time.
+    pub fn drain_except(&mut self, later: &[u64], until_ns: u64) -> Result<()> {
+        self.drain_taps(|hash| !later.contains(&hash), true, until_ns)
     }
 
     /// Like [`Self::drain_except`], but looks only at `published` (sorted hashes: the topics
-    /// the nodes said they published at the time that ended, `caravan_lockstep::Advance`):
-    /// the others have nothing new, and asking each of dozens of taps at every advance was
-    /// a good part of the launcher's work per tick.
-    pub fn drain_published(&mut self, published: &[u64], later: &[u64]) -> Result<()> {
+    /// the nodes said they published at the time that ended, `caravan_lockstep::Advance`)
+    /// and at taps holding messages of a later time: the others have nothing new, and asking
+    /// each of dozens of taps at every advance was a good part of the launcher's work per
+    /// tick.
+    pub fn drain_published(
+        &mut self,
+        published: &[u64],
+        later: &[u64],
+        until_ns: u64,
+    ) -> Result<()> {
         // A node publishes its status once a second: most advances have none.
         let status = published.binary_search(&STATUS_HASH).is_ok();
         self.drain_taps(
             |hash| published.binary_search(&hash).is_ok() && !later.contains(&hash),
             status,
+            until_ns,
         )
     }
 
-    fn drain_taps(&mut self, wanted: impl Fn(u64) -> bool, status: bool) -> Result<()> {
+    fn drain_taps(
+        &mut self,
+        wanted: impl Fn(u64) -> bool,
+        status: bool,
+        until_ns: u64,
+    ) -> Result<()> {
         let now_wall = caravan::wall_clock_ns();
         let mut batch = Vec::new();
         let mut messages = Vec::new();
         for (rank, (id, hash, tap)) in self.taps.iter().enumerate() {
-            if !wanted(*hash) {
+            if !wanted(*hash) && !tap.holds() {
                 continue;
             }
-            tap.drain(&mut batch)?;
+            tap.drain_until(until_ns, &mut batch)?;
             messages.extend(batch.drain(..).map(|message| Drained {
                 rank,
                 id: *id,
                 message,
             }));
         }
+        // Statuses are not recorded: the report and the hang watch want the newest.
         if let Some(tap) = self.status_tap.as_ref().filter(|_| status) {
             tap.drain(&mut batch)?;
         }

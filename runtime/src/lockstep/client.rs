@@ -70,6 +70,8 @@ impl Client {
             outputs: FixedVec::new(),
             declared: 0,
             quiet: 0,
+            output_depth: 0,
+            _reserved: 0,
         };
         let pending = super::pending::Pending::open(iox.config());
         hello.quiet = pending.as_ref().map_or(0, |p| p.token());
@@ -92,6 +94,7 @@ impl Client {
                 }
             }
             hello.declared = declared as u32;
+            hello.output_depth = ports.output_depth.min(u32::MAX as usize) as u32;
         }
         let client = Self {
             node_hash: shared.node_hash,
@@ -138,13 +141,13 @@ impl Client {
                 }
                 match *self.last_done.borrow() {
                     // A repeat is never quiet: it was not counted.
-                    Some(done) if grant.now_ns == done.now_ns => {
+                    Some(done) if grant.last_ns() == done.now_ns => {
                         if !self.last_in_slot.get() {
                             send(self.done_port()?, done, proto::DONE)?;
                         }
                         self.notify_done(true)?
                     }
-                    Some(done) if grant.now_ns < done.now_ns => {}
+                    Some(done) if grant.last_ns() < done.now_ns => {}
                     _ => {
                         self.quiet_step.set(
                             grant.quiet != 0
@@ -246,9 +249,9 @@ impl Client {
             wake_ns,
             published: FixedVec::new(),
             undeclared: self.shared.ports.borrow().undeclared as u32,
-            _reserved: 0,
+            burst: self.shared.burst.replace(false) as u32,
         };
-        for topic in self.shared.published.borrow_mut().drain(..) {
+        for (topic, _) in self.shared.published.borrow_mut().drain(..) {
             // More topics than fit cannot be scheduled precisely; the node is still woken by
             // its period, so truncation only delays subscribers. The scheduler no longer
             // knows what it published: it is not overlapped from then on.
@@ -281,6 +284,7 @@ impl Client {
                     now_ns,
                     wake_ns,
                     undeclared: done.undeclared,
+                    burst: done.burst,
                     published: done.published.as_slice(),
                 },
             ),

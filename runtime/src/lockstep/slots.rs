@@ -38,6 +38,8 @@ pub struct Report<'a> {
     pub wake_ns: u64,
     /// `Done::undeclared`.
     pub undeclared: u32,
+    /// `Done::burst`.
+    pub burst: u32,
     /// Hashes of the topics the step published to (at most `MAX_TOPICS`).
     pub published: &'a [u64],
 }
@@ -107,6 +109,7 @@ impl Pending {
         self.word(at + 16).store(grant.tick_ns, Ordering::Relaxed);
         self.half(at + 24).store(grant.quiet, Ordering::Relaxed);
         self.half(at + 28).store(grant.stop, Ordering::Relaxed);
+        self.word(at + 32).store(grant.until_ns, Ordering::Relaxed);
         seq.store(odd + 1, Ordering::Release);
     }
 
@@ -132,6 +135,7 @@ impl Pending {
                 tick_ns: self.word(at + 16).load(Ordering::Relaxed),
                 quiet: self.half(at + 24).load(Ordering::Relaxed),
                 stop: self.half(at + 28).load(Ordering::Relaxed),
+                until_ns: self.word(at + 32).load(Ordering::Relaxed),
             };
             fence(Ordering::Acquire);
             if seq.load(Ordering::Relaxed) == before {
@@ -151,8 +155,9 @@ impl Pending {
         let at = self.report_at(slot);
         let topics = &report.published[..report.published.len().min(MAX_TOPICS)];
         self.word(at + 8).store(report.wake_ns, Ordering::Relaxed);
-        self.half(at + 16)
-            .store(report.undeclared, Ordering::Relaxed);
+        // The two flags share a word: bit 0 undeclared, bit 1 burst.
+        let flags = (report.undeclared != 0) as u32 | ((report.burst != 0) as u32) << 1;
+        self.half(at + 16).store(flags, Ordering::Relaxed);
         self.half(at + 20)
             .store(topics.len() as u32, Ordering::Relaxed);
         // SAFETY: the topics' room is MAX_TOPICS words inside the slot; the scheduler reads
@@ -184,12 +189,21 @@ impl Pending {
             std::ptr::copy_nonoverlapping(self.at(at + 24).cast::<u64>(), topics.as_mut_ptr(), len)
         };
         let topics: &'t Vec<u64> = topics;
+        let flags = self.half(at + 16).load(Ordering::Relaxed);
         Some(Report {
             now_ns,
             wake_ns: self.word(at + 8).load(Ordering::Relaxed),
-            undeclared: self.half(at + 16).load(Ordering::Relaxed),
+            undeclared: flags & 1,
+            burst: (flags >> 1) & 1,
             published: topics,
         })
+    }
+
+    /// The time of the last report written into `slot`, if any: a grant of several periods
+    /// may end before its last ([`caravan_schemas::lockstep::Done::burst`]).
+    pub fn report_ns(&self, slot: usize) -> Option<u64> {
+        let ready = self.word(self.report_at(slot)).load(Ordering::Acquire);
+        (ready != 0).then(|| ready.wrapping_sub(1))
     }
 
     /// Whether the report of the step at `now_ns` is in `slot`.
@@ -217,6 +231,7 @@ mod tests {
             now_ns: 10,
             wake_ns: 25,
             undeclared: 1,
+            burst: 0,
             published: &published,
         };
         node.write_report(slot, &report);
@@ -256,6 +271,7 @@ mod tests {
             now_ns: 30,
             wake_ns: 0,
             undeclared: 0,
+            burst: 0,
             published: &[4],
         };
         page.write_report(first, &report);
@@ -279,6 +295,7 @@ mod tests {
             now_ns: 0,
             wake_ns: 0,
             undeclared: 0,
+            burst: 0,
             published: &published,
         };
         page.write_report(slot, &report);

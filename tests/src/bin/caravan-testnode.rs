@@ -10,6 +10,8 @@
 //! - `steps`: steps `count` times at the launch rate, then exits 0.
 //! - `params`: only parses its params (`gain: f64`, `name: String`).
 //! - `lockstep-source` / `lockstep-sink`: see the lockstep protocol test.
+//! - `lockstep-relay`: at 100 Hz, logs `now stamp` for each message of `topic` to `out`
+//!   and publishes `count` messages (at least 1) on `<topic>/relayed`, carrying its time.
 //! - `lockstep-scheduled`: a `Trigger::Scheduled` node asking for steps at (k + 1)² × 10 ms
 //!   for k < `count`, publishing on `topic` at each.
 //! - `hang`: steps at 10 Hz and hangs in its step after `count` steps.
@@ -147,6 +149,24 @@ fn run(mode: &str) -> Result<(), Error> {
                 let k = step.index();
                 if k < count {
                     step.wake_at(Duration::from_millis((k + 1) * (k + 1) * 10));
+                }
+                Ok(())
+            })?;
+        }
+        "lockstep-relay" => {
+            let subscriber = node.subscriber(&Topic::<Pose2D>::new(&p.topic))?;
+            let relayed = node.publisher(&Topic::<Pose2D>::new(&format!("{}/relayed", p.topic)))?;
+            let mut log = std::fs::File::create(&p.out).map_err(|e| Error::Step(e.to_string()))?;
+            node.run(Trigger::every_hz(100.0), |step| {
+                while let Some(msg) = subscriber.receive()? {
+                    writeln!(log, "{} {}", step.now_ns(), msg.header().stamp_ns)
+                        .map_err(|e| Error::Step(e.to_string()))?;
+                }
+                for _ in 0..p.count.max(1) {
+                    relayed.publish(&Pose2D {
+                        x: step.now().as_secs_f64(),
+                        ..Default::default()
+                    })?;
                 }
                 Ok(())
             })?;

@@ -33,6 +33,9 @@ pub struct DriverConfig {
     pub spin: Duration,
     /// Lockstep: let the next tick's nodes overlap the current one's (see `GroupSpec`).
     pub overlap: bool,
+    /// Lockstep: grant a periodic node several periods at once when none of its inputs can
+    /// change meanwhile (see `GroupSpec`).
+    pub batch: bool,
     pub duration: Option<Duration>,
     /// Processes that must join the lockstep schedule.
     pub expected: Vec<String>,
@@ -195,6 +198,9 @@ fn run_lockstep(
         if cfg.overlap {
             scheduler.overlap_until(end_ns.unwrap_or(u64::MAX));
         }
+        if cfg.batch {
+            scheduler.batch_until(end_ns.unwrap_or(u64::MAX));
+        }
         while let Some(next) = scheduler.next_time_ns() {
             if end_ns.is_some_and(|end| next > end) {
                 break;
@@ -230,9 +236,9 @@ fn run_lockstep(
             // discovery found new topics, after a node died, and once every
             // `FULL_DRAIN_EVERY` advances (a publisher outside the schedule).
             if discovered || died.replace(false) || advances % FULL_DRAIN_EVERY == 1 {
-                recorder.drain_except(&advance.overlapping)?;
+                recorder.drain_except(&advance.overlapping, now_ns)?;
             } else {
-                recorder.drain_published(&advance.published, &advance.overlapping)?;
+                recorder.drain_published(&advance.published, &advance.overlapping, now_ns)?;
             }
         }
         Ok(())

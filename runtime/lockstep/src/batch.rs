@@ -1,0 +1,171 @@
+//! Batches: a periodic node granted several periods at once, when none of its inputs can
+//! change meanwhile.
+//!
+//! A node's step at s reads the messages stamped up to s − tick. If no node that publishes
+//! to its inputs can step before some time H, the node's steps at s, s + period, … up to H
+//! read exactly what they would read granted one at a time: the node may take them all on
+//! one grant, and wake (and wake the scheduler) once instead of once per period. The
+//! physics, whose set-points change only when an agent steps, steps five ticks per grant in
+//! the convoy instead of one.
+//!
+//! What it publishes ahead waits in its readers' buffers, hidden until its time by their
+//! stamps (`caravan::Subscriber`), and in the recorder's taps until that time ends. So:
+//! - a batch never runs past the run's end, and only its first step's time waits for it:
+//!   every later time of the batch is finished when its grant's is;
+//! - at most `depth − 1` steps, `depth` the smallest buffer of its outputs, so that a reader
+//!   due right after the first step still finds that step's message, behind the ones ahead
+//!   of it; a step that sends one topic two messages ends the batch there
+//!   ([`caravan_schemas::lockstep::Done::burst`]), and the node is batched no more;
+//! - no node is stepped by its messages (`on`): those are woken per message, at its time;
+//! - every topic it publishes to is known to the recorder;
+//! - each node publishing to its inputs is a declared node of this machine whose next step
+//!   is known: a periodic one's from the schedule, a node stepped by messages not before
+//!   the next tick.
+//!
+//! The decision reads only the schedule as it stands when the batch's time is the oldest
+//! (every earlier time finished), so reruns take the same batches.
+
+use crate::scheduler::Scheduler;
+use caravan::lockstep::Report;
+
+/// Most periods one grant may hold: a batch is reported, and watched for hangs, as a whole.
+const MAX_STEPS: u64 = 32;
+
+impl Scheduler {
+    /// Lets a periodic node be granted several periods at once, up to `end_ns` (the run's
+    /// end), when none of its inputs can change meanwhile (see `batch.rs`).
+    pub fn batch_until(&mut self, end_ns: u64) {
+        self.batch_end = Some(end_ns);
+    }
+
+    /// The last step node `i`, due at `now_ns` (the oldest time being stepped), may take on
+    /// one grant: `now_ns` if only that one.
+    pub(crate) fn batch_last(&self, i: usize, now_ns: u64) -> u64 {
+        let m = &self.members[i];
+        let Some(end) = self.batch_end else {
+            return now_ns;
+        };
+        let depth = m.output_depth as u64;
+        let outputs = &m.footprint.outputs;
+        if m.period_ns == 0
+            || m.triggered
+            || m.bursty
+            || !m.quiet
+            || !m.slot_grants
+            || m.steps == 0
+            || !m.footprint.declared
+            || depth < 3
+            || outputs.is_empty()
+            || !outputs.iter().all(|t| self.known_topics.contains(t))
+            || outputs.iter().any(|t| self.subscribers.contains_key(t))
+        {
+            return now_ns;
+        }
+        let steps = (depth - 1).min(MAX_STEPS);
+        let mut horizon = end.min(now_ns + (steps - 1) * m.period_ns);
+        for (j, other) in self.members.iter().enumerate() {
+            if j == i {
+                continue;
+            }
+            let writes_inputs = !other.footprint.declared
+                || other
+                    .footprint
+                    .outputs
+                    .iter()
+                    .any(|t| m.footprint.inputs.binary_search(t).is_ok());
+            if !writes_inputs {
+                continue;
+            }
+            // A node that may restart, or whose steps are not known here, may publish at any
+            // time.
+            if !other.active || !other.quiet || !other.footprint.declared {
+                return now_ns;
+            }
+            horizon = horizon.min(self.next_due(j, now_ns));
+            if horizon <= now_ns {
+                return now_ns;
+            }
+        }
+        now_ns + (horizon - now_ns) / m.period_ns * m.period_ns
+    }
+
+    /// The earliest time ≥ `now_ns` (the oldest time being stepped) node `j` may step.
+    fn next_due(&self, j: usize, now_ns: u64) -> u64 {
+        let in_flight = self.flights.iter().find(|f| f.due.contains(&j));
+        let queued = self.queue.iter().find(|(_, due)| due.contains(&j));
+        let known = in_flight
+            .map(|f| f.now_ns)
+            .or(queued.map(|(&t, _)| t))
+            .unwrap_or(u64::MAX);
+        if self.members[j].period_ns == 0 {
+            // Stepped by messages: any step from this time on may wake it at the next tick.
+            known.min(now_ns + self.tick_ns)
+        } else {
+            known
+        }
+    }
+
+    /// Notes that node `i` steps at every period after `now_ns` up to `last_ns` on the grant
+    /// of `now_ns`.
+    pub(crate) fn note_batch(&mut self, i: usize, now_ns: u64, last_ns: u64) {
+        let period = self.members[i].period_ns;
+        self.members[i].batch = now_ns..=last_ns;
+        let mut t = now_ns + period;
+        while period > 0 && t <= last_ns {
+            match self.flights.iter_mut().find(|f| f.now_ns == t) {
+                Some(f) => f.batched.push(i),
+                None => self.ahead.entry(t).or_default().push(i),
+            }
+            t += period;
+        }
+    }
+
+    /// The time of the grant node `i`'s report of a step at `reported_ns` answers: its
+    /// batch's first when it falls in it.
+    pub(crate) fn granted_at(&self, i: usize, reported_ns: u64) -> u64 {
+        let batch = &self.members[i].batch;
+        if batch.start() < batch.end() && batch.contains(&reported_ns) {
+            *batch.start()
+        } else {
+            reported_ns
+        }
+    }
+
+    /// Takes the report ending node `i`'s batch: the later times of the batch learn what it
+    /// published, and steps it did not take (it ended early) are taken off them.
+    pub(crate) fn end_batch(&mut self, i: usize, report: &Report) {
+        let batch = self.members[i].batch.clone();
+        if report.burst != 0 {
+            self.members[i].bursty = true;
+            tracing::debug!(
+                "node '{}' sent one topic two messages in its step at {} ns: it is granted \
+                 one period at a time from now on",
+                self.members[i].name,
+                report.now_ns
+            );
+        }
+        if batch.start() == batch.end() {
+            return;
+        }
+        for f in self.flights.iter_mut() {
+            if f.now_ns > *batch.start() && f.batched.contains(&i) {
+                if f.now_ns <= report.now_ns {
+                    f.published.extend(report.published.iter().copied());
+                } else {
+                    f.batched.retain(|&j| j != i);
+                }
+            }
+        }
+        self.ahead.retain(|&t, nodes| {
+            if t > report.now_ns {
+                nodes.retain(|&j| j != i);
+            }
+            !nodes.is_empty()
+        });
+        let later = (report.now_ns - batch.start()) / self.members[i].period_ns.max(1);
+        self.stats.steps += later;
+        self.stats.batched_steps += later;
+        self.members[i].batch_published = report.published.to_vec();
+        self.members[i].batch = *batch.start()..=report.now_ns;
+    }
+}
