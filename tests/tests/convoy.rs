@@ -47,5 +47,7 @@ fn custom_rust_follower_completes_the_convoy() {
     );
 }
 
+#[path = "convoy/batch.rs"]
+mod batch;
 #[path = "convoy/containers.rs"]
 mod containers;

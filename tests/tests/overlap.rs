@@ -52,3 +52,13 @@ fn overlap_must_be_a_boolean() {
     assert!(err.contains("overlap"), "{err}");
     assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
 }
+
+#[test]
+fn batch_must_be_a_boolean() {
+    let s = Scenario::new("batch-bad", &format!("batch = 1\n{PINGPONG}"));
+    let out = s.run(&[]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("batch"), "{err}");
+    assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
+}

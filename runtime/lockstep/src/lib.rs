@@ -6,12 +6,16 @@
 //! share no topic with the nodes still running there (`overlap.rs`). Nothing they could see
 //! differs, so recordings stay the same bytes; the two cores are kept busy instead of waiting
 //! for the slowest node of every time (typically the physics) before anything else starts.
+//!
+//! Batches: a periodic node whose inputs cannot change before a later time is granted every
+//! period up to then at once (`batch.rs`), and it and the scheduler wake once for them.
 
 mod admission;
 mod advance;
 mod batch;
 mod members;
 mod overlap;
+mod reports;
 mod scheduler;
 
 pub use advance::{Advance, ScheduleStats, Watchdog};

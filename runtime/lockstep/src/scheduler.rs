@@ -4,8 +4,8 @@ use crate::advance::{Advance, ScheduleStats, Watchdog};
 use crate::members::{Flight, Member};
 use crate::overlap::{self, Footprint};
 use caravan::Error;
-use caravan::lockstep::control::{Sub, has_samples, listener, spin_on, subscriber, wait_events};
-use caravan::lockstep::{Pending, Report};
+use caravan::lockstep::Pending;
+use caravan::lockstep::control::{Sub, listener, spin_on, subscriber, wait_events};
 use caravan_schemas::lockstep::{self as proto, Done, Grant, Hello};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
@@ -53,7 +53,7 @@ pub struct Scheduler {
     /// When a wait for reports last looked for hellos.
     pub(crate) hello_looked: Instant,
     /// The topics of the report being read from a slot, kept between reports.
-    topics: Vec<u64>,
+    pub(crate) topics: Vec<u64>,
     /// Grants of several periods run up to this time (`batch.rs`); `None`: one at a time.
     pub(crate) batch_end: Option<u64>,
     /// Times not being stepped yet → nodes that step then within a grant of an earlier time.
@@ -362,122 +362,6 @@ impl Scheduler {
         Ok(())
     }
 
-    fn receive_reports(&mut self) -> Result<(), Error> {
-        while let Some(sample) = self
-            .done
-            .receive()
-            .map_err(|e| Error::transport("done", e))?
-        {
-            // Read in place: a report is 4 KB, most of it the published topics' room.
-            let done = sample.payload();
-            let Some(&i) = self.by_hash.get(&done.node_hash) else {
-                continue;
-            };
-            let report = Report {
-                now_ns: done.now_ns,
-                wake_ns: done.wake_ns,
-                undeclared: done.undeclared,
-                burst: done.burst,
-                published: done.published.as_slice(),
-            };
-            self.take_report(i, &report)?;
-        }
-        self.read_slots()
-    }
-
-    /// The steps reported in the page's slots (`caravan::lockstep::Report`): looked for only
-    /// in the slots of the nodes waited for.
-    fn read_slots(&mut self) -> Result<(), Error> {
-        let reported: Vec<(usize, usize, u64)> = self.slot_reports_in().collect();
-        let mut topics = std::mem::take(&mut self.topics);
-        let mut taken = Ok(());
-        for (i, slot, now_ns) in reported {
-            let pending = self.pending.as_ref().expect("a slot is in the page");
-            let Some(report) = pending.read_report(slot, now_ns, &mut topics) else {
-                continue;
-            };
-            self.members[i].slot_grants = true;
-            self.stats.slot_reports += 1;
-            taken = self.take_report(i, &report);
-            if taken.is_err() {
-                break;
-            }
-        }
-        self.topics = topics;
-        taken
-    }
-
-    /// The nodes waited for whose report is in their slot: (member, slot, time).
-    fn slot_reports_in(&self) -> impl Iterator<Item = (usize, usize, u64)> + '_ {
-        let pending = self.pending.as_ref();
-        self.flights.iter().flat_map(move |f| {
-            f.waiting.iter().filter_map(move |&i| {
-                let slot = self.members[i].slot?;
-                let batch = &self.members[i].batch;
-                if *batch.start() == f.now_ns && batch.start() < batch.end() {
-                    // A batch reports its last step, or the one it ended at.
-                    let at = pending?.report_ns(slot)?;
-                    return batch.contains(&at).then_some((i, slot, at));
-                }
-                (pending?.has_report(slot, f.now_ns)).then_some((i, slot, f.now_ns))
-            })
-        })
-    }
-
-    /// Whether a report is in (a `Done` sample, or a slot of a node waited for).
-    fn reports_in(&self) -> Result<bool, Error> {
-        Ok(has_samples(&self.done, proto::DONE)? || self.slot_reports_in().next().is_some())
-    }
-
-    /// Takes node `i`'s report of a step: schedules what it woke and what it asked for.
-    fn take_report(&mut self, i: usize, report: &Report) -> Result<(), Error> {
-        let newest = self.flights.back().map_or(self.now_ns, |f| f.now_ns);
-        let granted_ns = self.granted_at(i, report.now_ns);
-        if granted_ns > newest {
-            return Err(Error::Lockstep(format!(
-                "node '{}' reported a step at {} ns, but time is {} ns",
-                self.members[i].name, report.now_ns, newest
-            )));
-        }
-        // Repeats of reports (answers to repeated grants) are expected; skip them.
-        let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == granted_ns) else {
-            return Ok(());
-        };
-        if !f.waiting.remove(&i) {
-            return Ok(());
-        }
-        f.published.extend(report.published.iter().copied());
-        self.end_batch(i, report);
-        // Its last step's time: what comes next is scheduled from there.
-        let now_ns = report.now_ns;
-        let member = &mut self.members[i];
-        member.last_step = member.granted_at.elapsed();
-        member.steps += 1;
-        if report.undeclared != 0 && member.footprint.declared {
-            member.footprint.declared = false;
-            if member.overlapped {
-                return Err(Error::Lockstep(format!(
-                    "node '{}' opened a topic in its step at {now_ns} ns, after it joined \
-                     the schedule, while nodes of another time stepped beside it: a rerun \
-                     could differ. Open a node's publishers and subscribers before its step \
-                     loop",
-                    member.name
-                )));
-            }
-            tracing::warn!(
-                "node '{}' opened a topic in its step at {now_ns} ns, after it joined the \
-                 schedule: it is no longer stepped beside other ticks",
-                member.name
-            );
-        }
-        member.overlapped = false;
-        self.schedule_after(i, now_ns, report.published)?;
-        if report.wake_ns > now_ns {
-            self.insert(report.wake_ns, i)?;
-        }
-        Ok(())
-    }
-
     /// Queues `i` at `time_ns`, or adds it to that time if it is being stepped.
     pub(crate) fn insert(&mut self, time_ns: u64, i: usize) -> Result<(), Error> {
         if let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == time_ns) {
@@ -557,7 +441,12 @@ impl Scheduler {
         self.admit_new()
     }
 
-    fn schedule_after(&mut self, i: usize, now_ns: u64, published: &[u64]) -> Result<(), Error> {
+    pub(crate) fn schedule_after(
+        &mut self,
+        i: usize,
+        now_ns: u64,
+        published: &[u64],
+    ) -> Result<(), Error> {
         let period = self.members[i].period_ns;
         if period > 0 {
             self.insert(now_ns + period, i)?;

@@ -48,16 +48,18 @@ pub fn render(r: &Value) -> String {
         schedule["overlapped_steps"].as_u64(),
     ) {
         let count = |key: &str| schedule[key].as_u64().unwrap_or(0);
-        let (wake_ups, reports, grants) = (
+        let (wake_ups, reports, grants, batched) = (
             count("wake_ups"),
             count("slot_reports"),
             count("slot_grants"),
+            count("batched_steps"),
         );
         let _ = writeln!(
             md,
             "Lockstep: {advances} advances of simulated time, {steps} node steps, {overlapped} of \
-             them started while the tick before was still running; {wake_ups} wake-ups sent \
-             with the grants; {reports} reports and {grants} grants through the shared page.\n"
+             them started while the tick before was still running, {batched} taken within a \
+             grant of several periods; {wake_ups} wake-ups sent with the grants; {reports} \
+             reports and {grants} grants through the shared page.\n"
         );
     }
     md.push_str("## Nodes\n\n| node | host | steps | rate Hz | deadline misses | jitter p50/p99/max ms | compute mean/p99/max ms | missed msgs | CPU s | peak MiB | restarts | exit |\n|---|---|---:|---:|---:|---|---|---:|---:|---:|---:|---|\n");

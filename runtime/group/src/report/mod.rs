@@ -10,7 +10,8 @@
 //! - `run`: `{outcome ("completed" | "degraded" | "interrupted" | "failed"), failure (string
 //!   or null; for "degraded", which processes were restarted),
 //!   sim_time_s, wall_time_s, real_time_factor, warnings (sentences; suspicious but legal),
-//!   schedule (lockstep, else null): {advances, steps, overlapped_steps, wake_ups, slot_reports, slot_grants}}`
+//!   schedule (lockstep, else null): {advances, steps, overlapped_steps, wake_ups, slot_reports, slot_grants,
+//!   batched_steps}}`
 //! - `nodes[]`: `{name, host, required, restarts, exit_status, period_ms (null when stepped by
 //!   messages), steps, rate_hz, deadline_misses, jitter_p50_ms, jitter_p99_ms, jitter_max_ms,
 //!   compute_mean_ms, compute_p99_ms, compute_max_ms (wall-clock time in the step),
