@@ -280,8 +280,10 @@ impl Executor<'_> {
             self.shared.tick_ns.set(grant.tick_ns);
             // A grant of several periods: every step as if granted alone, one report.
             let mut now_ns = grant.now_ns;
+            let mut index = 0;
             loop {
                 self.shared.now_ns.set(now_ns);
+                self.shared.step_of_grant.set(index);
                 state.now_ns = now_ns;
                 if let Err(e) = self.run_step(&mut step, &mut stats, &mut state, now_ns, now_ns) {
                     break 'run Err(e);
@@ -297,6 +299,7 @@ impl Executor<'_> {
                     break;
                 }
                 now_ns += period_ns;
+                index += 1;
             }
             // A node stepped by messages asks to step again when a held message arrives.
             let arrival = self.shared.next_arrival_ns.get();
@@ -305,7 +308,7 @@ impl Executor<'_> {
                 Trigger::Scheduled => state.wake_ns.take().unwrap_or(0),
                 _ => 0,
             };
-            client.report_done(now_ns, wake_ns)?;
+            client.report_done(now_ns, wake_ns, grant.last_ns() > grant.now_ns)?;
             if state.stop {
                 break Ok(());
             }

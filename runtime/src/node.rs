@@ -96,6 +96,7 @@ impl Node {
             tick_ns: Cell::new(0),
             lockstep: identity.clock == ClockMode::Lockstep,
             published: RefCell::new(Vec::with_capacity(caravan_schemas::lockstep::MAX_TOPICS)),
+            step_of_grant: Cell::new(0),
             burst: Cell::new(false),
             missed: Cell::new(0),
             listeners: RefCell::new(Vec::new()),

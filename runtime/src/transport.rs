@@ -18,9 +18,12 @@ pub(crate) struct Shared {
     /// In lockstep, a message stamped t is visible from t + tick_ns on; 0 in realtime.
     pub tick_ns: Cell<u64>,
     pub lockstep: bool,
-    /// Topic hashes published to since the last report (a grant's steps), each with the
-    /// time of the last step that published there, for the lockstep scheduler.
-    pub published: RefCell<Vec<(u64, u64)>>,
+    /// Topic hashes published to since the last report, each with the time of the last step
+    /// that published there and a bit for each step of the grant that did (bit j: its step
+    /// j), for the lockstep scheduler.
+    pub published: RefCell<Vec<(u64, u64, u32)>>,
+    /// Which step of its grant the node is taking (0 for the first), lockstep only.
+    pub step_of_grant: Cell<u32>,
     /// A step published more than one message to one topic since the last report: a grant
     /// of several periods ends there (its readers' buffers hold one message per step ahead).
     pub burst: Cell<bool>,
@@ -100,14 +103,18 @@ impl Shared {
     pub fn sent(&self, topic_hash: u64, notifier: &Notifier<ipc::Service>) {
         if self.lockstep {
             let now = self.now_ns.get();
+            let bit = 1u32.checked_shl(self.step_of_grant.get()).unwrap_or(0);
             let mut list = self.published.borrow_mut();
-            match list.iter_mut().find(|(t, _)| *t == topic_hash) {
-                // Outside a step (a node's set-up, its last status) nothing is ahead of anyone.
-                Some((_, at)) if *at == now && self.step_cpu_started_ns.get().is_some() => {
-                    self.burst.set(true)
+            match list.iter_mut().find(|(t, _, _)| *t == topic_hash) {
+                Some((_, at, steps)) => {
+                    // Outside a step (a node's set-up, its last status) nothing is ahead.
+                    if *at == now && self.step_cpu_started_ns.get().is_some() {
+                        self.burst.set(true);
+                    }
+                    *at = now;
+                    *steps |= bit;
                 }
-                Some((_, at)) => *at = now,
-                None => list.push((topic_hash, now)),
+                None => list.push((topic_hash, now, bit)),
             }
         } else {
             wake(notifier);

@@ -148,13 +148,24 @@ pub struct Done {
     /// becomes visible then: delayed by a link, or stamped later by a compute budget); 0 for
     /// none.
     pub wake_ns: u64,
-    /// Hashes of the topics this step published to (a grant of several steps: all of them).
+    /// Hashes of the topics this step published to (a grant of several periods: see
+    /// [`Done::STEPS`]).
     pub published: FixedVec<u64, MAX_TOPICS>,
     /// 1: the node's `Hello` declaration no longer holds (it opened a port after joining);
     /// the scheduler stops overlapping it.
     pub undeclared: u32,
-    /// 1: a step published more than one message to one topic. A grant of several periods
-    /// ended at that step (`now_ns`, maybe before the grant's last), and the scheduler grants
-    /// the node one period at a time from then on. (It was reserved, always 0.)
-    pub burst: u32,
+    /// Bits ([`Done::BURST`], [`Done::STEPS`]); it was reserved, always 0.
+    pub flags: u32,
+}
+
+impl Done {
+    /// A step published more than one message to one topic. A grant of several periods ended
+    /// at that step (`now_ns`, maybe before the grant's last), and the scheduler grants the
+    /// node one period at a time from then on.
+    pub const BURST: u32 = 1;
+    /// The report of a grant of several periods: `published` holds pairs, a topic's hash
+    /// then a word whose bit j says that the grant's step j (at `now_ns` of the grant plus j
+    /// periods) published there, so that the nodes its messages step are stepped at their
+    /// times.
+    pub const STEPS: u32 = 2;
 }

@@ -301,9 +301,9 @@ fn seen(log: &std::path::Path) -> Vec<(u64, u64)> {
         .collect()
 }
 
-/// A 10 Hz source, a 100 Hz relay `a` of it, and a 100 Hz relay `b` of `a`, stepped for
-/// 500 ms with batches on (`a` sends `per_step` messages a step): the advances, the
-/// scheduler's counts, and what `a` and `b` saw.
+/// A 10 Hz source, a 100 Hz relay `a` of it, a 100 Hz relay `b` of `a` and a sink stepped
+/// by `a`'s messages, stepped for 500 ms (tick 1 ms) with batches on (`a` sends `per_step`
+/// messages a step): the advances, the scheduler's counts, and what `a` and `b` saw (ms).
 fn relay_chain(
     tag: &str,
     per_step: u64,
@@ -338,8 +338,13 @@ fn relay_chain(
             "lockstep-relay",
             json!({"topic": "bt/in/relayed", "out": log("b")}),
         ),
+        spawn(
+            "sink",
+            "lockstep-sink",
+            json!({"topic": "bt/in/relayed", "out": log("sink")}),
+        ),
     ];
-    let names = ["source", "a", "b"].map(String::from).to_vec();
+    let names = ["source", "a", "b", "sink"].map(String::from).to_vec();
     scheduler.wait_for_nodes(&names, |_| Ok(vec![])).unwrap();
     let mut advances = Vec::new();
     while scheduler.next_time_ns().unwrap() <= end {
@@ -349,7 +354,26 @@ fn relay_chain(
     for c in &mut children {
         assert!(c.wait().unwrap().success());
     }
-    let (a, b) = (seen(&log("a")), seen(&log("b")));
+    let ms = |v: Vec<(u64, u64)>| -> Vec<(u64, u64)> {
+        (v.into_iter())
+            .map(|(n, s)| (n / 1_000_000, s / 1_000_000))
+            .collect()
+    };
+    let (a, b, sink) = (
+        ms(seen(&log("a"))),
+        ms(seen(&log("b"))),
+        ms(seen(&log("sink"))),
+    );
+    // The sink, stepped by `a`'s messages, saw each one tick after it was sent, and `b` one
+    // period after: whether `a` took its steps one at a time or several on a grant.
+    let per_step = per_step as usize;
+    let relayed = |delay: u64| -> Vec<(u64, u64)> {
+        (0..50)
+            .flat_map(|k| std::iter::repeat_n((k * 10 + delay, k * 10), per_step))
+            .collect()
+    };
+    assert_eq!(b, relayed(10));
+    assert_eq!(sink, relayed(1));
     std::fs::remove_dir_all(dir).ok();
     (advances, scheduler.stats(), a, b)
 }
@@ -363,7 +387,12 @@ fn a_node_whose_inputs_cannot_change_takes_several_periods_on_one_grant_and_sees
     // on one grant (4 more). `b` reads `a`, and follows it: at 20 ms `a` has stepped up to
     // 70, so `b` takes 20–80 on one grant, and so on.
     assert!(stats.batched_steps > 40 + 4 + 30, "{stats:?}");
-    assert!(stats.wake_ups * 4 < stats.steps, "{stats:?}");
+    // One wake-up per grant.
+    assert_eq!(
+        stats.wake_ups,
+        stats.steps - stats.batched_steps,
+        "{stats:?}"
+    );
     let times = |node: &str| -> Vec<u64> {
         (advances.iter())
             .filter(|adv| adv.stepped.contains(&node.into()))
@@ -373,18 +402,14 @@ fn a_node_whose_inputs_cannot_change_takes_several_periods_on_one_grant_and_sees
     let every_10ms: Vec<u64> = (0..=50).map(|k| k * 10).collect();
     assert_eq!(times("a"), every_10ms);
     assert_eq!(times("b"), every_10ms);
-    assert_eq!(stats.steps, 6 + 51 + 51, "{stats:?}");
-    // Each saw every message of its input once, at its first step after the message's time:
-    // a batch neither shows a message early nor loses one.
+    let after_a: Vec<u64> = (0..50).map(|k| k * 10 + 1).collect();
+    assert_eq!(times("sink"), after_a);
+    assert_eq!(stats.steps, 6 + 51 + 51 + 50, "{stats:?}");
+    // `a` saw each of the source's messages once, at its first step after the message's time:
+    // a batch neither shows a message early nor loses one (and `b` and the sink, above).
     let source: Vec<(u64, u64)> = (0..5).map(|k| (k * 100 + 10, k * 100)).collect();
-    let ms = |v: Vec<(u64, u64)>| -> Vec<(u64, u64)> {
-        v.into_iter()
-            .map(|(n, s)| (n / 1_000_000, s / 1_000_000))
-            .collect()
-    };
-    assert_eq!(ms(a), source);
-    let relayed: Vec<(u64, u64)> = (0..50).map(|k| (k * 10 + 10, k * 10)).collect();
-    assert_eq!(ms(b), relayed);
+    assert_eq!(a, source);
+    assert_eq!(b.len(), 50);
 }
 
 #[test]
@@ -393,13 +418,9 @@ fn a_node_sending_two_messages_to_a_topic_in_a_step_ends_its_batch_and_takes_no_
     // `a`'s first step sent two messages: it was never granted several periods. Only the
     // source was (100–500 ms on one grant).
     assert_eq!(stats.batched_steps, 4, "{stats:?}");
-    assert_eq!(stats.steps, 6 + 51 + 51, "{stats:?}");
-    assert!(advances.iter().all(|adv| adv.stepped.len() <= 3));
-    // `b` saw both messages of each of `a`'s steps, one period later.
-    let relayed: Vec<(u64, u64)> = (0..50).flat_map(|k| [(k * 10 + 10, k * 10); 2]).collect();
-    let b: Vec<(u64, u64)> = b
-        .into_iter()
-        .map(|(n, s)| (n / 1_000_000, s / 1_000_000))
-        .collect();
-    assert_eq!(b, relayed);
+    assert_eq!(stats.steps, 6 + 51 + 51 + 50, "{stats:?}");
+    assert!(advances.iter().all(|adv| adv.stepped.len() <= 4));
+    // `b` saw both messages of each of `a`'s steps, one period later (checked in
+    // `relay_chain`, as the sink's).
+    assert_eq!(b.len(), 100);
 }

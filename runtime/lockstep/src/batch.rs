@@ -15,8 +15,10 @@
 //! - at most `depth − 1` steps, `depth` the smallest buffer of its outputs, so that a reader
 //!   due right after the first step still finds that step's message, behind the ones ahead
 //!   of it; a step that sends one topic two messages ends the batch there
-//!   ([`caravan_schemas::lockstep::Done::burst`]), and the node is batched no more;
-//! - no node is stepped by its messages (`on`): those are woken per message, at its time;
+//!   ([`Done::BURST`]), and the node is batched no more;
+//! - a node stepped by its messages (`on`) is stepped at each time one was published: the
+//!   batch's report says which of its steps published where ([`Done::STEPS`]), so it may
+//!   publish to at most `MAX_TOPICS / 2` topics;
 //! - every topic it publishes to is known to the recorder;
 //! - each node publishing to its inputs is a declared node of this machine whose next step
 //!   is known: a periodic one's from the schedule, a node stepped by messages not before
@@ -26,7 +28,9 @@
 //! (every earlier time finished), so reruns take the same batches.
 
 use crate::scheduler::Scheduler;
+use caravan::Error;
 use caravan::lockstep::Report;
+use caravan_schemas::lockstep::{Done, MAX_TOPICS};
 
 /// Most periods one grant may hold: a batch is reported, and watched for hangs, as a whole.
 const MAX_STEPS: u64 = 32;
@@ -57,7 +61,8 @@ impl Scheduler {
             || depth < 3
             || outputs.is_empty()
             || !outputs.iter().all(|t| self.known_topics.contains(t))
-            || outputs.iter().any(|t| self.subscribers.contains_key(t))
+            || (outputs.len() * 2 > MAX_TOPICS
+                && outputs.iter().any(|t| self.subscribers.contains_key(t)))
         {
             return now_ns;
         }
@@ -132,10 +137,11 @@ impl Scheduler {
     }
 
     /// Takes the report ending node `i`'s batch: the later times of the batch learn what it
-    /// published, and steps it did not take (it ended early) are taken off them.
-    pub(crate) fn end_batch(&mut self, i: usize, report: &Report) {
+    /// published then (`steps`, the report's pairs, else all of it at each), and steps it did
+    /// not take (it ended early) are taken off them.
+    pub(crate) fn end_batch(&mut self, i: usize, report: &Report, steps: Option<&[(u64, u32)]>) {
         let batch = self.members[i].batch.clone();
-        if report.burst != 0 {
+        if report.flags & Done::BURST != 0 {
             self.members[i].bursty = true;
             tracing::debug!(
                 "node '{}' sent one topic two messages in its step at {} ns: it is granted \
@@ -147,10 +153,16 @@ impl Scheduler {
         if batch.start() == batch.end() {
             return;
         }
+        let published: Vec<(u64, u32)> = match steps {
+            Some(steps) => steps.to_vec(),
+            None => report.published.iter().map(|&t| (t, u32::MAX)).collect(),
+        };
+        let period = self.members[i].period_ns.max(1);
         for f in self.flights.iter_mut() {
             if f.now_ns > *batch.start() && f.batched.contains(&i) {
                 if f.now_ns <= report.now_ns {
-                    f.published.extend(report.published.iter().copied());
+                    let step = (f.now_ns - batch.start()) / period;
+                    f.published.extend(published_at(&published, step));
                 } else {
                     f.batched.retain(|&j| j != i);
                 }
@@ -162,10 +174,68 @@ impl Scheduler {
             }
             !nodes.is_empty()
         });
-        let later = (report.now_ns - batch.start()) / self.members[i].period_ns.max(1);
+        let later = (report.now_ns - batch.start()) / period;
         self.stats.steps += later;
         self.stats.batched_steps += later;
-        self.members[i].batch_published = report.published.to_vec();
+        self.members[i].batch_published = published;
         self.members[i].batch = *batch.start()..=report.now_ns;
     }
+
+    /// What node `i`'s last batch published at `now_ns`, one of its times after the first.
+    pub(crate) fn batch_published_at(
+        &self,
+        i: usize,
+        now_ns: u64,
+    ) -> impl Iterator<Item = u64> + '_ {
+        let m = &self.members[i];
+        let step = (now_ns - m.batch.start()) / m.period_ns.max(1);
+        published_at(&m.batch_published, step)
+    }
+
+    /// Schedules what node `i`'s batch of `first_ns` up to `last_ns` woke: itself a period
+    /// after its last step, and the nodes stepped by a topic a tick after each step that
+    /// published there.
+    pub(crate) fn schedule_batch_after(
+        &mut self,
+        i: usize,
+        first_ns: u64,
+        last_ns: u64,
+        steps: &[(u64, u32)],
+    ) -> Result<(), Error> {
+        let period = self.members[i].period_ns;
+        self.insert(last_ns + period, i)?;
+        for &(topic, bits) in steps {
+            let Some(woken) = self.subscribers.get(&topic).cloned() else {
+                continue;
+            };
+            for step in (0..32).filter(|j| bits & (1 << j) != 0) {
+                let at = first_ns + step * period;
+                if at > last_ns {
+                    break;
+                }
+                for &j in &woken {
+                    self.insert(at + self.tick_ns, j)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The topics of `published` (topic, bit j for each step j that published there) published
+/// at step `step`.
+fn published_at(published: &[(u64, u32)], step: u64) -> impl Iterator<Item = u64> + '_ {
+    let bit = 1u32.checked_shl(step as u32).unwrap_or(0);
+    (published.iter())
+        .filter(move |(_, bits)| bits & bit != 0)
+        .map(|&(t, _)| t)
+}
+
+/// A batch's report's pairs of topic and steps ([`Done::STEPS`]), if it has them.
+pub(crate) fn steps_of(report: &Report) -> Option<Vec<(u64, u32)>> {
+    (report.flags & Done::STEPS != 0).then(|| {
+        (report.published.chunks_exact(2))
+            .map(|pair| (pair[0], pair[1] as u32))
+            .collect()
+    })
 }

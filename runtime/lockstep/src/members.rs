@@ -53,9 +53,9 @@ pub(crate) struct Member {
     pub(crate) bursty: bool,
     /// Its last grant's steps, first and last (the same for one step): see `batch.rs`.
     pub(crate) batch: std::ops::RangeInclusive<u64>,
-    /// The topics of its last report of several periods, for the times of the batch after
-    /// the first.
-    pub(crate) batch_published: Vec<u64>,
+    /// The topics of its last report of several periods, each with a bit for each step of
+    /// the batch that published there, for the times of the batch after the first.
+    pub(crate) batch_published: Vec<(u64, u32)>,
 }
 
 impl Member {

@@ -23,7 +23,7 @@ impl Scheduler {
                 now_ns: done.now_ns,
                 wake_ns: done.wake_ns,
                 undeclared: done.undeclared,
-                burst: done.burst,
+                flags: done.flags,
                 published: done.published.as_slice(),
             };
             self.take_report(i, &report)?;
@@ -92,8 +92,21 @@ impl Scheduler {
         if !f.waiting.remove(&i) {
             return Ok(());
         }
-        f.published.extend(report.published.iter().copied());
-        self.end_batch(i, report);
+        // A grant of several periods says which of its steps published where.
+        let steps = crate::batch::steps_of(report);
+        let published: std::borrow::Cow<[u64]> = match &steps {
+            Some(steps) => steps.iter().map(|&(t, _)| t).collect(),
+            None => report.published.into(),
+        };
+        f.published.extend(match &steps {
+            Some(steps) => steps
+                .iter()
+                .filter(|(_, bits)| bits & 1 != 0)
+                .map(|&(t, _)| t)
+                .collect(),
+            None => published.to_vec(),
+        });
+        self.end_batch(i, report, steps.as_deref());
         // Its last step's time: what comes next is scheduled from there.
         let now_ns = report.now_ns;
         let member = &mut self.members[i];
@@ -117,7 +130,10 @@ impl Scheduler {
             );
         }
         member.overlapped = false;
-        self.schedule_after(i, now_ns, report.published)?;
+        match &steps {
+            Some(steps) => self.schedule_batch_after(i, granted_ns, now_ns, steps)?,
+            None => self.schedule_after(i, now_ns, &published)?,
+        }
         if report.wake_ns > now_ns {
             self.insert(report.wake_ns, i)?;
         }

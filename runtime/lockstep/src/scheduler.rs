@@ -226,7 +226,7 @@ impl Scheduler {
         // What a batch published at this time, if its report is in (else `end_batch` adds it).
         let published = (batched.iter())
             .filter(|&&i| !self.flights.iter().any(|f| f.waiting.contains(&i)))
-            .flat_map(|&i| self.members[i].batch_published.iter().copied())
+            .flat_map(|&i| self.batch_published_at(i, now_ns))
             .collect();
         self.flights.push_back(Flight {
             now_ns,

@@ -240,26 +240,45 @@ impl Client {
         Ok(())
     }
 
-    /// Reports the step at `now_ns` finished, with the topics it published to.
-    /// `wake_ns` (0 for none) asks for another step when a held message becomes visible.
-    pub fn report_done(&self, now_ns: u64, wake_ns: u64) -> Result<(), Error> {
+    /// Reports the step at `now_ns` finished, with the topics it published to: the last of
+    /// its grant's steps, which were several if `several` (`Grant::until_ns`), each topic
+    /// then with the steps that published there ([`Done::STEPS`]). `wake_ns` (0 for none) asks
+    /// for another step when a held message becomes visible.
+    pub fn report_done(&self, now_ns: u64, wake_ns: u64, several: bool) -> Result<(), Error> {
         let mut done = Done {
             node_hash: self.node_hash,
             now_ns,
             wake_ns,
             published: FixedVec::new(),
             undeclared: self.shared.ports.borrow().undeclared as u32,
-            burst: self.shared.burst.replace(false) as u32,
+            flags: if self.shared.burst.replace(false) {
+                Done::BURST
+            } else {
+                0
+            },
         };
-        for (topic, _) in self.shared.published.borrow_mut().drain(..) {
+        let mut published = self.shared.published.borrow_mut();
+        let steps = several && published.len() * 2 <= proto::MAX_TOPICS;
+        if steps {
+            done.flags |= Done::STEPS;
+        }
+        for (topic, _, bits) in published.drain(..) {
             // More topics than fit cannot be scheduled precisely; the node is still woken by
             // its period, so truncation only delays subscribers. The scheduler no longer
             // knows what it published: it is not overlapped from then on.
-            if done.published.push(topic).is_err() {
+            let pushed = match steps {
+                true => done
+                    .published
+                    .push(topic)
+                    .and_then(|()| done.published.push(bits as u64)),
+                false => done.published.push(topic),
+            };
+            if pushed.is_err() {
                 self.shared.ports.borrow_mut().undeclared = true;
                 done.undeclared = 1;
             }
         }
+        drop(published);
         *self.last_done.borrow_mut() = Some(done);
         let quiet = self.quiet_step.replace(false);
         let slot = match &self.pending {
@@ -284,7 +303,7 @@ impl Client {
                     now_ns,
                     wake_ns,
                     undeclared: done.undeclared,
-                    burst: done.burst,
+                    flags: done.flags,
                     published: done.published.as_slice(),
                 },
             ),

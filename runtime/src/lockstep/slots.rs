@@ -38,8 +38,8 @@ pub struct Report<'a> {
     pub wake_ns: u64,
     /// `Done::undeclared`.
     pub undeclared: u32,
-    /// `Done::burst`.
-    pub burst: u32,
+    /// `Done::flags`.
+    pub flags: u32,
     /// Hashes of the topics the step published to (at most `MAX_TOPICS`).
     pub published: &'a [u64],
 }
@@ -155,8 +155,8 @@ impl Pending {
         let at = self.report_at(slot);
         let topics = &report.published[..report.published.len().min(MAX_TOPICS)];
         self.word(at + 8).store(report.wake_ns, Ordering::Relaxed);
-        // The two flags share a word: bit 0 undeclared, bit 1 burst.
-        let flags = (report.undeclared != 0) as u32 | ((report.burst != 0) as u32) << 1;
+        // The flags share a word: bit 0 undeclared, the report's flags above it.
+        let flags = (report.undeclared != 0) as u32 | report.flags << 1;
         self.half(at + 16).store(flags, Ordering::Relaxed);
         self.half(at + 20)
             .store(topics.len() as u32, Ordering::Relaxed);
@@ -194,13 +194,13 @@ impl Pending {
             now_ns,
             wake_ns: self.word(at + 8).load(Ordering::Relaxed),
             undeclared: flags & 1,
-            burst: (flags >> 1) & 1,
+            flags: flags >> 1,
             published: topics,
         })
     }
 
     /// The time of the last report written into `slot`, if any: a grant of several periods
-    /// may end before its last ([`caravan_schemas::lockstep::Done::burst`]).
+    /// may end before its last ([`caravan_schemas::lockstep::Done::BURST`]).
     pub fn report_ns(&self, slot: usize) -> Option<u64> {
         let ready = self.word(self.report_at(slot)).load(Ordering::Acquire);
         (ready != 0).then(|| ready.wrapping_sub(1))
@@ -231,7 +231,7 @@ mod tests {
             now_ns: 10,
             wake_ns: 25,
             undeclared: 1,
-            burst: 0,
+            flags: 0,
             published: &published,
         };
         node.write_report(slot, &report);
@@ -271,7 +271,7 @@ mod tests {
             now_ns: 30,
             wake_ns: 0,
             undeclared: 0,
-            burst: 0,
+            flags: 0,
             published: &[4],
         };
         page.write_report(first, &report);
@@ -295,7 +295,7 @@ mod tests {
             now_ns: 0,
             wake_ns: 0,
             undeclared: 0,
-            burst: 0,
+            flags: 0,
             published: &published,
         };
         page.write_report(slot, &report);
