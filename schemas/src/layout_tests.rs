@@ -30,7 +30,13 @@ const _: () = {
     assert!(offset_of!(LaserScan, ranges) == 32);
     assert!(offset_of!(OccupancyGrid, data) == 40);
     // `container` took what was padding: a Hello of a build before it is read the same.
-    assert!(size_of::<lockstep::Hello>() == 12400);
+    // `output_depth` and a reserved word came at the end (grants of several periods).
+    assert!(size_of::<lockstep::Hello>() == 12408);
+    assert!(offset_of!(lockstep::Hello, output_depth) == 12400);
+    assert!(size_of::<lockstep::Grant>() == 32);
+    assert!(offset_of!(lockstep::Grant, until_ns) == 24);
+    // `flags` took the reserved word: the size is unchanged.
+    assert!(offset_of!(lockstep::Done, flags) + 4 == size_of::<lockstep::Done>());
     assert!(offset_of!(lockstep::Hello, container) == 68);
     assert!(offset_of!(lockstep::Hello, period_ns) == 72);
 };

@@ -43,22 +43,25 @@ fn overlapping_ticks_records_the_same_messages_as_one_tick_at_a_time() {
     assert!(with["overlapped_steps"].is_u64(), "{with}");
 }
 
-#[test]
-fn overlap_must_be_a_boolean() {
-    let s = Scenario::new("overlap-bad", &format!("overlap = \"yes\"\n{PINGPONG}"));
+/// A `[group]` key given a value that is not a boolean is refused naming it, and nothing starts.
+fn refused_unless_boolean(key: &str, value: &str) {
+    let s = Scenario::new(
+        &format!("{key}-bad"),
+        &format!("{key} = {value}\n{PINGPONG}"),
+    );
     let out = s.run(&[]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("overlap"), "{err}");
+    assert!(err.contains(key), "{err}");
     assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
 }
 
 #[test]
+fn overlap_must_be_a_boolean() {
+    refused_unless_boolean("overlap", "\"yes\"");
+}
+
+#[test]
 fn batch_must_be_a_boolean() {
-    let s = Scenario::new("batch-bad", &format!("batch = 1\n{PINGPONG}"));
-    let out = s.run(&[]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("batch"), "{err}");
-    assert!(s.run_dirs().is_empty(), "a run directory was made: {err}");
+    refused_unless_boolean("batch", "1");
 }

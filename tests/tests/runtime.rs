@@ -301,18 +301,19 @@ fn seen(log: &std::path::Path) -> Vec<(u64, u64)> {
         .collect()
 }
 
-/// A 10 Hz source, a 100 Hz relay `a` of it, a 100 Hz relay `b` of `a` and a sink stepped
-/// by `a`'s messages, stepped for 500 ms (tick 1 ms) with batches on (`a` sends `per_step`
-/// messages a step): the advances, the scheduler's counts, and what `a` and `b` saw (ms).
-fn relay_chain(
-    tag: &str,
-    per_step: u64,
-) -> (
+/// What [`relay_chain`] leaves: the advances, the scheduler's counts, and the messages `a`
+/// and `b` saw, as (its time, the message's stamp) in ms.
+type RelayChain = (
     Vec<caravan_lockstep::Advance>,
     caravan_lockstep::ScheduleStats,
     Vec<(u64, u64)>,
     Vec<(u64, u64)>,
-) {
+);
+
+/// A 10 Hz source, a 100 Hz relay `a` of it, a 100 Hz relay `b` of `a` and a sink stepped
+/// by `a`'s messages, stepped for 500 ms (tick 1 ms) with batches on (`a` sends `per_step`
+/// messages a step): the advances, the scheduler's counts, and what `a` and `b` saw (ms).
+fn relay_chain(tag: &str, per_step: u64) -> RelayChain {
     let group = TestGroup::new(tag);
     let group = &group.name;
     let dir = std::env::temp_dir().join(group);
