@@ -906,7 +906,7 @@ class Done(Message):
         ("published_len", ctypes.c_uint32),
         ("published", ctypes.c_uint64 * 512),
         ("undeclared", ctypes.c_uint32),
-        ("burst", ctypes.c_uint32),
+        ("flags", ctypes.c_uint32),
     ]
     SIZE = 4136
     ALIGN = 8
@@ -917,7 +917,7 @@ class Done(Message):
         "published_len": 24,
         "published": 32,
         "undeclared": 4128,
-        "burst": 4132,
+        "flags": 4132,
     }
 
     @classmethod

@@ -102,13 +102,17 @@ impl Shared {
     /// realtime `notifier` wakes them.
     pub fn sent(&self, topic_hash: u64, notifier: &Notifier<ipc::Service>) {
         if self.lockstep {
-            let now = self.now_ns.get();
+            // Outside a step (a node's set-up, its last status) nothing is ahead of anyone: no
+            // step's time is u64::MAX.
+            let now = match self.step_cpu_started_ns.get() {
+                Some(_) => self.now_ns.get(),
+                None => u64::MAX,
+            };
             let bit = 1u32.checked_shl(self.step_of_grant.get()).unwrap_or(0);
             let mut list = self.published.borrow_mut();
             match list.iter_mut().find(|(t, _, _)| *t == topic_hash) {
                 Some((_, at, steps)) => {
-                    // Outside a step (a node's set-up, its last status) nothing is ahead.
-                    if *at == now && self.step_cpu_started_ns.get().is_some() {
+                    if *at == now && now != u64::MAX {
                         self.burst.set(true);
                     }
                     *at = now;

@@ -312,8 +312,10 @@ type RelayChain = (
 
 /// A 10 Hz source, a 100 Hz relay `a` of it, a 100 Hz relay `b` of `a` and a sink stepped
 /// by `a`'s messages, stepped for 500 ms (tick 1 ms) with batches on (`a` sends `per_step`
-/// messages a step): the advances, the scheduler's counts, and what `a` and `b` saw (ms).
-fn relay_chain(tag: &str, per_step: u64) -> RelayChain {
+/// messages a step, one more at `burst_ms` if not 0): the advances, the scheduler's counts,
+/// and what `a` and `b` saw (ms). The sink and `b` must see each message of `a` once, a
+/// tick and a period after it was sent.
+fn relay_chain(tag: &str, per_step: u64, burst_ms: u64) -> RelayChain {
     let group = TestGroup::new(tag);
     let group = &group.name;
     let dir = std::env::temp_dir().join(group);
@@ -332,7 +334,7 @@ fn relay_chain(tag: &str, per_step: u64) -> RelayChain {
         spawn(
             "a",
             "lockstep-relay",
-            json!({"topic": "bt/in", "out": log("a"), "count": per_step}),
+            json!({"topic": "bt/in", "out": log("a"), "count": per_step, "burst_ms": burst_ms}),
         ),
         spawn(
             "b",
@@ -367,10 +369,12 @@ fn relay_chain(tag: &str, per_step: u64) -> RelayChain {
     );
     // The sink, stepped by `a`'s messages, saw each one tick after it was sent, and `b` one
     // period after: whether `a` took its steps one at a time or several on a grant.
-    let per_step = per_step as usize;
     let relayed = |delay: u64| -> Vec<(u64, u64)> {
         (0..50)
-            .flat_map(|k| std::iter::repeat_n((k * 10 + delay, k * 10), per_step))
+            .flat_map(|k| {
+                let n = per_step + (burst_ms > 0 && k * 10 == burst_ms) as u64;
+                std::iter::repeat_n((k * 10 + delay, k * 10), n as usize)
+            })
             .collect()
     };
     assert_eq!(b, relayed(10));
@@ -381,7 +385,7 @@ fn relay_chain(tag: &str, per_step: u64) -> RelayChain {
 
 #[test]
 fn a_node_whose_inputs_cannot_change_takes_several_periods_on_one_grant_and_sees_the_same() {
-    let (advances, stats, a, b) = relay_chain("batch", 1);
+    let (advances, stats, a, b) = relay_chain("batch", 1, 0);
     // `a` reads only the 10 Hz source: between two of its steps `a` takes several periods on
     // one grant, at most 7 (its topic's depth of 8 less one): 10–70 ms, 80–100, 110–170, …
     // 480–500, 40 steps within an earlier one's grant. The source reads nothing: 100–500 ms
@@ -415,7 +419,7 @@ fn a_node_whose_inputs_cannot_change_takes_several_periods_on_one_grant_and_sees
 
 #[test]
 fn a_node_sending_two_messages_to_a_topic_in_a_step_ends_its_batch_and_takes_no_more() {
-    let (advances, stats, _, b) = relay_chain("burst", 2);
+    let (advances, stats, _, b) = relay_chain("burst", 2, 0);
     // `a`'s first step sent two messages: it was never granted several periods. Only the
     // source was (100–500 ms on one grant).
     assert_eq!(stats.batched_steps, 4, "{stats:?}");
@@ -424,4 +428,23 @@ fn a_node_sending_two_messages_to_a_topic_in_a_step_ends_its_batch_and_takes_no_
     // `b` saw both messages of each of `a`'s steps, one period later (checked in
     // `relay_chain`, as the sink's).
     assert_eq!(b.len(), 100);
+}
+
+#[test]
+fn a_batch_ends_at_the_step_that_sends_a_topic_two_messages_and_its_readers_miss_nothing() {
+    // `a` takes 10–50 ms on one grant; its step at 30 ms sends two messages: the grant ends
+    // there, the scheduler takes the report of 30 ms for it, and `a` steps one period at a
+    // time from 40 ms on.
+    let (advances, stats, _, b) = relay_chain("burst-late", 1, 30);
+    let a_at = |ms: u64| {
+        (advances.iter())
+            .find(|adv| adv.now_ns == ms * 1_000_000)
+            .is_some_and(|adv| adv.stepped.contains(&"a".into()))
+    };
+    assert!((0..=50).all(|k| a_at(k * 10)), "{advances:?}");
+    assert_eq!(stats.steps, 6 + 51 + 51 + 50, "{stats:?}");
+    // `b` and the sink saw both messages of 30 ms and each other once (in `relay_chain`).
+    assert_eq!(b.len(), 51);
+    // The source's batch (4 later steps) and `a`'s 20 and 30 ms, at least.
+    assert!(stats.batched_steps >= 4 + 2, "{stats:?}");
 }

@@ -12,28 +12,39 @@
 //! stamps (`caravan::Subscriber`), and in the recorder's taps until that time ends. So:
 //! - a batch never runs past the run's end, and only its first step's time waits for it:
 //!   every later time of the batch is finished when its grant's is;
-//! - at most `depth − 1` steps, `depth` the smallest buffer of its outputs, so that a reader
-//!   due right after the first step still finds that step's message, behind the ones ahead
-//!   of it; a step that sends one topic two messages ends the batch there
-//!   ([`Done::BURST`]), and the node is batched no more;
-//! - a node stepped by its messages (`on`) is stepped at each time one was published: the
-//!   batch's report says which of its steps published where ([`Done::STEPS`]), so it may
-//!   publish to at most `MAX_TOPICS / 2` topics;
+//! - its steps after the first, with what a reader has not read yet (one message a period of
+//!   the reader's, or one if the reader is stepped by each message it reads) and [`SLACK`],
+//!   fit in the smallest buffer of its topics (`Hello::output_depth`): a reader finds every
+//!   message it would find granted one period at a time. (A reader that falls behind a topic
+//!   loses its oldest messages either way; only how many may differ.) A step that sends one
+//!   topic two messages ends the batch there ([`Done::BURST`]), and the node is batched no
+//!   more;
+//! - no other node publishes to its topics;
+//! - a node stepped by its messages is stepped at each time one was published: the batch's
+//!   report says which of its steps published where ([`Done::STEPS`]);
 //! - every topic it publishes to is known to the recorder;
-//! - each node publishing to its inputs is a declared node of this machine whose next step
-//!   is known: a periodic one's from the schedule, a node stepped by messages not before
-//!   the next tick.
+//! - every other node declared its topics and holds this machine's count of quiet steps, and
+//!   each one publishing to its inputs has a known next step: a periodic one's from the
+//!   schedule, a node stepped by messages not before the next tick.
 //!
 //! The decision reads only the schedule as it stands when the batch's time is the oldest
-//! (every earlier time finished), so reruns take the same batches.
+//! (every earlier time finished), and a node that may be batched is never granted early
+//! beside an earlier time (`overlap.rs`), so reruns take the same batches. A node that opens
+//! a port after joining while a batch runs stops the run, as under overlap. (A restarted
+//! node rejoins at a time the wall clock decides: a batch is not cut short for it.)
 
+use crate::overlap;
 use crate::scheduler::Scheduler;
 use caravan::Error;
 use caravan::lockstep::Report;
 use caravan_schemas::lockstep::{Done, MAX_TOPICS};
 
-/// Most periods one grant may hold: a batch is reported, and watched for hangs, as a whole.
+/// Most periods one grant may hold: a batch is reported as a whole.
 const MAX_STEPS: u64 = 32;
+
+/// Room kept in each reader's buffer beyond the batch's messages: a step that sends one topic
+/// up to `SLACK + 1` messages (and so ends its batch, `Done::BURST`) loses nothing.
+const SLACK: u64 = 2;
 
 impl Scheduler {
     /// Lets a periodic node be granted several periods at once, up to `end_ns` (the run's
@@ -42,56 +53,83 @@ impl Scheduler {
         self.batch_end = Some(end_ns);
     }
 
+    /// Whether node `i` could ever be granted several periods: what does not depend on the
+    /// time (a node that could is never overlapped, so that its batches do not depend on
+    /// which of two times it was granted in).
+    pub(crate) fn may_batch(&self, i: usize) -> bool {
+        let m = &self.members[i];
+        let outputs = &m.footprint.outputs;
+        self.batch_end.is_some()
+            && m.period_ns > 0
+            && !m.triggered
+            && !m.bursty
+            && m.quiet
+            && m.slot_grants
+            && m.steps > 0
+            && m.footprint.declared
+            && m.output_depth as u64 >= 2 + SLACK
+            && !outputs.is_empty()
+            && outputs.iter().all(|t| self.known_topics.contains(t))
+            // The report's pairs (and the status topic's) must fit when nodes are stepped by
+            // its topics.
+            && ((outputs.len() + 1) * 2 <= MAX_TOPICS
+                || !outputs.iter().any(|t| self.subscribers.contains_key(t)))
+    }
+
     /// The last step node `i`, due at `now_ns` (the oldest time being stepped), may take on
     /// one grant: `now_ns` if only that one.
     pub(crate) fn batch_last(&self, i: usize, now_ns: u64) -> u64 {
-        let m = &self.members[i];
-        let Some(end) = self.batch_end else {
+        let Some(end) = self.batch_end.filter(|_| self.may_batch(i)) else {
             return now_ns;
         };
-        let depth = m.output_depth as u64;
-        let outputs = &m.footprint.outputs;
-        if m.period_ns == 0
-            || m.triggered
-            || m.bursty
-            || !m.quiet
-            || !m.slot_grants
-            || m.steps == 0
-            || !m.footprint.declared
-            || depth < 3
-            || outputs.is_empty()
-            || !outputs.iter().all(|t| self.known_topics.contains(t))
-            || (outputs.len() * 2 > MAX_TOPICS
-                && outputs.iter().any(|t| self.subscribers.contains_key(t)))
-        {
-            return now_ns;
-        }
-        let steps = (depth - 1).min(MAX_STEPS);
-        let mut horizon = end.min(now_ns + (steps - 1) * m.period_ns);
+        let m = &self.members[i];
+        let (period, depth) = (m.period_ns, m.output_depth as u64);
+        let (inputs, outputs) = (&m.footprint.inputs, &m.footprint.outputs);
+        let mut steps = (depth - 1 - SLACK).min(MAX_STEPS);
+        let mut horizon = end;
         for (j, other) in self.members.iter().enumerate() {
             if j == i {
                 continue;
             }
-            let writes_inputs = !other.footprint.declared
-                || other
-                    .footprint
-                    .outputs
-                    .iter()
-                    .any(|t| m.footprint.inputs.binary_search(t).is_ok());
-            if !writes_inputs {
-                continue;
-            }
-            // A node that may restart, or whose steps are not known here, may publish at any
-            // time.
+            // A node that may restart, or whose steps or topics are not known here, may
+            // publish anywhere at any time.
             if !other.active || !other.quiet || !other.footprint.declared {
                 return now_ns;
             }
-            horizon = horizon.min(self.next_due(j, now_ns));
-            if horizon <= now_ns {
+            let theirs = &other.footprint;
+            // Another publisher of its topics: their messages share the readers' buffers.
+            if !overlap::disjoint(&theirs.outputs, outputs) {
                 return now_ns;
             }
+            if !overlap::disjoint(&theirs.inputs, outputs) {
+                // A reader: it finds up to `gap` unread messages of each topic when it
+                // steps, and the batch's ahead of them.
+                let gap = if other.period_ns > 0 {
+                    other.period_ns.div_ceil(period)
+                } else if (theirs.inputs.iter())
+                    .filter(|t| outputs.binary_search(t).is_ok())
+                    .all(|t| self.subscribers.get(t).is_some_and(|w| w.contains(&j)))
+                {
+                    // Stepped by each message of what it reads of the node's.
+                    1
+                } else {
+                    return now_ns;
+                };
+                // One that falls behind loses its oldest messages either way (only how many
+                // may differ); its newest stays.
+                if gap < depth {
+                    steps = steps.min(depth + 1 - gap - SLACK);
+                }
+            }
+            if !overlap::disjoint(&theirs.outputs, inputs) {
+                horizon = horizon.min(self.next_due(j, now_ns));
+            }
         }
-        now_ns + (horizon - now_ns) / m.period_ns * m.period_ns
+        let horizon = horizon.min(now_ns + steps.saturating_sub(1) * period);
+        if horizon <= now_ns {
+            return now_ns;
+        }
+        now_ns + (horizon - now_ns) / period * period
     }
 
     /// The earliest time ≥ `now_ns` (the oldest time being stepped) node `j` may step.

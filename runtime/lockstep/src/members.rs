@@ -73,6 +73,11 @@ impl Member {
         }
     }
 
+    /// How many steps its last grant holds.
+    pub(crate) fn granted_steps(&self) -> u64 {
+        (self.batch.end() - self.batch.start()) / self.period_ns.max(1) + 1
+    }
+
     /// Sends its grant, without waking it ([`Self::wake`]): into its slot of `page` once it
     /// reads grants there, else as a sample. True if into its slot.
     pub(crate) fn send(&mut self, grant: Grant, page: Option<&Pending>) -> Result<bool, Error> {

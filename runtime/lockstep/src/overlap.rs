@@ -39,7 +39,7 @@ impl Footprint {
 }
 
 /// Whether two sorted lists have no element in common.
-fn disjoint(a: &[u64], b: &[u64]) -> bool {
+pub(crate) fn disjoint(a: &[u64], b: &[u64]) -> bool {
     let (mut i, mut j) = (0, 0);
     while i < a.len() && j < b.len() {
         match a[i].cmp(&b[j]) {

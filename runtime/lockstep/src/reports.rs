@@ -109,17 +109,20 @@ impl Scheduler {
         self.end_batch(i, report, steps.as_deref());
         // Its last step's time: what comes next is scheduled from there.
         let now_ns = report.now_ns;
+        // A grant of several periods up to this time or later was decided on its declaration.
+        let batching = (self.members.iter())
+            .any(|m| m.batch.start() < m.batch.end() && *m.batch.end() >= granted_ns);
         let member = &mut self.members[i];
         member.last_step = member.granted_at.elapsed();
         member.steps += 1;
         if report.undeclared != 0 && member.footprint.declared {
             member.footprint.declared = false;
-            if member.overlapped {
+            if member.overlapped || batching {
                 return Err(Error::Lockstep(format!(
                     "node '{}' opened a topic in its step at {now_ns} ns, after it joined \
-                     the schedule, while nodes of another time stepped beside it: a rerun \
-                     could differ. Open a node's publishers and subscribers before its step \
-                     loop",
+                     the schedule, while nodes of another time stepped beside it or a node \
+                     took several periods on one grant: a rerun could differ. Open a node's \
+                     publishers and subscribers before its step loop",
                     member.name
                 )));
             }

@@ -56,6 +56,8 @@ pub struct Scheduler {
     pub(crate) topics: Vec<u64>,
     /// Grants of several periods run up to this time (`batch.rs`); `None`: one at a time.
     pub(crate) batch_end: Option<u64>,
+    /// The most steps a node waited for was granted at once ([`Self::longest_grant`]).
+    longest_grant: std::rc::Rc<std::cell::Cell<u64>>,
     /// Times not being stepped yet → nodes that step then within a grant of an earlier time.
     pub(crate) ahead: BTreeMap<u64, Vec<usize>>,
 }
@@ -103,6 +105,7 @@ impl Scheduler {
             hello_looked: Instant::now(),
             topics: Vec::with_capacity(proto::MAX_TOPICS),
             batch_end: None,
+            longest_grant: Default::default(),
             ahead: BTreeMap::new(),
         })
     }
@@ -114,6 +117,13 @@ impl Scheduler {
 
     pub fn tick_ns(&self) -> u64 {
         self.tick_ns
+    }
+
+    /// The most steps one node the scheduler waits for was granted at once, kept current
+    /// while it waits: a watchdog allowing each step its time allows a grant of several
+    /// periods that many times as long.
+    pub fn longest_grant(&self) -> std::rc::Rc<std::cell::Cell<u64>> {
+        self.longest_grant.clone()
     }
 
     /// Counts so far.
@@ -172,6 +182,11 @@ impl Scheduler {
                 .flat_map(|f| f.waiting.iter().copied())
                 .collect();
             let names: Vec<&str> = waiting.iter().map(|&i| &*self.members[i].name).collect();
+            let longest = (waiting.iter())
+                .map(|&i| self.members[i].granted_steps())
+                .max()
+                .unwrap_or(1);
+            self.longest_grant.set(longest);
             let now_ns = self.now_ns;
             let dead = watchdog(&names).map_err(|why| {
                 Error::Lockstep(format!(
@@ -284,6 +299,7 @@ impl Scheduler {
             .filter(|&n| {
                 let member = &self.members[n];
                 self.eligible(n)
+                    && !self.may_batch(n)
                     && !oldest.waiting.contains(&n)
                     && overlap::may_start(
                         &member.footprint,
@@ -400,17 +416,24 @@ impl Scheduler {
             if let Some(&i) = self.by_hash.get(&proto::name_hash(name)) {
                 self.members[i].active = false;
                 self.members[i].overlapped = false;
+                // A batch it had not reported: none of its steps counts.
+                let batching = (self.flights.iter()).any(|f| f.waiting.contains(&i))
+                    && self.members[i].batch.start() < self.members[i].batch.end();
                 for f in &mut self.flights {
                     // Not stepped at that time after all: a restart may be due there again.
                     if f.waiting.remove(&i) | f.held.remove(&i) {
                         f.due.remove(&i);
                     }
-                    f.batched.retain(|&j| j != i);
+                    if batching {
+                        f.batched.retain(|&j| j != i);
+                    }
                 }
-                self.ahead.retain(|_, nodes| {
-                    nodes.retain(|&j| j != i);
-                    !nodes.is_empty()
-                });
+                if batching {
+                    self.ahead.retain(|_, nodes| {
+                        nodes.retain(|&j| j != i);
+                        !nodes.is_empty()
+                    });
+                }
             }
         }
     }

@@ -141,7 +141,8 @@ impl Client {
                 }
                 match *self.last_done.borrow() {
                     // A repeat is never quiet: it was not counted.
-                    Some(done) if grant.last_ns() == done.now_ns => {
+                    // The grant of the last report, which may have ended its steps early.
+                    Some(done) if (grant.now_ns..=grant.last_ns()).contains(&done.now_ns) => {
                         if !self.last_in_slot.get() {
                             send(self.done_port()?, done, proto::DONE)?;
                         }

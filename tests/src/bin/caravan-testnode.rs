@@ -11,7 +11,8 @@
 //! - `params`: only parses its params (`gain: f64`, `name: String`).
 //! - `lockstep-source` / `lockstep-sink`: see the lockstep protocol test.
 //! - `lockstep-relay`: at 100 Hz, logs `now stamp` for each message of `topic` to `out`
-//!   and publishes `count` messages (at least 1) on `<topic>/relayed`, carrying its time.
+//!   and publishes `count` messages (at least 1) on `<topic>/relayed`, carrying its time,
+//!   one more at `burst_ms`.
 //! - `lockstep-scheduled`: a `Trigger::Scheduled` node asking for steps at (k + 1)² × 10 ms
 //!   for k < `count`, publishing on `topic` at each.
 //! - `hang`: steps at 10 Hz and hangs in its step after `count` steps.
@@ -42,6 +43,8 @@ struct Params {
     delay_ms: u64,
     /// `stream`: the subscribers to wait for (0 counts as 1).
     readers: usize,
+    /// `lockstep-relay`: the time of its step (ms) that sends one message more, 0 for none.
+    burst_ms: u64,
 }
 
 fn main() {
@@ -162,7 +165,8 @@ fn run(mode: &str) -> Result<(), Error> {
                     writeln!(log, "{} {}", step.now_ns(), msg.header().stamp_ns)
                         .map_err(|e| Error::Step(e.to_string()))?;
                 }
-                for _ in 0..p.count.max(1) {
+                let extra = (p.burst_ms > 0 && step.now().as_millis() == p.burst_ms as u128) as u64;
+                for _ in 0..p.count.max(1) + extra {
                     relayed.publish(&Pose2D {
                         x: step.now().as_secs_f64(),
                         ..Default::default()

@@ -201,6 +201,7 @@ fn run_lockstep(
         if cfg.batch {
             scheduler.batch_until(end_ns.unwrap_or(u64::MAX));
         }
+        let longest_grant = scheduler.longest_grant();
         while let Some(next) = scheduler.next_time_ns() {
             if end_ns.is_some_and(|end| next > end) {
                 break;
@@ -210,7 +211,9 @@ fn run_lockstep(
             let started = Instant::now();
             let mut reported = false;
             let hang_watch = |waiting: &[&str]| {
-                if !reported && started.elapsed() > cfg.step_timeout {
+                // A node granted several periods at once has the time of each.
+                let steps = longest_grant.get().clamp(1, u32::MAX as u64) as u32;
+                if !reported && started.elapsed() > cfg.step_timeout.saturating_mul(steps) {
                     reported = true;
                     let names = waiting.iter().map(|n| n.to_string()).collect();
                     let _ = events.send(Event::Hung {
