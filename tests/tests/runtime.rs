@@ -387,10 +387,11 @@ fn relay_chain(tag: &str, per_step: u64, burst_ms: u64) -> RelayChain {
 fn a_node_whose_inputs_cannot_change_takes_several_periods_on_one_grant_and_sees_the_same() {
     let (advances, stats, a, b) = relay_chain("batch", 1, 0);
     // `a` reads only the 10 Hz source: between two of its steps `a` takes several periods on
-    // one grant, at most 7 (its topic's depth of 8 less one): 10–70 ms, 80–100, 110–170, …
-    // 480–500, 40 steps within an earlier one's grant. The source reads nothing: 100–500 ms
-    // on one grant (4 more). `b` reads `a`, and follows it: at 20 ms `a` has stepped up to
-    // 70, so `b` takes 20–80 on one grant, and so on.
+    // one grant, at most 5 (its topic's depth of 8, less a message its readers have not read
+    // and room for two more): 10–50 ms, 60–100, 110–150, … 460–500, 40 steps within an
+    // earlier one's grant. The source reads nothing: 100–500 ms on one grant (4 more). `b`
+    // reads `a`, and follows it: at 20 ms `a` has stepped up to 50, so `b` takes 20–60 on one
+    // grant, and so on.
     assert!(stats.batched_steps > 40 + 4 + 30, "{stats:?}");
     // One wake-up per grant.
     assert_eq!(

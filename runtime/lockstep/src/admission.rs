@@ -96,9 +96,15 @@ impl Scheduler {
                 member.steps = 0;
                 member.overlapped = false;
                 member.output_depth = hello.output_depth;
-                member.batch = 0..=0;
+                // After the steps its last batch took, which its readers have had.
+                let batch = member.batch.clone();
+                let after_batch = match batch.start() < batch.end() {
+                    true => batch.end() + member.period_ns,
+                    false => 0,
+                };
                 if member.steps_on_joining {
-                    self.insert(self.now_ns + self.tick_ns, i)?;
+                    let at = (self.now_ns + self.tick_ns).max(after_batch);
+                    self.insert(at, i)?;
                 }
             }
             return Ok(());

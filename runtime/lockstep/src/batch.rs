@@ -12,24 +12,27 @@
 //! stamps (`caravan::Subscriber`), and in the recorder's taps until that time ends. So:
 //! - a batch never runs past the run's end, and only its first step's time waits for it:
 //!   every later time of the batch is finished when its grant's is;
-//! - its steps after the first, with what a reader has not read yet (one message a period of
-//!   the reader's, or one if the reader is stepped by each message it reads) and [`SLACK`],
-//!   fit in the smallest buffer of its topics (`Hello::output_depth`): a reader finds every
-//!   message it would find granted one period at a time. (A reader that falls behind a topic
-//!   loses its oldest messages either way; only how many may differ.) A step that sends one
+//! - its steps, with what a reader has not read yet (one message a period of the reader's,
+//!   or one if the reader is stepped by each message it reads) and [`SLACK`], fit in the
+//!   smallest buffer of its topics (`Hello::output_depth`): a reader, even one stepping beside
+//!   the batch's first step, finds every message it would find granted one period at a time.
+//!   (A reader that falls behind a topic loses its oldest messages either way; only which and
+//!   how many may differ.) A step that sends one
 //!   topic two messages ends the batch there ([`Done::BURST`]), and the node is batched no
 //!   more;
 //! - no other node publishes to its topics;
 //! - a node stepped by its messages is stepped at each time one was published: the batch's
 //!   report says which of its steps published where ([`Done::STEPS`]);
 //! - every topic it publishes to is known to the recorder;
-//! - every other node declared its topics and holds this machine's count of quiet steps, and
-//!   each one publishing to its inputs has a known next step: a periodic one's from the
-//!   schedule, a node stepped by messages not before the next tick.
+//! - every other node is running, declared its topics and holds this machine's count of
+//!   quiet steps, and each one publishing to its inputs has a known next step: a periodic
+//!   one's from the schedule (one due as often as the node leaves it no room), a node
+//!   stepped by messages not before the next tick.
 //!
 //! The decision reads only the schedule as it stands when the batch's time is the oldest
 //! (every earlier time finished), and a node that may be batched is never granted early
-//! beside an earlier time (`overlap.rs`), so reruns take the same batches. A node that opens
+//! beside an earlier time (`overlap.rs`), so reruns take the same batches. A restarted node
+//! rejoins after the steps of its last batch. A node that opens
 //! a port after joining while a batch runs stops the run, as under overlap. (A restarted
 //! node rejoins at a time the wall clock decides: a batch is not cut short for it.)
 
@@ -53,57 +56,67 @@ impl Scheduler {
         self.batch_end = Some(end_ns);
     }
 
-    /// Whether node `i` could ever be granted several periods: what does not depend on the
-    /// time (a node that could is never overlapped, so that its batches do not depend on
-    /// which of two times it was granted in).
-    pub(crate) fn may_batch(&self, i: usize) -> bool {
+    /// The most periods node `i` could take on one grant, whatever the time: 1 if it cannot
+    /// batch. What does not depend on the time is decided here; a node this allows more
+    /// than one is never overlapped, so that its batches do not depend on which of two
+    /// times it was granted in.
+    pub(crate) fn batch_room(&self, i: usize) -> u64 {
+        self.room(i, true)
+    }
+
+    /// [`Self::batch_room`], looking at the publishers of its inputs if `writers` (a
+    /// publisher due as often as it leaves room only if it batches too).
+    fn room(&self, i: usize, writers: bool) -> u64 {
         let m = &self.members[i];
-        let outputs = &m.footprint.outputs;
-        self.batch_end.is_some()
-            && m.period_ns > 0
+        let (period, depth) = (m.period_ns, m.output_depth as u64);
+        let (inputs, outputs) = (&m.footprint.inputs, &m.footprint.outputs);
+        let eligible = self.batch_end.is_some()
+            && period > 0
             && !m.triggered
             && !m.bursty
             && m.quiet
             && m.slot_grants
             && m.steps > 0
             && m.footprint.declared
-            && m.output_depth as u64 >= 2 + SLACK
+            && depth >= 2 + SLACK
             && !outputs.is_empty()
             && outputs.iter().all(|t| self.known_topics.contains(t))
             // The report's pairs (and the status topic's) must fit when nodes are stepped by
             // its topics.
             && ((outputs.len() + 1) * 2 <= MAX_TOPICS
-                || !outputs.iter().any(|t| self.subscribers.contains_key(t)))
-    }
-
-    /// The last step node `i`, due at `now_ns` (the oldest time being stepped), may take on
-    /// one grant: `now_ns` if only that one.
-    pub(crate) fn batch_last(&self, i: usize, now_ns: u64) -> u64 {
-        let Some(end) = self.batch_end.filter(|_| self.may_batch(i)) else {
-            return now_ns;
-        };
-        let m = &self.members[i];
-        let (period, depth) = (m.period_ns, m.output_depth as u64);
-        let (inputs, outputs) = (&m.footprint.inputs, &m.footprint.outputs);
+                || !outputs.iter().any(|t| self.subscribers.contains_key(t)));
+        if !eligible {
+            return 1;
+        }
         let mut steps = (depth - 1 - SLACK).min(MAX_STEPS);
-        let mut horizon = end;
         for (j, other) in self.members.iter().enumerate() {
             if j == i {
                 continue;
             }
-            // A node that may restart, or whose steps or topics are not known here, may
-            // publish anywhere at any time.
+            // A node that may restart (or that exited), or whose steps or topics are not
+            // known here, may publish anywhere at any time.
             if !other.active || !other.quiet || !other.footprint.declared {
-                return now_ns;
+                return 1;
             }
             let theirs = &other.footprint;
             // Another publisher of its topics: their messages share the readers' buffers.
             if !overlap::disjoint(&theirs.outputs, outputs) {
-                return now_ns;
+                return 1;
+            }
+            // A publisher of its inputs due as often as it is leaves no room between its
+            // steps, unless it runs ahead in batches itself.
+            if writers
+                && !overlap::disjoint(&theirs.outputs, inputs)
+                && !(other.period_ns > period
+                    || other.period_ns == 0 && period <= self.tick_ns
+                    || other.period_ns > 0 && self.room(j, false) >= 2)
+            {
+                return 1;
             }
             if !overlap::disjoint(&theirs.inputs, outputs) {
                 // A reader: it finds up to `gap` unread messages of each topic when it
-                // steps, and the batch's ahead of them.
+                // steps, one more if it steps beside the batch's first step, and the
+                // batch's ahead of them.
                 let gap = if other.period_ns > 0 {
                     other.period_ns.div_ceil(period)
                 } else if (theirs.inputs.iter())
@@ -113,19 +126,35 @@ impl Scheduler {
                     // Stepped by each message of what it reads of the node's.
                     1
                 } else {
-                    return now_ns;
+                    return 1;
                 };
-                // One that falls behind loses its oldest messages either way (only how many
-                // may differ); its newest stays.
-                if gap < depth {
-                    steps = steps.min(depth + 1 - gap - SLACK);
+                // One that falls behind loses its oldest messages either way (only which and
+                // how many may differ); its newest stays.
+                if gap <= depth {
+                    steps = steps.min(depth.saturating_sub(gap + SLACK));
                 }
             }
-            if !overlap::disjoint(&theirs.outputs, inputs) {
+        }
+        steps.max(1)
+    }
+
+    /// The last step node `i`, due at `now_ns` (the oldest time being stepped), may take on
+    /// one grant: `now_ns` if only that one.
+    pub(crate) fn batch_last(&self, i: usize, now_ns: u64) -> u64 {
+        let (Some(end), steps) = (self.batch_end, self.batch_room(i)) else {
+            return now_ns;
+        };
+        if steps < 2 {
+            return now_ns;
+        }
+        let m = &self.members[i];
+        let period = m.period_ns;
+        let mut horizon = end.min(now_ns + (steps - 1) * period);
+        for (j, other) in self.members.iter().enumerate() {
+            if j != i && !overlap::disjoint(&other.footprint.outputs, &m.footprint.inputs) {
                 horizon = horizon.min(self.next_due(j, now_ns));
             }
         }
-        let horizon = horizon.min(now_ns + steps.saturating_sub(1) * period);
         if horizon <= now_ns {
             return now_ns;
         }

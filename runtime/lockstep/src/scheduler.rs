@@ -299,7 +299,7 @@ impl Scheduler {
             .filter(|&n| {
                 let member = &self.members[n];
                 self.eligible(n)
-                    && !self.may_batch(n)
+                    && self.batch_room(n) < 2
                     && !oldest.waiting.contains(&n)
                     && overlap::may_start(
                         &member.footprint,
@@ -429,6 +429,9 @@ impl Scheduler {
                     }
                 }
                 if batching {
+                    // None of its batch's steps counts: a restart starts at the first.
+                    let start = *self.members[i].batch.start();
+                    self.members[i].batch = start..=start;
                     self.ahead.retain(|_, nodes| {
                         nodes.retain(|&j| j != i);
                         !nodes.is_empty()

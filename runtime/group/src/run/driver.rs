@@ -219,7 +219,7 @@ fn run_lockstep(
                     let _ = events.send(Event::Hung {
                         names,
                         now_ns: next,
-                        timeout: cfg.step_timeout,
+                        timeout: cfg.step_timeout.saturating_mul(steps),
                     });
                 }
                 watchdog(waiting)
