@@ -18,10 +18,9 @@ pub(crate) struct Shared {
     /// In lockstep, a message stamped t is visible from t + tick_ns on; 0 in realtime.
     pub tick_ns: Cell<u64>,
     pub lockstep: bool,
-    /// Topic hashes published to since the last report, each with the time of the last step
-    /// that published there and a bit for each step of the grant that did (bit j: its step
-    /// j), for the lockstep scheduler.
-    pub published: RefCell<Vec<(u64, u64, u32)>>,
+    /// Topic hashes published to since the last report, each with a bit for each step of the
+    /// grant that did (bit j: its step j), for the lockstep scheduler.
+    pub published: RefCell<Vec<(u64, u32)>>,
     /// Which step of its grant the node is taking (0 for the first), lockstep only.
     pub step_of_grant: Cell<u32>,
     /// A step published more than one message to one topic since the last report: a grant
@@ -102,23 +101,21 @@ impl Shared {
     /// realtime `notifier` wakes them.
     pub fn sent(&self, topic_hash: u64, notifier: &Notifier<ipc::Service>) {
         if self.lockstep {
-            // Outside a step (a node's set-up, its last status) nothing is ahead of anyone: no
-            // step's time is u64::MAX.
-            let now = match self.step_cpu_started_ns.get() {
-                Some(_) => self.now_ns.get(),
-                None => u64::MAX,
+            // Outside a step (a node's set-up, its last status) nothing is ahead of anyone: the
+            // message marks no step, and is no burst.
+            let bit = match self.step_cpu_started_ns.get() {
+                Some(_) => 1u32.checked_shl(self.step_of_grant.get()).unwrap_or(0),
+                None => 0,
             };
-            let bit = 1u32.checked_shl(self.step_of_grant.get()).unwrap_or(0);
             let mut list = self.published.borrow_mut();
-            match list.iter_mut().find(|(t, _, _)| *t == topic_hash) {
-                Some((_, at, steps)) => {
-                    if *at == now && now != u64::MAX {
+            match list.iter_mut().find(|(t, _)| *t == topic_hash) {
+                Some((_, steps)) => {
+                    if *steps & bit != 0 {
                         self.burst.set(true);
                     }
-                    *at = now;
                     *steps |= bit;
                 }
-                None => list.push((topic_hash, now, bit)),
+                None => list.push((topic_hash, bit)),
             }
         } else {
             wake(notifier);

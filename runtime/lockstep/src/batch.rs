@@ -291,7 +291,7 @@ impl Scheduler {
 
 /// The topics of `published` (topic, bit j for each step j that published there) published
 /// at step `step`.
-fn published_at(published: &[(u64, u32)], step: u64) -> impl Iterator<Item = u64> + '_ {
+pub(crate) fn published_at(published: &[(u64, u32)], step: u64) -> impl Iterator<Item = u64> + '_ {
     let bit = 1u32.checked_shl(step as u32).unwrap_or(0);
     (published.iter())
         .filter(move |(_, bits)| bits & bit != 0)

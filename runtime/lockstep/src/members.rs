@@ -49,7 +49,7 @@ pub(crate) struct Member {
     pub(crate) triggered: bool,
     /// The smallest buffer depth of its outputs (`Hello::output_depth`), 0 if unknown.
     pub(crate) output_depth: u32,
-    /// A step of it sent two messages to one topic (`Done::burst`): never batched again.
+    /// A step of it sent two messages to one topic (`Done::BURST`): never batched again.
     pub(crate) bursty: bool,
     /// Its last grant's steps, first and last (the same for one step): see `batch.rs`.
     pub(crate) batch: std::ops::RangeInclusive<u64>,

@@ -40,6 +40,12 @@ impl Footprint {
 
 /// Whether two sorted lists have no element in common.
 pub(crate) fn disjoint(a: &[u64], b: &[u64]) -> bool {
+    // A physics process publishes hundreds of topics, a node reads a few: look each of the
+    // few up rather than walk both.
+    let (short, long) = if a.len() <= b.len() { (a, b) } else { (b, a) };
+    if short.len() * 8 < long.len() {
+        return short.iter().all(|t| long.binary_search(t).is_err());
+    }
     let (mut i, mut j) = (0, 0);
     while i < a.len() && j < b.len() {
         match a[i].cmp(&b[j]) {

@@ -98,14 +98,10 @@ impl Scheduler {
             Some(steps) => steps.iter().map(|&(t, _)| t).collect(),
             None => report.published.into(),
         };
-        f.published.extend(match &steps {
-            Some(steps) => steps
-                .iter()
-                .filter(|(_, bits)| bits & 1 != 0)
-                .map(|&(t, _)| t)
-                .collect(),
-            None => published.to_vec(),
-        });
+        match &steps {
+            Some(steps) => f.published.extend(crate::batch::published_at(steps, 0)),
+            None => f.published.extend(published.iter().copied()),
+        }
         self.end_batch(i, report, steps.as_deref());
         // Its last step's time: what comes next is scheduled from there.
         let now_ns = report.now_ns;

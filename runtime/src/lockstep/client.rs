@@ -263,7 +263,7 @@ impl Client {
         if steps {
             done.flags |= Done::STEPS;
         }
-        for (topic, _, bits) in published.drain(..) {
+        for (topic, bits) in published.drain(..) {
             // More topics than fit cannot be scheduled precisely; the node is still woken by
             // its period, so truncation only delays subscribers. The scheduler no longer
             // knows what it published: it is not overlapped from then on.
