@@ -61,15 +61,15 @@ pub struct Hello {
     /// the node holds open: it may then be granted quiet steps. 0: always notify.
     pub quiet: u32,
     /// The smallest buffer depth of the topics it publishes to (messages a subscriber
-    /// holds), 0 if it publishes to none or does not say: a periodic node may be granted
-    /// several periods at once ([`Grant::until_ns`]) only while each of its readers can hold
-    /// what it publishes ahead of them.
+    /// holds), `u32::MAX` if it publishes to none, 0 if it does not say (it takes one step a
+    /// grant): a node may be granted several steps at once ([`Grant::until_ns`]) only while
+    /// each of its readers can hold what it publishes ahead of them.
     pub output_depth: u32,
     pub _reserved: u32,
 }
 
-/// Permission to step at simulated time `now_ns`, and for a periodic node at every period
-/// after it up to `until_ns`.
+/// Permission to step at simulated time `now_ns`, and at its later times up to `until_ns`
+/// (a periodic node's periods, a node stepped by messages the times they show).
 #[repr(C)]
 #[derive(
     Debug, Default, Clone, Copy, PartialEq, Eq, ZeroCopySend, PlacementDefault, Serialize, Describe,
@@ -85,10 +85,12 @@ pub struct Grant {
     /// the node takes it off the count before reporting, and notifies only when at most one
     /// quiet step is left. 0: report and notify.
     pub quiet: u32,
-    /// A periodic node's last step of this grant: it steps at `now_ns`, `now_ns` + its period,
-    /// … up to `until_ns`, without waiting for a grant in between, and reports once, for the
-    /// last. The scheduler grants several periods only when none of the node's inputs can
-    /// change meanwhile (`caravan_lockstep`, "batches"). 0 or `now_ns`: one step.
+    /// The last time this grant lets the node step at: a periodic node steps at `now_ns`,
+    /// `now_ns` + its period, … up to `until_ns`; a node stepped by messages at `now_ns` and
+    /// then whenever a message it holds shows (its stamp plus a tick) up to `until_ns`. It
+    /// does not wait for a grant in between, and reports once, for its last step. The
+    /// scheduler grants several steps only when none of the node's inputs can change
+    /// meanwhile (`caravan_lockstep`, "batches"). 0 or `now_ns`: one step.
     pub until_ns: u64,
 }
 
@@ -163,9 +165,9 @@ impl Done {
     /// at that step (`now_ns`, maybe before the grant's last), and the scheduler grants the
     /// node one period at a time from then on.
     pub const BURST: u32 = 1;
-    /// The report of a grant of several periods: `published` holds pairs, a topic's hash
-    /// then a word whose bit j says that the grant's step j (at `now_ns` of the grant plus j
-    /// periods) published there, so that the nodes its messages step are stepped at their
-    /// times.
+    /// The report of a grant of several steps: `published` holds pairs, a topic's hash then
+    /// a word whose bit j says that the grant's step at `now_ns` of the grant plus j periods
+    /// (for a node stepped by messages, plus j ticks) published there, so that the nodes its
+    /// messages step are stepped at their times.
     pub const STEPS: u32 = 2;
 }

@@ -131,6 +131,8 @@ impl Scheduler {
             bursty: false,
             batch: 0..=0,
             batch_published: Vec::new(),
+            batch_times: Vec::new(),
+            recent: std::collections::VecDeque::with_capacity(crate::members::RECENT),
             name: name.into(),
         });
         self.by_hash.insert(hash, index);

@@ -1,5 +1,5 @@
-//! Batches: a periodic node granted several periods at once, when none of its inputs can
-//! change meanwhile.
+//! Batches: a node granted several periods (or messages) at once, when none of its inputs
+//! can change meanwhile.
 //!
 //! A node's step at s reads the messages stamped up to s − tick. If no node that publishes
 //! to its inputs can step before some time H, the node's steps at s, s + period, … up to H
@@ -7,6 +7,19 @@
 //! one grant, and wake (and wake the scheduler) once instead of once per period. The
 //! physics, whose set-points change only when an agent steps, steps five ticks per grant in
 //! the convoy instead of one.
+//!
+//! A node stepped by messages (`Trigger::OnMessage`) is batched the same way over the times
+//! it is due up to H: a batch of its triggers published ahead, the scheduler knows each
+//! message's time from that batch's report, and the node finds the messages waiting in its
+//! buffer. It steps at each time one shows (its stamp plus a tick), and a bit of its report
+//! stands for a tick. Only a node that reads nothing but the topics stepping it: a message
+//! of another topic would step it at a time the scheduler does not know. For a periodic
+//! reader of its topics, how many messages that reader has not read yet depends on when
+//! the node stepped: the node's steps since one reader period and a tick before the batch
+//! (kept in `Member::recent`), the batch's and [`SLACK`] must fit in the buffer
+//! ([`Scheduler::unread_room`]). The convoy's odometry, stepped by the wheel encoders' 50 Hz
+//! ticks that the sensors publish five periods at a time, takes their steps three at a
+//! time.
 //!
 //! What it publishes ahead waits in its readers' buffers, hidden until its time by their
 //! stamps (`caravan::Subscriber`), and in the recorder's taps until that time ends. So:
@@ -68,18 +81,23 @@ impl Scheduler {
     /// publisher due as often as it leaves room only if it batches too).
     fn room(&self, i: usize, writers: bool) -> u64 {
         let m = &self.members[i];
-        let (period, depth) = (m.period_ns, m.output_depth as u64);
         let (inputs, outputs) = (&m.footprint.inputs, &m.footprint.outputs);
+        // Stepped by messages: its steps are the times its messages arrive.
+        let on_messages = m.period_ns == 0 && m.triggered;
+        let (period, depth) = (m.period_ns, m.output_depth as u64);
         let eligible = self.batch_end.is_some()
-            && period > 0
-            && !m.triggered
+            && (period > 0 && !m.triggered || on_messages)
             && !m.bursty
             && m.quiet
             && m.slot_grants
             && m.steps > 0
             && m.footprint.declared
             && depth >= 2 + SLACK
-            && !outputs.is_empty()
+            && (on_messages || !outputs.is_empty())
+            // Stepped by messages, it steps when any message it holds shows: the scheduler
+            // knows those times only for the topics that step it.
+            && (!on_messages
+                || (inputs.iter()).all(|t| self.subscribers.get(t).is_some_and(|w| w.contains(&i))))
             && outputs.iter().all(|t| self.known_topics.contains(t))
             // The report's pairs (and the status topic's) must fit when nodes are stepped by
             // its topics.
@@ -117,7 +135,11 @@ impl Scheduler {
                 // A reader: it finds up to `gap` unread messages of each topic when it
                 // steps, one more if it steps beside the batch's first step, and the
                 // batch's ahead of them.
-                let gap = if other.period_ns > 0 {
+                let gap = if other.period_ns > 0 && on_messages {
+                    // How many it has not read depends on when the node stepped: counted
+                    // at the time ([`Self::unread_room`]).
+                    continue;
+                } else if other.period_ns > 0 {
                     other.period_ns.div_ceil(period)
                 } else if (theirs.inputs.iter())
                     .filter(|t| outputs.binary_search(t).is_ok())
@@ -149,7 +171,9 @@ impl Scheduler {
         }
         let m = &self.members[i];
         let period = m.period_ns;
-        let mut horizon = end.min(now_ns + (steps - 1) * period);
+        // A step of a node stepped by messages is a bit of its report: 32 ticks at most.
+        let span = if period > 0 { steps - 1 } else { MAX_STEPS - 1 };
+        let mut horizon = end.min(now_ns + span * m.step_ns(self.tick_ns));
         for (j, other) in self.members.iter().enumerate() {
             if j != i && !overlap::disjoint(&other.footprint.outputs, &m.footprint.inputs) {
                 horizon = horizon.min(self.next_due(j, now_ns));
@@ -158,7 +182,61 @@ impl Scheduler {
         if horizon <= now_ns {
             return now_ns;
         }
-        now_ns + (horizon - now_ns) / period * period
+        if period > 0 {
+            return now_ns + (horizon - now_ns) / period * period;
+        }
+        // Stepped by messages: the times it is due, as many as its readers leave room for.
+        let room = steps.min(self.unread_room(i, now_ns)) as usize;
+        let times = self.due_times(i, now_ns, horizon);
+        match room.checked_sub(2) {
+            Some(later) => times.get(later).or(times.last()).copied().unwrap_or(now_ns),
+            None => now_ns,
+        }
+    }
+
+    /// For a node `i` stepped by messages, due at `now_ns`: the most steps it may take on one
+    /// grant for the periodic readers of its topics. A reader finds, at its first step from
+    /// `now_ns` on, every message sent since one period and a tick before that (the messages
+    /// it read at its step before are older): the node's steps since then, the batch's, and
+    /// [`SLACK`] must fit in the buffer. One that already falls behind loses its oldest either
+    /// way.
+    fn unread_room(&self, i: usize, now_ns: u64) -> u64 {
+        let m = &self.members[i];
+        let depth = m.output_depth as u64;
+        let mut room = u64::MAX;
+        for other in &self.members {
+            if other.period_ns == 0
+                || overlap::disjoint(&other.footprint.inputs, &m.footprint.outputs)
+            {
+                continue;
+            }
+            let since = now_ns.saturating_sub(other.period_ns + self.tick_ns);
+            let unread = (m.recent.iter())
+                .filter(|&&t| t > since && t < now_ns)
+                .count() as u64;
+            if unread < depth {
+                room = room.min(depth.saturating_sub(unread + SLACK));
+            }
+        }
+        room
+    }
+
+    /// The times after `now_ns` up to `last_ns` at which node `i` is due, in order.
+    fn due_times(&self, i: usize, now_ns: u64, last_ns: u64) -> Vec<u64> {
+        if last_ns <= now_ns {
+            return Vec::new();
+        }
+        let in_flights = (self.flights.iter())
+            .filter(|f| f.due.contains(&i))
+            .map(|f| f.now_ns);
+        let queued = (self.queue.range(now_ns + 1..=last_ns))
+            .filter(|(_, due)| due.contains(&i))
+            .map(|(&t, _)| t);
+        let times: std::collections::BTreeSet<u64> = in_flights
+            .chain(queued)
+            .filter(|&t| t > now_ns && t <= last_ns)
+            .collect();
+        times.into_iter().collect()
     }
 
     /// The earliest time ≥ `now_ns` (the oldest time being stepped) node `j` may step.
@@ -177,19 +255,40 @@ impl Scheduler {
         }
     }
 
-    /// Notes that node `i` steps at every period after `now_ns` up to `last_ns` on the grant
-    /// of `now_ns`.
+    /// Notes that node `i` steps on the grant of `now_ns` at every period after it up to
+    /// `last_ns`, or, stepped by messages, at every time it is due up to then (which it is
+    /// then no more).
     pub(crate) fn note_batch(&mut self, i: usize, now_ns: u64, last_ns: u64) {
         let period = self.members[i].period_ns;
-        self.members[i].batch = now_ns..=last_ns;
-        let mut t = now_ns + period;
-        while period > 0 && t <= last_ns {
+        let times: Vec<u64> = if period > 0 {
+            (1..)
+                .map(|k| now_ns + k * period)
+                .take_while(|&t| t <= last_ns)
+                .collect()
+        } else {
+            self.due_times(i, now_ns, last_ns)
+        };
+        for &t in &times {
             match self.flights.iter_mut().find(|f| f.now_ns == t) {
-                Some(f) => f.batched.push(i),
-                None => self.ahead.entry(t).or_default().push(i),
+                Some(f) => {
+                    if f.due.remove(&i) {
+                        f.held.remove(&i);
+                    }
+                    f.batched.push(i);
+                }
+                None => {
+                    if let Some(due) = self.queue.get_mut(&t) {
+                        due.remove(&i);
+                        if due.is_empty() {
+                            self.queue.remove(&t);
+                        }
+                    }
+                    self.ahead.entry(t).or_default().push(i);
+                }
             }
-            t += period;
         }
+        self.members[i].batch = now_ns..=last_ns;
+        self.members[i].batch_times = times;
     }
 
     /// The time of the grant node `i`'s report of a step at `reported_ns` answers: its
@@ -205,8 +304,14 @@ impl Scheduler {
 
     /// Takes the report ending node `i`'s batch: the later times of the batch learn what it
     /// published then (`steps`, the report's pairs, else all of it at each), and steps it did
-    /// not take (it ended early) are taken off them.
-    pub(crate) fn end_batch(&mut self, i: usize, report: &Report, steps: Option<&[(u64, u32)]>) {
+    /// not take (it ended early) are taken off them; a node stepped by messages is due then
+    /// again.
+    pub(crate) fn end_batch(
+        &mut self,
+        i: usize,
+        report: &Report,
+        steps: Option<&[(u64, u32)]>,
+    ) -> Result<(), Error> {
         let batch = self.members[i].batch.clone();
         if report.flags & Done::BURST != 0 {
             self.members[i].bursty = true;
@@ -218,17 +323,17 @@ impl Scheduler {
             );
         }
         if batch.start() == batch.end() {
-            return;
+            return Ok(());
         }
         let published: Vec<(u64, u32)> = match steps {
             Some(steps) => steps.to_vec(),
             None => report.published.iter().map(|&t| (t, u32::MAX)).collect(),
         };
-        let period = self.members[i].period_ns.max(1);
+        let step_ns = self.members[i].step_ns(self.tick_ns);
         for f in self.flights.iter_mut() {
             if f.now_ns > *batch.start() && f.batched.contains(&i) {
                 if f.now_ns <= report.now_ns {
-                    let step = (f.now_ns - batch.start()) / period;
+                    let step = (f.now_ns - batch.start()) / step_ns;
                     f.published.extend(published_at(&published, step));
                 } else {
                     f.batched.retain(|&j| j != i);
@@ -241,11 +346,23 @@ impl Scheduler {
             }
             !nodes.is_empty()
         });
-        let later = (report.now_ns - batch.start()) / period;
-        self.stats.steps += later;
-        self.stats.batched_steps += later;
-        self.members[i].batch_published = published;
-        self.members[i].batch = *batch.start()..=report.now_ns;
+        let (taken, untaken): (Vec<u64>, Vec<u64>) =
+            std::mem::take(&mut self.members[i].batch_times)
+                .into_iter()
+                .partition(|&t| t <= report.now_ns);
+        self.stats.steps += taken.len() as u64;
+        self.stats.batched_steps += taken.len() as u64;
+        let member = &mut self.members[i];
+        member.batch_published = published;
+        member.batch = *batch.start()..=report.now_ns;
+        member.batch_times = taken;
+        if member.period_ns == 0 {
+            // Their messages still wait for it.
+            for t in untaken {
+                self.insert(t, i)?;
+            }
+        }
+        Ok(())
     }
 
     /// What node `i`'s last batch published at `now_ns`, one of its times after the first.
@@ -255,7 +372,7 @@ impl Scheduler {
         now_ns: u64,
     ) -> impl Iterator<Item = u64> + '_ {
         let m = &self.members[i];
-        let step = (now_ns - m.batch.start()) / m.period_ns.max(1);
+        let step = (now_ns - m.batch.start()) / m.step_ns(self.tick_ns);
         published_at(&m.batch_published, step)
     }
 
@@ -270,13 +387,16 @@ impl Scheduler {
         steps: &[(u64, u32)],
     ) -> Result<(), Error> {
         let period = self.members[i].period_ns;
-        self.insert(last_ns + period, i)?;
+        if period > 0 {
+            self.insert(last_ns + period, i)?;
+        }
+        let step_ns = self.members[i].step_ns(self.tick_ns);
         for &(topic, bits) in steps {
             let Some(woken) = self.subscribers.get(&topic).cloned() else {
                 continue;
             };
             for step in (0..32).filter(|j| bits & (1 << j) != 0) {
-                let at = first_ns + step * period;
+                let at = first_ns + step * step_ns;
                 if at > last_ns {
                     break;
                 }

@@ -56,7 +56,17 @@ pub(crate) struct Member {
     /// The topics of its last report of several periods, each with a bit for each step of
     /// the batch that published there, for the times of the batch after the first.
     pub(crate) batch_published: Vec<(u64, u32)>,
+    /// The times of its last grant's steps after the first (empty for one step).
+    pub(crate) batch_times: Vec<u64>,
+    /// The times of its last steps, oldest first (at most [`RECENT`]): how many messages a
+    /// reader of its topics may not have read yet when a node stepped by messages is granted
+    /// several at once (`batch.rs`).
+    pub(crate) recent: std::collections::VecDeque<u64>,
 }
+
+/// How many of a node's last step times [`Member::recent`] keeps: more than a topic's
+/// buffer holds, since a reader with more unread messages loses the oldest either way.
+pub(crate) const RECENT: usize = 64;
 
 impl Member {
     /// Its grant of a step at `now_ns`: quiet, under `token`, if it holds the count of quiet
@@ -75,7 +85,25 @@ impl Member {
 
     /// How many steps its last grant holds.
     pub(crate) fn granted_steps(&self) -> u64 {
-        (self.batch.end() - self.batch.start()) / self.period_ns.max(1) + 1
+        self.batch_times.len() as u64 + 1
+    }
+
+    /// The time between two steps a bit of its batch's report stands for (`Done::STEPS`):
+    /// its period, or for a node stepped by messages (which steps on ticks) a tick.
+    pub(crate) fn step_ns(&self, tick_ns: u64) -> u64 {
+        if self.period_ns > 0 {
+            self.period_ns
+        } else {
+            tick_ns
+        }
+    }
+
+    /// Notes that it stepped at `now_ns`.
+    pub(crate) fn stepped_at(&mut self, now_ns: u64) {
+        if self.recent.len() == RECENT {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(now_ns);
     }
 
     /// Sends its grant, without waking it ([`Self::wake`]): into its slot of `page` once it

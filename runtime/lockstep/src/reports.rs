@@ -102,7 +102,7 @@ impl Scheduler {
             Some(steps) => f.published.extend(crate::batch::published_at(steps, 0)),
             None => f.published.extend(published.iter().copied()),
         }
-        self.end_batch(i, report, steps.as_deref());
+        self.end_batch(i, report, steps.as_deref())?;
         // Its last step's time: what comes next is scheduled from there.
         let now_ns = report.now_ns;
         // A grant of several periods up to this time or later was decided on its declaration.
@@ -111,6 +111,10 @@ impl Scheduler {
         let member = &mut self.members[i];
         member.last_step = member.granted_at.elapsed();
         member.steps += 1;
+        member.stepped_at(granted_ns);
+        for k in 0..member.batch_times.len() {
+            member.stepped_at(member.batch_times[k]);
+        }
         if report.undeclared != 0 && member.footprint.declared {
             member.footprint.declared = false;
             if member.overlapped || batching {

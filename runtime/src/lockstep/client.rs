@@ -94,7 +94,11 @@ impl Client {
                 }
             }
             hello.declared = declared as u32;
-            hello.output_depth = ports.output_depth.min(u32::MAX as usize) as u32;
+            // Publishing to nothing, nothing bounds how many steps it may take at once.
+            hello.output_depth = match ports.outputs.is_empty() {
+                true => u32::MAX,
+                false => ports.output_depth.min(u32::MAX as usize) as u32,
+            };
         }
         let client = Self {
             node_hash: shared.node_hash,
