@@ -296,7 +296,7 @@ impl Executor<'_> {
                 // one message per step ahead of them (`Shared::burst`).
                 let burst = self.shared.burst.get();
                 // The next step: a period on, or for a node stepped by messages when the
-                // next one it holds shows (its bit in the report counts ticks).
+                // next one it holds shows.
                 let next_ns = match trigger {
                     _ if period_ns > 0 => now_ns + period_ns,
                     Trigger::OnMessage(_) => self.shared.next_arrival_ns.get(),
@@ -305,10 +305,7 @@ impl Executor<'_> {
                 if state.stop || burst || next_ns <= now_ns || next_ns > grant.last_ns() {
                     break;
                 }
-                index = match period_ns {
-                    0 => ((next_ns - grant.now_ns) / grant.tick_ns.max(1)) as u32,
-                    _ => index + 1,
-                };
+                index += 1;
                 now_ns = next_ns;
             }
             // A node stepped by messages asks to step again when a held message arrives.

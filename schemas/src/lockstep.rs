@@ -166,8 +166,8 @@ impl Done {
     /// node one period at a time from then on.
     pub const BURST: u32 = 1;
     /// The report of a grant of several steps: `published` holds pairs, a topic's hash then
-    /// a word whose bit j says that the grant's step at `now_ns` of the grant plus j periods
-    /// (for a node stepped by messages, plus j ticks) published there, so that the nodes its
+    /// a word whose bit j says that the grant's step j (the first is 0; for a periodic node
+    /// at `now_ns` of the grant plus j periods) published there, so that the nodes its
     /// messages step are stepped at their times.
     pub const STEPS: u32 = 2;
 }

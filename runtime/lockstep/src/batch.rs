@@ -11,8 +11,8 @@
 //! A node stepped by messages (`Trigger::OnMessage`) is batched the same way over the times
 //! it is due up to H: a batch of its triggers published ahead, the scheduler knows each
 //! message's time from that batch's report, and the node finds the messages waiting in its
-//! buffer. It steps at each time one shows (its stamp plus a tick), and a bit of its report
-//! stands for a tick. Only a node that reads nothing but the topics stepping it: a message
+//! buffer. It steps at each time one shows (its stamp plus a tick), the times the scheduler
+//! noted for the batch (`Member::batch_times`). Only a node that reads nothing but the topics stepping it: a message
 //! of another topic would step it at a time the scheduler does not know. For a periodic
 //! reader of its topics, how many messages that reader has not read yet depends on when
 //! the node stepped: the node's steps since one reader period and a tick before the batch
@@ -171,9 +171,10 @@ impl Scheduler {
         }
         let m = &self.members[i];
         let period = m.period_ns;
-        // A step of a node stepped by messages is a bit of its report: 32 ticks at most.
-        let span = if period > 0 { steps - 1 } else { MAX_STEPS - 1 };
-        let mut horizon = end.min(now_ns + span * m.step_ns(self.tick_ns));
+        let mut horizon = match period {
+            0 => end,
+            _ => end.min(now_ns + (steps - 1) * period),
+        };
         for (j, other) in self.members.iter().enumerate() {
             if j != i && !overlap::disjoint(&other.footprint.outputs, &m.footprint.inputs) {
                 horizon = horizon.min(self.next_due(j, now_ns));
@@ -329,11 +330,11 @@ impl Scheduler {
             Some(steps) => steps.to_vec(),
             None => report.published.iter().map(|&t| (t, u32::MAX)).collect(),
         };
-        let step_ns = self.members[i].step_ns(self.tick_ns);
+        let member = &self.members[i];
         for f in self.flights.iter_mut() {
             if f.now_ns > *batch.start() && f.batched.contains(&i) {
                 if f.now_ns <= report.now_ns {
-                    let step = (f.now_ns - batch.start()) / step_ns;
+                    let step = member.step_of(f.now_ns);
                     f.published.extend(published_at(&published, step));
                 } else {
                     f.batched.retain(|&j| j != i);
@@ -372,8 +373,7 @@ impl Scheduler {
         now_ns: u64,
     ) -> impl Iterator<Item = u64> + '_ {
         let m = &self.members[i];
-        let step = (now_ns - m.batch.start()) / m.step_ns(self.tick_ns);
-        published_at(&m.batch_published, step)
+        published_at(&m.batch_published, m.step_of(now_ns))
     }
 
     /// Schedules what node `i`'s batch of `first_ns` up to `last_ns` woke: itself a period
@@ -390,13 +390,18 @@ impl Scheduler {
         if period > 0 {
             self.insert(last_ns + period, i)?;
         }
-        let step_ns = self.members[i].step_ns(self.tick_ns);
         for &(topic, bits) in steps {
             let Some(woken) = self.subscribers.get(&topic).cloned() else {
                 continue;
             };
             for step in (0..32).filter(|j| bits & (1 << j) != 0) {
-                let at = first_ns + step * step_ns;
+                let at = match step {
+                    0 => first_ns,
+                    k => match self.members[i].batch_times.get(k - 1) {
+                        Some(&at) => at,
+                        None => break,
+                    },
+                };
                 if at > last_ns {
                     break;
                 }

@@ -88,14 +88,15 @@ impl Member {
         self.batch_times.len() as u64 + 1
     }
 
-    /// The time between two steps a bit of its batch's report stands for (`Done::STEPS`):
-    /// its period, or for a node stepped by messages (which steps on ticks) a tick.
-    pub(crate) fn step_ns(&self, tick_ns: u64) -> u64 {
-        if self.period_ns > 0 {
-            self.period_ns
-        } else {
-            tick_ns
+    /// Which step of its last grant was at `now_ns` (the bit of its report's `Done::STEPS`
+    /// that stands for it); `u64::MAX` if none.
+    pub(crate) fn step_of(&self, now_ns: u64) -> u64 {
+        if *self.batch.start() == now_ns {
+            return 0;
         }
+        (self.batch_times.iter())
+            .position(|&t| t == now_ns)
+            .map_or(u64::MAX, |k| k as u64 + 1)
     }
 
     /// Notes that it stepped at `now_ns`.
