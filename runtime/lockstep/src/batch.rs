@@ -49,6 +49,7 @@
 //! a port after joining while a batch runs stops the run, as under overlap. (A restarted
 //! node rejoins at a time the wall clock decides: a batch is not cut short for it.)
 
+use crate::members::RECENT;
 use crate::overlap;
 use crate::scheduler::Scheduler;
 use caravan::Error;
@@ -212,6 +213,10 @@ impl Scheduler {
                 continue;
             }
             let since = now_ns.saturating_sub(other.period_ns + self.tick_ns);
+            if m.recent.len() == RECENT && m.recent.front().is_some_and(|&t| t > since) {
+                // More steps in the window than it keeps: it cannot tell whether they fit.
+                return 1;
+            }
             let unread = (m.recent.iter())
                 .filter(|&&t| t > since && t < now_ns)
                 .count() as u64;

@@ -64,8 +64,8 @@ pub(crate) struct Member {
     pub(crate) recent: std::collections::VecDeque<u64>,
 }
 
-/// How many of a node's last step times [`Member::recent`] keeps: more than a topic's
-/// buffer holds, since a reader with more unread messages loses the oldest either way.
+/// How many of a node's last step times [`Member::recent`] keeps: a node with more steps in
+/// a reader's window is not batched (`batch.rs`).
 pub(crate) const RECENT: usize = 64;
 
 impl Member {

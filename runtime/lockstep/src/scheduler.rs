@@ -379,7 +379,14 @@ impl Scheduler {
     }
 
     /// Queues `i` at `time_ns`, or adds it to that time if it is being stepped.
-    pub(crate) fn insert(&mut self, time_ns: u64, i: usize) -> Result<(), Error> {
+    pub(crate) fn insert(&mut self, mut time_ns: u64, i: usize) -> Result<(), Error> {
+        // A time its grant of several steps took (or is taking) is past for it: a message
+        // that wakes it there (from a publisher that restarted or joined while the batch
+        // ran, after the batch was decided) is read at its next step after the batch.
+        let batch = &self.members[i].batch;
+        if batch.start() < batch.end() && batch.contains(&time_ns) {
+            time_ns = batch.end() + self.tick_ns;
+        }
         if let Some(f) = self.flights.iter_mut().find(|f| f.now_ns == time_ns) {
             if f.due.insert(i) {
                 f.held.insert(i);
