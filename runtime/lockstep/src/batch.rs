@@ -184,8 +184,8 @@ impl Scheduler {
         if horizon <= now_ns {
             return now_ns;
         }
-        if period > 0 {
-            return now_ns + (horizon - now_ns) / period * period;
+        if let Some(periods) = (horizon - now_ns).checked_div(period) {
+            return now_ns + periods * period;
         }
         // Stepped by messages: the times it is due, as many as its readers leave room for.
         let room = steps.min(self.unread_room(i, now_ns)) as usize;
