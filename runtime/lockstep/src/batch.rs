@@ -18,8 +18,8 @@
 //! the node stepped: the node's steps since one reader period and a tick before the batch
 //! (kept in `Member::recent`), the batch's and [`SLACK`] must fit in the buffer
 //! ([`Scheduler::unread_room`]). The convoy's odometry, stepped by the wheel encoders' 50 Hz
-//! ticks that the sensors publish five periods at a time, takes their steps three at a
-//! time.
+//! ticks that the sensors publish five periods at a time, takes their steps two and three
+//! at a time.
 //!
 //! What it publishes ahead waits in its readers' buffers, hidden until its time by their
 //! stamps (`caravan::Subscriber`), and in the recorder's taps until that time ends. So:
