@@ -12,8 +12,9 @@
 //! it is due up to H: a batch of its triggers published ahead, the scheduler knows each
 //! message's time from that batch's report, and the node finds the messages waiting in its
 //! buffer. It steps at each time one shows (its stamp plus a tick), the times the scheduler
-//! noted for the batch (`Member::batch_times`). Only a node that reads nothing but the topics stepping it: a message
-//! of another topic would step it at a time the scheduler does not know. For a periodic
+//! noted for the batch (`Member::batch_times`). Only a node that reads nothing but the
+//! topics stepping it: a message of another topic would step it at a time the scheduler
+//! does not know. For a periodic
 //! reader of its topics, how many messages that reader has not read yet depends on when
 //! the node stepped: the node's steps since one reader period and a tick before the batch
 //! (kept in `Member::recent`), the batch's and [`SLACK`] must fit in the buffer
