@@ -1,6 +1,7 @@
 //! Batches (launch key `group.batch`, on by default): a periodic node whose inputs cannot
-//! change is granted several periods at once, and wakes once for them. Nothing it or its
-//! readers see changes, so neither does the recording.
+//! change is granted several periods at once, and wakes once for them; a node stepped by its
+//! messages takes them on one grant too. Nothing they or their readers see changes, so
+//! neither does the recording.
 
 use caravan_tests::recording::{all_messages, assert_same_messages, read};
 use caravan_tests::{ConvoyRun, node, run_convoy_with};
@@ -19,6 +20,9 @@ fn a_convoy_granted_several_periods_at_once_records_what_it_records_one_period_a
         assert_eq!(count(b, key), count(s, key), "{key}");
     }
     assert_eq!(count(s, "batched_steps"), 0);
+    // One period at a time, the odometry (a tick after the sensors) starts while the physics
+    // still steps; a node that may take a batch never does.
+    assert!(count(s, "overlapped_steps") > 0, "{}", s["run"]["schedule"]);
     assert!(count(b, "batched_steps") >= 300, "{}", b["run"]["schedule"]);
     assert_eq!(
         count(b, "wake_ups"),
