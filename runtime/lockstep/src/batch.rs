@@ -162,14 +162,14 @@ impl Scheduler {
         steps.max(1)
     }
 
-    /// The last step node `i`, due at `now_ns` (the oldest time being stepped), may take on
-    /// one grant: `now_ns` if only that one.
-    pub(crate) fn batch_last(&self, i: usize, now_ns: u64) -> u64 {
+    /// The times after `now_ns` at which node `i`, due at `now_ns` (the oldest time being
+    /// stepped), may step on the same grant, in order: none if only that one.
+    pub(crate) fn batch_times(&self, i: usize, now_ns: u64) -> Vec<u64> {
         let (Some(end), steps) = (self.batch_end, self.batch_room(i)) else {
-            return now_ns;
+            return Vec::new();
         };
         if steps < 2 {
-            return now_ns;
+            return Vec::new();
         }
         let m = &self.members[i];
         let period = m.period_ns;
@@ -182,19 +182,17 @@ impl Scheduler {
                 horizon = horizon.min(self.next_due(j, now_ns));
             }
         }
-        if horizon <= now_ns {
-            return now_ns;
-        }
-        if let Some(periods) = (horizon - now_ns).checked_div(period) {
-            return now_ns + periods * period;
+        if period > 0 {
+            return (1..)
+                .map(|k| now_ns + k * period)
+                .take_while(|&t| t <= horizon)
+                .collect();
         }
         // Stepped by messages: the times it is due, as many as its readers leave room for.
         let room = steps.min(self.unread_room(i, now_ns)) as usize;
-        let times = self.due_times(i, now_ns, horizon);
-        match room.checked_sub(2) {
-            Some(later) => times.get(later).or(times.last()).copied().unwrap_or(now_ns),
-            None => now_ns,
-        }
+        let mut times = self.due_times(i, now_ns, horizon);
+        times.truncate(room.saturating_sub(1));
+        times
     }
 
     /// For a node `i` stepped by messages, due at `now_ns`: the most steps it may take on one
@@ -262,19 +260,9 @@ impl Scheduler {
         }
     }
 
-    /// Notes that node `i` steps on the grant of `now_ns` at every period after it up to
-    /// `last_ns`, or, stepped by messages, at every time it is due up to then (which it is
-    /// then no more).
-    pub(crate) fn note_batch(&mut self, i: usize, now_ns: u64, last_ns: u64) {
-        let period = self.members[i].period_ns;
-        let times: Vec<u64> = if period > 0 {
-            (1..)
-                .map(|k| now_ns + k * period)
-                .take_while(|&t| t <= last_ns)
-                .collect()
-        } else {
-            self.due_times(i, now_ns, last_ns)
-        };
+    /// Notes that node `i` steps on the grant of `now_ns` at `times` too ([`Self::batch_times`];
+    /// a node stepped by messages is then no more due at them).
+    pub(crate) fn note_batch(&mut self, i: usize, now_ns: u64, times: Vec<u64>) {
         for &t in &times {
             match self.flights.iter_mut().find(|f| f.now_ns == t) {
                 Some(f) => {
@@ -294,7 +282,7 @@ impl Scheduler {
                 }
             }
         }
-        self.members[i].batch = now_ns..=last_ns;
+        self.members[i].batch = now_ns..=times.last().copied().unwrap_or(now_ns);
         self.members[i].batch_times = times;
     }
 

@@ -347,12 +347,12 @@ impl Scheduler {
         for &i in &nodes {
             // Only the oldest time's nodes may take several periods: every earlier time has
             // finished, so the schedule the batch is read from is the same on a rerun.
-            let last_ns = if f == 0 {
-                self.batch_last(i, now_ns)
+            let times = if f == 0 {
+                self.batch_times(i, now_ns)
             } else {
-                now_ns
+                Vec::new()
             };
-            self.note_batch(i, now_ns, last_ns);
+            self.note_batch(i, now_ns, times);
             let grant = self.members[i].step_grant(now_ns, self.tick_ns, token);
             self.send(i, grant)?;
             self.flights[f].waiting.insert(i);
