@@ -29,6 +29,21 @@ impl Descriptor {
         extra: Option<(&str, &Value)>,
         out: &mut Vec<u8>,
     ) -> Result<(), String> {
+        let text = extra
+            .map(|(key, value)| serde_json::to_vec(value).map(|text| (key, text)))
+            .transpose()
+            .map_err(|e| e.to_string())?;
+        self.write_json_text(bytes, text.as_ref().map(|(k, t)| (*k, t.as_slice())), out)
+    }
+
+    /// [`Self::write_json`] with the extra key's value given as its JSON text (`serde_json`'s,
+    /// which is not checked), for a writer that renders it without a `Value`.
+    pub fn write_json_text(
+        &self,
+        bytes: &[u8],
+        extra: Option<(&str, &[u8])>,
+        out: &mut Vec<u8>,
+    ) -> Result<(), String> {
         self.check_size(bytes.len())?;
         self.object(self.layout(), bytes, extra)
             .write_text(out)
@@ -39,7 +54,7 @@ impl Descriptor {
         &'a self,
         layout: &'a TypeLayout,
         bytes: &'a [u8],
-        extra: Option<(&'a str, &'a Value)>,
+        extra: Option<(&'a str, &'a [u8])>,
     ) -> Object<'a> {
         Object {
             d: self,
@@ -55,14 +70,15 @@ pub(crate) struct Object<'a> {
     pub(crate) d: &'a Descriptor,
     pub(crate) layout: &'a TypeLayout,
     pub(crate) bytes: &'a [u8],
-    /// One more key, written over a field of that name.
-    pub(crate) extra: Option<(&'a str, &'a Value)>,
+    /// One more key and its JSON text, written over a field of that name.
+    pub(crate) extra: Option<(&'a str, &'a [u8])>,
 }
 
 /// One value of an [`Object`].
 pub(crate) enum Item<'a> {
     Field(&'a Field),
-    Extra(&'a Value),
+    /// JSON text, written as it is.
+    Extra(&'a [u8]),
 }
 
 impl<'a> Object<'a> {

@@ -23,7 +23,7 @@ impl Object<'_> {
             name.serialize(&mut Json::new(Bytes(out)))?;
             out.push(b':');
             match item {
-                Item::Extra(value) => value.serialize(&mut Json::new(Bytes(out)))?,
+                Item::Extra(text) => out.extend_from_slice(text),
                 Item::Field(f) => self.field(f).write_text(out)?,
             }
         }

@@ -35,7 +35,11 @@ pub struct SceneSchema {
     pub data: Vec<u8>,
 }
 
+/// A view's topic and schema.
+pub type ViewTopic = (String, fn() -> SceneSchema);
+
 /// One Foxglove message derived from a recorded one.
+#[cfg(test)]
 pub struct View {
     pub topic: String,
     pub schema: fn() -> SceneSchema,
@@ -51,15 +55,11 @@ fn schema_of<T: Encode>() -> SceneSchema {
     }
 }
 
-fn view<T: Encode>(topic: String, message: &T) -> View {
-    let mut bytes = Vec::new();
+/// Encodes `message` into `out`, over what it held.
+fn put<T: Encode>(message: &T, out: &mut Vec<u8>) {
+    out.clear();
     // Encoding into a growable Vec cannot run out of room.
-    let _ = message.encode(&mut bytes);
-    View {
-        topic,
-        schema: schema_of::<T>,
-        bytes,
-    }
+    let _ = message.encode(out);
 }
 
 fn timestamp(ns: u64) -> Timestamp {
@@ -122,113 +122,208 @@ fn transform(stamp: Timestamp, child: String, pose: Pose) -> FrameTransform {
     }
 }
 
-/// The Foxglove views of one recorded message, its bytes as `descriptor` lays them out (none
-/// for types without a view, or bytes of the wrong length).
-pub fn views(topic: &str, descriptor: &Descriptor, bytes: &[u8], stamp_ns: u64) -> Vec<View> {
-    let Ok(json) = descriptor.fields(bytes) else {
-        return Vec::new();
-    };
-    let json = &json;
-    let type_name = descriptor.type_name();
-    let stamp = timestamp(stamp_ns);
-    let own = format!("foxglove/{topic}");
-    let robot = caravan_schemas::topics::robot_of(topic);
-    let in_map = |pose: Pose| PoseInFrame {
+/// The kinds of Caravan messages with views.
+#[derive(Clone, Copy)]
+enum Kind {
+    Pose2D,
+    Odometry,
+    Goal,
+    Path,
+    Scan,
+    Grid,
+    Links,
+    Scene,
+}
+
+/// The Foxglove views of one raw topic, worked out when the topic is discovered: their topics,
+/// and what a message needs besides its bytes (frames, the robot). A message then costs no name
+/// formatting, and its views are encoded into buffers kept between messages; a pose's two
+/// views (most of a recording's) are kept whole and only their numbers refilled.
+pub struct Viewer {
+    kind: Kind,
+    /// The views' topics and schemas, in the order [`Viewer::encode`] fills its buffers.
+    topics: Vec<ViewTopic>,
+    /// A scan's frame (its robot's `base_link`, else `map`).
+    frame: String,
+    robot: Option<usize>,
+    /// A pose's view in the map and its transform (when its topic places a frame).
+    pose: PoseInFrame,
+    tf: Option<FrameTransforms>,
+}
+
+impl Viewer {
+    /// The views of `topic`'s messages, laid out as `descriptor` says; `None` for a type
+    /// without views.
+    pub fn new(topic: &str, descriptor: &Descriptor) -> Option<Viewer> {
+        let robot = caravan_schemas::topics::robot_of(topic).map(|(i, _)| i);
+        let kind = match descriptor.type_name() {
+            "caravan::Pose2D" => Kind::Pose2D,
+            "caravan::Odometry" => Kind::Odometry,
+            "caravan::Goal" => Kind::Goal,
+            "caravan::Path2D" => Kind::Path,
+            "caravan::LaserScan" => Kind::Scan,
+            "caravan::OccupancyGrid" => Kind::Grid,
+            "caravan::LinkStates" if robot.is_some() => Kind::Links,
+            "caravan::Scene" => Kind::Scene,
+            _ => return None,
+        };
+        let own = format!("foxglove/{topic}");
+        let tf = || {
+            (
+                TF_TOPIC.to_string(),
+                schema_of::<FrameTransforms> as fn() -> _,
+            )
+        };
+        let (topics, tf_child) = match kind {
+            Kind::Pose2D | Kind::Odometry | Kind::Goal => {
+                let child = match kind {
+                    Kind::Pose2D => caravan_schemas::topics::pose_frame(topic),
+                    _ => None,
+                };
+                let mut topics = vec![(own, schema_of::<PoseInFrame> as fn() -> _)];
+                topics.extend(child.is_some().then(tf));
+                (topics, child)
+            }
+            Kind::Path => (vec![(own, schema_of::<PosesInFrame> as fn() -> _)], None),
+            Kind::Scan => (vec![(own, schema_of::<LaserScan> as fn() -> _)], None),
+            Kind::Grid => (vec![(own, schema_of::<Grid> as fn() -> _)], None),
+            Kind::Links => (vec![tf()], None),
+            Kind::Scene => (vec![(own, schema_of::<SceneUpdate> as fn() -> _)], None),
+        };
+        Some(Viewer {
+            kind,
+            topics,
+            frame: match robot {
+                Some(i) => robot_frame(i, "base_link"),
+                None => MAP_FRAME.into(),
+            },
+            robot,
+            pose: PoseInFrame {
+                timestamp: None,
+                frame_id: MAP_FRAME.into(),
+                pose: None,
+            },
+            tf: tf_child.map(|child| FrameTransforms {
+                transforms: vec![transform(timestamp(0), child, pose_2d(None))],
+            }),
+        })
+    }
+
+    /// The views' topics and schemas, in the order [`Viewer::encode`] fills its buffers.
+    pub fn topics(&self) -> &[ViewTopic] {
+        &self.topics
+    }
+
+    /// Encodes the views of one message (its bytes, laid out as `descriptor` says) into
+    /// `out[i]` for the view `topics()[i]`: false, with nothing encoded, for bytes of the wrong
+    /// length.
+    pub fn encode(
+        &mut self,
+        descriptor: &Descriptor,
+        bytes: &[u8],
+        stamp_ns: u64,
+        out: &mut Vec<Vec<u8>>,
+    ) -> bool {
+        let Ok(json) = descriptor.fields(bytes) else {
+            return false;
+        };
+        if out.len() < self.topics.len() {
+            out.resize_with(self.topics.len(), Vec::new);
+        }
+        let json = &json;
+        let stamp = timestamp(stamp_ns);
+        let mut in_map = |pose: Pose, out: &mut Vec<u8>| {
+            self.pose.timestamp = Some(stamp);
+            self.pose.pose = Some(pose);
+            put(&self.pose, out);
+        };
+        match self.kind {
+            Kind::Pose2D => {
+                let pose = pose_2d(Some(*json));
+                in_map(pose, &mut out[0]);
+                if let Some(tf) = &mut self.tf {
+                    let t = &mut tf.transforms[0];
+                    t.timestamp = Some(stamp);
+                    t.translation = pose.position;
+                    t.rotation = pose.orientation;
+                    put(&*tf, &mut out[1]);
+                }
+            }
+            Kind::Odometry => in_map(pose_3d(json.get("pose")), &mut out[0]),
+            Kind::Goal => in_map(pose_2d(json.get("pose")), &mut out[0]),
+            Kind::Path => {
+                let path = PosesInFrame {
+                    timestamp: Some(stamp),
+                    frame_id: MAP_FRAME.into(),
+                    poses: json
+                        .structs("poses")
+                        .into_iter()
+                        .map(|p| pose_2d(Some(p)))
+                        .collect(),
+                };
+                put(&path, &mut out[0]);
+            }
+            Kind::Scan => {
+                let scan = LaserScan {
+                    timestamp: Some(stamp),
+                    frame_id: self.frame.clone(),
+                    pose: Some(Pose {
+                        position: Some(Vector3::default()),
+                        orientation: Some(Quaternion {
+                            w: 1.0,
+                            ..Default::default()
+                        }),
+                    }),
+                    start_angle: num(json, "angle_min"),
+                    end_angle: num(json, "angle_max"),
+                    ranges: json.numbers("ranges"),
+                    intensities: json.numbers("intensities"),
+                };
+                put(&scan, &mut out[0]);
+            }
+            Kind::Grid => put(&grid(json, stamp), &mut out[0]),
+            Kind::Links => {
+                let i = self.robot.unwrap_or(0);
+                let transforms = json
+                    .structs("links")
+                    .into_iter()
+                    .map(|l| {
+                        let name = l.text("name").unwrap_or("");
+                        transform(stamp, robot_frame(i, name), pose_3d(l.get("pose")))
+                    })
+                    .collect();
+                put(&FrameTransforms { transforms }, &mut out[0]);
+            }
+            Kind::Scene => put(&scene_update(json, stamp), &mut out[0]),
+        }
+        true
+    }
+}
+
+/// An `OccupancyGrid` as a grid of one `int8` field.
+fn grid(json: &Fields, stamp: Timestamp) -> Grid {
+    let width = json.unsigned("width").unwrap_or(0) as u32;
+    let resolution = num(json, "resolution");
+    // Cells are i8 (−1 unknown, 0–100 occupancy), one byte each, row-major from the origin,
+    // as ROS's OccupancyGrid and Foxglove's Grid both lay them out: the message's own bytes.
+    let data: Vec<u8> = json.bytes("data").unwrap_or_default().to_vec();
+    Grid {
         timestamp: Some(stamp),
         frame_id: MAP_FRAME.into(),
-        pose: Some(pose),
-    };
-    match type_name {
-        "caravan::Pose2D" => {
-            let pose = pose_2d(Some(*json));
-            let mut out = vec![view(own, &in_map(pose))];
-            if let Some(child) = caravan_schemas::topics::pose_frame(topic) {
-                let tf = FrameTransforms {
-                    transforms: vec![transform(stamp, child, pose)],
-                };
-                out.push(view(TF_TOPIC.into(), &tf));
-            }
-            out
-        }
-        "caravan::Odometry" => vec![view(own, &in_map(pose_3d(json.get("pose"))))],
-        "caravan::Goal" => vec![view(own, &in_map(pose_2d(json.get("pose"))))],
-        "caravan::Path2D" => {
-            let path = PosesInFrame {
-                timestamp: Some(stamp),
-                frame_id: MAP_FRAME.into(),
-                poses: json
-                    .structs("poses")
-                    .into_iter()
-                    .map(|p| pose_2d(Some(p)))
-                    .collect(),
-            };
-            vec![view(own, &path)]
-        }
-        "caravan::LaserScan" => {
-            let frame = match robot {
-                Some((i, _)) => caravan_schemas::topics::robot_frame(i, "base_link"),
-                None => MAP_FRAME.into(),
-            };
-            let scan = LaserScan {
-                timestamp: Some(stamp),
-                frame_id: frame,
-                pose: Some(Pose {
-                    position: Some(Vector3::default()),
-                    orientation: Some(Quaternion {
-                        w: 1.0,
-                        ..Default::default()
-                    }),
-                }),
-                start_angle: num(json, "angle_min"),
-                end_angle: num(json, "angle_max"),
-                ranges: json.numbers("ranges"),
-                intensities: json.numbers("intensities"),
-            };
-            vec![view(own, &scan)]
-        }
-        "caravan::OccupancyGrid" => {
-            let width = json.unsigned("width").unwrap_or(0) as u32;
-            let resolution = num(json, "resolution");
-            // Cells are i8 (−1 unknown, 0–100 occupancy), one byte each, row-major from the
-            // origin, as ROS's OccupancyGrid and Foxglove's Grid both lay them out: the
-            // message's own bytes.
-            let data: Vec<u8> = json.bytes("data").unwrap_or_default().to_vec();
-            let grid = Grid {
-                timestamp: Some(stamp),
-                frame_id: MAP_FRAME.into(),
-                pose: Some(pose_2d(json.get("origin"))),
-                column_count: width,
-                cell_size: Some(Vector2 {
-                    x: resolution,
-                    y: resolution,
-                }),
-                row_stride: width,
-                cell_stride: 1,
-                fields: vec![PackedElementField {
-                    name: "occupancy".into(),
-                    offset: 0,
-                    r#type: NumericType::Int8 as i32,
-                }],
-                data: data.into(),
-            };
-            vec![view(own, &grid)]
-        }
-        "caravan::LinkStates" => {
-            let Some((i, _)) = robot else {
-                return Vec::new();
-            };
-            let transforms = json
-                .structs("links")
-                .into_iter()
-                .map(|l| {
-                    let name = l.text("name").unwrap_or("");
-                    transform(stamp, robot_frame(i, name), pose_3d(l.get("pose")))
-                })
-                .collect();
-            vec![view(TF_TOPIC.into(), &FrameTransforms { transforms })]
-        }
-        "caravan::Scene" => vec![view(own, &scene_update(json, stamp))],
-        _ => Vec::new(),
+        pose: Some(pose_2d(json.get("origin"))),
+        column_count: width,
+        cell_size: Some(Vector2 {
+            x: resolution,
+            y: resolution,
+        }),
+        row_stride: width,
+        cell_stride: 1,
+        fields: vec![PackedElementField {
+            name: "occupancy".into(),
+            offset: 0,
+            r#type: NumericType::Int8 as i32,
+        }],
+        data: data.into(),
     }
 }
 
@@ -293,21 +388,32 @@ fn scene_update(json: &Fields, stamp: Timestamp) -> SceneUpdate {
     }
 }
 
-/// The Foxglove topics a raw topic gives, known before its first message so that the channels
-/// exist from the start: the views of the type's default message, so the two cannot differ.
-pub fn topics_of(topic: &str, descriptor: &Descriptor) -> Vec<(String, fn() -> SceneSchema)> {
-    let bytes = descriptor.default_bytes().unwrap_or_default();
-    views(topic, descriptor, &bytes, 0)
-        .into_iter()
-        .map(|v| (v.topic, v.schema))
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use prost::Message;
     use serde_json::json;
+
+    /// The views of one message of `topic`, as the writer encodes them.
+    pub fn views(topic: &str, descriptor: &Descriptor, bytes: &[u8], stamp_ns: u64) -> Vec<View> {
+        let Some(mut viewer) = Viewer::new(topic, descriptor) else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        if !viewer.encode(descriptor, bytes, stamp_ns, &mut out) {
+            return Vec::new();
+        }
+        let topics = viewer.topics().to_vec();
+        topics
+            .into_iter()
+            .zip(out)
+            .map(|((topic, schema), bytes)| View {
+                topic,
+                schema,
+                bytes,
+            })
+            .collect()
+    }
 
     /// The views of the message of `type_name` whose JSON view is `json` (the rest default).
     fn json_views(topic: &str, type_name: &str, json: &serde_json::Value, stamp: u64) -> Vec<View> {
@@ -453,7 +559,9 @@ mod tests {
                 .map(|v| v.topic)
                 .collect();
             let d = caravan_schemas::catalog::descriptor(type_name).unwrap();
-            let announced: Vec<String> = topics_of(topic, d).into_iter().map(|t| t.0).collect();
+            let announced: Vec<String> = Viewer::new(topic, d)
+                .map(|v| v.topics().iter().map(|t| t.0.clone()).collect())
+                .unwrap_or_default();
             assert_eq!(made, announced, "{topic}");
         }
     }

@@ -139,9 +139,44 @@ pub fn header_json(h: &caravan_schemas::Header, with_wall_clock: bool) -> Value 
     header
 }
 
+/// Appends the text `serde_json::to_vec` gives of [`header_json`], without building it: the
+/// writer's per-message path (keys in byte order, as `serde_json::Map` keeps them).
+pub fn write_header_json(h: &caravan_schemas::Header, with_wall_clock: bool, out: &mut Vec<u8>) {
+    use std::io::Write;
+    out.push(b'{');
+    if with_wall_clock {
+        // Writing to a Vec cannot fail.
+        let _ = write!(out, "\"send_wall_ns\":\"{}\",", h.send_wall_ns);
+    }
+    let _ = write!(
+        out,
+        "\"seq\":{},\"source_id\":\"{}\",\"stamp_ns\":{}}}",
+        h.seq, h.source_id, h.stamp_ns
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use serde_json::Value;
+
+    #[test]
+    fn the_header_text_is_serde_jsons() {
+        let h = caravan_schemas::Header {
+            seq: 7,
+            stamp_ns: 1_500_000_000,
+            source_id: u64::MAX,
+            send_wall_ns: 1_700_000_000_123_456_789,
+        };
+        for wall in [false, true] {
+            let mut text = Vec::new();
+            super::write_header_json(&h, wall, &mut text);
+            let expected = serde_json::to_vec(&super::header_json(&h, wall)).unwrap();
+            assert_eq!(
+                String::from_utf8(text).unwrap(),
+                String::from_utf8(expected).unwrap()
+            );
+        }
+    }
 
     /// Every array in `schema` has `items`; returns the paths of those that do not.
     fn arrays_without_items(schema: &Value, path: &str, out: &mut Vec<String>) {

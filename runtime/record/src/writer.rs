@@ -139,6 +139,17 @@ fn with_writer<T>(
         .with_context(cannot)
 }
 
+/// A topic the writer was told of, by [`NewTopic::id`].
+struct Known {
+    topic: Arc<str>,
+    type_name: &'static str,
+    /// Its raw channel in the file; `None` for a topic served live only.
+    channel: Option<u16>,
+    /// Its Foxglove views, and their channels in the file (empty when not recorded).
+    viewer: Option<scene::Viewer>,
+    view_channels: Vec<u16>,
+}
+
 /// The MCAP file and the live view, fed by [`Command`]s.
 struct Writer {
     /// `None` once a write failed (a full disk): see [`abandon`].
@@ -146,18 +157,24 @@ struct Writer {
     /// The MCAP file, for messages about it (a full disk).
     path: PathBuf,
     lockstep: bool,
-    /// (topic, type name, whether it has Foxglove views) by [`NewTopic::id`].
-    topics: Vec<(std::sync::Arc<str>, &'static str, bool)>,
+    /// The topics by [`NewTopic::id`].
+    topics: Vec<Option<Known>>,
     /// Statistics by [`NewTopic::id`], for topics with messages.
     stats: Vec<Option<TopicStats>>,
     channels: BTreeMap<String, u16>,
     /// Schema ids by name.
     schemas: BTreeMap<String, u16>,
-    sequences: BTreeMap<u16, u32>,
+    /// The last sequence number written, by channel id.
+    sequences: Vec<u32>,
     live: Option<super::live::LiveView>,
     /// The JSON text of the message being written, kept between messages: sized for a map
     /// (a megabyte of cells), it is allocated once, not once per message.
     text: Vec<u8>,
+    /// The text of its header, kept likewise.
+    header: Vec<u8>,
+    /// The views of the message being written, by [`scene::Viewer::topics`], kept between
+    /// messages as `text` is.
+    views: Vec<Vec<u8>>,
 }
 
 impl Writer {
@@ -200,10 +217,12 @@ impl Writer {
             topics: Vec::new(),
             channels: BTreeMap::new(),
             schemas: BTreeMap::new(),
-            sequences: BTreeMap::new(),
+            sequences: Vec::new(),
             stats: Vec::new(),
             live: None,
             text: Vec::new(),
+            header: Vec::new(),
+            views: Vec::new(),
         })
     }
 
@@ -247,25 +266,34 @@ impl Writer {
 
     fn add_topic(&mut self, new: NewTopic) -> Result<()> {
         if self.topics.len() <= new.id {
-            self.topics.resize(new.id + 1, ("".into(), "", false));
+            self.topics.resize_with(new.id + 1, || None);
             self.stats.resize_with(new.id + 1, || None);
         }
-        let views = scene::topics_of(&new.topic, &new.descriptor);
-        self.topics[new.id] = (new.topic.as_str().into(), new.type_name, !views.is_empty());
-        if new.recorded {
-            self.channel(&new.topic, &new.descriptor)?;
-        }
+        let viewer = scene::Viewer::new(&new.topic, &new.descriptor);
+        let views = viewer.as_ref().map_or(&[][..], |v| v.topics());
+        let channel = match new.recorded {
+            true => Some(self.channel(&new.topic, &new.descriptor)?),
+            false => None,
+        };
+        let mut view_channels = Vec::new();
         for (view, schema) in views {
             if new.recorded {
-                self.scene_channel(&view, schema)?;
+                view_channels.push(self.scene_channel(view, *schema)?);
             }
             if let Some(live) = &mut self.live {
-                live.advertise_view(&view, schema())?;
+                live.advertise_view(view, schema())?;
             }
         }
         if let Some(live) = &mut self.live {
             live.advertise_raw(&new.topic, &new.descriptor, !self.lockstep)?;
         }
+        self.topics[new.id] = Some(Known {
+            topic: new.topic.as_str().into(),
+            type_name: new.type_name,
+            channel,
+            viewer,
+            view_channels,
+        });
         Ok(())
     }
 
@@ -291,7 +319,7 @@ impl Writer {
         self.add_channel(topic, schema_id, "json")
     }
 
-    /// A Foxglove view's channel, added on first use.
+    /// A Foxglove view's channel, added with the first raw topic that has the view.
     fn scene_channel(&mut self, topic: &str, schema: fn() -> scene::SceneSchema) -> Result<u16> {
         if let Some(&id) = self.channels.get(topic) {
             return Ok(id);
@@ -309,44 +337,57 @@ impl Writer {
         Ok(id)
     }
 
-    fn write_message(&mut self, channel: u16, stamp_ns: u64, data: &[u8]) -> Result<()> {
-        let sequence = self.sequences.entry(channel).or_insert(0);
-        *sequence += 1;
-        let header = mcap::records::MessageHeader {
-            channel_id: channel,
-            sequence: *sequence,
-            log_time: stamp_ns,
-            publish_time: stamp_ns,
-        };
-        with_writer(&mut self.writer, &self.path, |w| {
-            w.write_to_known_channel(&header, data)
-        })
-    }
-
     fn write(&mut self, drained: Drained, now_wall: u64) -> Result<()> {
-        let (topic, type_name, has_views) = self
-            .topics
-            .get(drained.id)
-            .cloned()
+        let Writer {
+            writer,
+            path,
+            lockstep,
+            topics,
+            stats,
+            sequences,
+            live,
+            text,
+            header,
+            views,
+            ..
+        } = self;
+        let known = topics
+            .get_mut(drained.id)
+            .and_then(Option::as_mut)
             .ok_or_else(|| anyhow!("a message of a topic the recorder never announced"))?;
         let msg = drained.message;
         let stamp_ns = msg.header.stamp_ns;
         // Views and record are read straight from the message's bytes; the record's text is
         // what `serde_json::to_vec` of its JSON view gave (`Descriptor::write_json`).
-        let views = if has_views {
-            scene::views(&topic, &msg.descriptor, &msg.bytes, stamp_ns)
-        } else {
-            Vec::new()
+        let viewed = match &mut known.viewer {
+            Some(viewer) => match viewer.encode(&msg.descriptor, &msg.bytes, stamp_ns, views) {
+                true => viewer.topics(),
+                false => &[],
+            },
+            None => &[],
         };
-        let header = schema::header_json(&msg.header, !self.lockstep);
-        let mut bytes = std::mem::take(&mut self.text);
-        bytes.clear();
-        let recorded = self.write_text(&topic, &msg, &header, views, &mut bytes);
-        self.text = bytes;
-        if !recorded? {
-            return Ok(());
+        let views = &views[..viewed.len()];
+        header.clear();
+        schema::write_header_json(&msg.header, !*lockstep, header);
+        text.clear();
+        msg.descriptor
+            .write_json_text(&msg.bytes, Some(("header", header)), text)
+            .map_err(|e| anyhow!("topic '{}': cannot convert to JSON: {e}", known.topic))?;
+        if let Some(live) = live {
+            live.log(&known.topic, stamp_ns, text);
+            for ((topic, _), bytes) in viewed.iter().zip(views) {
+                live.log(topic, stamp_ns, bytes);
+            }
         }
-        let stats = self.stats[drained.id].get_or_insert_with(|| TopicStats::new(type_name));
+        // Discovery gave every recorded topic its channel; the others are served live only.
+        let Some(channel) = known.channel else {
+            return Ok(());
+        };
+        write_message(writer, path, sequences, channel, stamp_ns, text)?;
+        for (&channel, bytes) in known.view_channels.iter().zip(views) {
+            write_message(writer, path, sequences, channel, stamp_ns, bytes)?;
+        }
+        let stats = stats[drained.id].get_or_insert_with(|| TopicStats::new(known.type_name));
         stats
             .counted
             .add(Some((msg.header.source_id, msg.header.seq)));
@@ -354,38 +395,6 @@ impl Writer {
             .latency
             .saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));
         Ok(())
-    }
-
-    /// Writes `msg` as JSON text (into `bytes`) and its `views` to the live view and, when its
-    /// topic is recorded, to the file: whether it was.
-    fn write_text(
-        &mut self,
-        topic: &str,
-        msg: &caravan::tap::Tapped,
-        header: &serde_json::Value,
-        views: Vec<scene::View>,
-        bytes: &mut Vec<u8>,
-    ) -> Result<bool> {
-        let stamp_ns = msg.header.stamp_ns;
-        msg.descriptor
-            .write_json(&msg.bytes, Some(("header", header)), bytes)
-            .map_err(|e| anyhow!("topic '{topic}': cannot convert to JSON: {e}"))?;
-        if let Some(live) = &mut self.live {
-            live.log(topic, stamp_ns, bytes);
-            for view in &views {
-                live.log(&view.topic, stamp_ns, &view.bytes);
-            }
-        }
-        // Discovery gave every recorded topic its channel; the others are served live only.
-        let Some(&channel) = self.channels.get(topic) else {
-            return Ok(false);
-        };
-        self.write_message(channel, stamp_ns, bytes)?;
-        for view in views {
-            let channel = self.scene_channel(&view.topic, view.schema)?;
-            self.write_message(channel, stamp_ns, &view.bytes)?;
-        }
-        Ok(true)
     }
 
     /// Writes the summary and flushes the file.
@@ -403,9 +412,32 @@ impl Writer {
             .topics
             .iter()
             .zip(stats)
-            .filter_map(|((topic, _, _), s)| Some((topic.to_string(), s?)))
+            .filter_map(|(known, s)| Some((known.as_ref()?.topic.to_string(), s?)))
             .collect())
     }
+}
+
+/// Writes one message on `channel`, numbered after the channel's last.
+fn write_message(
+    writer: &mut Option<McapWriter>,
+    path: &Path,
+    sequences: &mut Vec<u32>,
+    channel: u16,
+    stamp_ns: u64,
+    data: &[u8],
+) -> Result<()> {
+    let index = usize::from(channel);
+    if sequences.len() <= index {
+        sequences.resize(index + 1, 0);
+    }
+    sequences[index] += 1;
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: sequences[index],
+        log_time: stamp_ns,
+        publish_time: stamp_ns,
+    };
+    with_writer(writer, path, |w| w.write_to_known_channel(&header, data))
 }
 
 /// The writer's thread, seen from the recorder.
