@@ -112,6 +112,8 @@ impl Executor<'_> {
         let started = Instant::now();
         let cpu_started = crate::stats::thread_cpu_ns();
         self.shared.step_cpu_started_ns.set(Some(cpu_started));
+        let arrivals = &self.shared.arrivals;
+        arrivals.set(arrivals.get() + 1);
         // Subscribers note what they still hold while the step reads them.
         self.shared.next_arrival_ns.set(u64::MAX);
         let stepped = step(state);

@@ -106,6 +106,7 @@ impl Node {
                 .and_then(|n| NodeNet::new(n, &identity.name, &identity.host)),
             next_arrival_ns: Cell::new(u64::MAX),
             step_cpu_started_ns: Cell::new(None),
+            arrivals: Cell::new(0),
             ports: RefCell::new(Default::default()),
         });
         // Emulated links hold messages past the tick and a CPU slowdown stamps them late:

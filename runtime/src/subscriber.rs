@@ -60,6 +60,9 @@ pub struct Subscriber<T: Message> {
     /// Received from iceoryx2 but not yet visible (lockstep only).
     pending: RefCell<VecDeque<Sample<ipc::Service, T, Header>>>,
     pending_limit: usize,
+    /// The node's [`Shared::arrivals`] when a step found the port empty: until it changes,
+    /// nothing the step can see comes in (lockstep only).
+    empty_at: Cell<Option<u64>>,
     /// Messages that crossed a link, in arrival order.
     delayed: RefCell<VecDeque<Delayed<T>>>,
     /// Per publisher, the latest arrival so far: a link keeps each publisher's order.
@@ -97,6 +100,7 @@ impl<T: Message> Subscriber<T> {
             port,
             pending: RefCell::new(VecDeque::with_capacity(8)),
             pending_limit: topic.delivery().depth().max(8) - 1,
+            empty_at: Cell::new(None),
             delayed: RefCell::new(VecDeque::new()),
             last_arrival: RefCell::new(Vec::new()),
             queues: RefCell::new(
@@ -163,12 +167,23 @@ impl<T: Message> Subscriber<T> {
         Ok(self.take_visible(&mut pending))
     }
 
-    /// Pulls from iceoryx2 until the queue is empty or `pending` holds its limit.
+    /// Pulls from iceoryx2 until the queue is empty or `pending` holds its limit; within a
+    /// step, not again once the port was empty (see [`Shared::arrivals`]): `latest` and a
+    /// loop of `receive` would otherwise look once more per message.
     fn fill(&self, pending: &mut VecDeque<Sample<ipc::Service, T, Header>>) -> Result<(), Error> {
+        // Realtime messages come in while a step runs, and a step sees what came.
+        let in_step = self.shared.lockstep && self.shared.step_cpu_started_ns.get().is_some();
+        let arrivals = self.shared.arrivals.get();
+        if in_step && self.empty_at.get() == Some(arrivals) {
+            return Ok(());
+        }
         while pending.len() < self.pending_limit {
             match self.pull()? {
                 Some(sample) => pending.push_back(sample),
-                None => break,
+                None => {
+                    self.empty_at.set(in_step.then_some(arrivals));
+                    break;
+                }
             }
         }
         Ok(())

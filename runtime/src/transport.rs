@@ -40,6 +40,11 @@ pub(crate) struct Shared {
     /// The stepping thread's CPU time when the current step started, ns, for compute
     /// budgets.
     pub step_cpu_started_ns: Cell<Option<u64>>,
+    /// Counts what may put a message a step can see into a subscriber's port: a step's start
+    /// and each message the node sends (it may read its own topic). In lockstep every message
+    /// a step can see is in before the step starts, so a subscriber that found its port empty
+    /// at this count does not look again (each look walks iceoryx2's publisher slots).
+    pub arrivals: Cell<u64>,
     /// What the node told the lockstep scheduler it touches (see [`Ports`]).
     pub ports: RefCell<Ports>,
 }
@@ -100,6 +105,7 @@ impl Shared {
     /// learns of it with the step's report (and wakes the topic's triggered nodes); in
     /// realtime `notifier` wakes them.
     pub fn sent(&self, topic_hash: u64, notifier: &Notifier<ipc::Service>) {
+        self.arrivals.set(self.arrivals.get() + 1);
         if self.lockstep {
             // Outside a step (a node's set-up, its last status) nothing is ahead of anyone: the
             // message marks no step, and is no burst.
