@@ -42,8 +42,10 @@ pub(crate) struct Shared {
     pub step_cpu_started_ns: Cell<Option<u64>>,
     /// Counts what may put a message a step can see into a subscriber's port: a step's start
     /// and each message the node sends (it may read its own topic). In lockstep every message
-    /// a step can see is in before the step starts, so a subscriber that found its port empty
-    /// at this count does not look again (each look walks iceoryx2's publisher slots).
+    /// of the group's nodes that a step can see is in before the step starts, so a subscriber
+    /// that found its port empty at this count does not look again (each look walks
+    /// iceoryx2's publisher slots). A message from outside the group (`caravan topic pub`,
+    /// `caravan play`) comes when it comes: a step that looked before it sees it at the next.
     pub arrivals: Cell<u64>,
     /// What the node told the lockstep scheduler it touches (see [`Ports`]).
     pub ports: RefCell<Ports>,

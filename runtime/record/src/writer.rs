@@ -358,7 +358,7 @@ impl Writer {
         let msg = drained.message;
         let stamp_ns = msg.header.stamp_ns;
         // Views and record are read straight from the message's bytes; the record's text is
-        // what `serde_json::to_vec` of its JSON view gave (`Descriptor::write_json`).
+        // what `serde_json::to_vec` of its JSON view gave (`Descriptor::write_json_text`).
         let viewed = match &mut known.viewer {
             Some(viewer) => match viewer.encode(&msg.descriptor, &msg.bytes, stamp_ns, views) {
                 true => viewer.topics(),
