@@ -126,21 +126,17 @@ fn header_schema(with_wall_clock: bool) -> Value {
     json!({"type": "object", "properties": props})
 }
 
-/// The header as the recorder writes it (see the module doc for the strings).
+/// The header as the recorder writes it (see the module doc for the strings), as a value: the
+/// text of [`write_header_json`] read back.
 pub fn header_json(h: &caravan_schemas::Header, with_wall_clock: bool) -> Value {
-    let mut header = json!({
-        "seq": h.seq,
-        "stamp_ns": h.stamp_ns,
-        "source_id": h.source_id.to_string(),
-    });
-    if with_wall_clock {
-        header["send_wall_ns"] = json!(h.send_wall_ns.to_string());
-    }
-    header
+    let mut text = Vec::new();
+    write_header_json(h, with_wall_clock, &mut text);
+    serde_json::from_slice(&text).expect("the header's text is JSON")
 }
 
-/// Appends the text `serde_json::to_vec` gives of [`header_json`], without building it: the
-/// writer's per-message path (keys in byte order, as `serde_json::Map` keeps them).
+/// Appends the header's JSON text as the recorder writes it, without building a value: the
+/// writer's per-message path. Keys come in byte order, as `serde_json::Map` keeps them, so the
+/// text is what `serde_json::to_vec` gives of [`header_json`].
 pub fn write_header_json(h: &caravan_schemas::Header, with_wall_clock: bool, out: &mut Vec<u8>) {
     use std::io::Write;
     out.push(b'{');
@@ -175,6 +171,17 @@ mod tests {
                 String::from_utf8(text).unwrap(),
                 String::from_utf8(expected).unwrap()
             );
+            // The numbers a reader can take as JSON numbers are numbers; the u64s beyond
+            // JSON's exact integers are decimal strings.
+            let mut want = serde_json::json!({
+                "seq": 7,
+                "stamp_ns": 1_500_000_000u64,
+                "source_id": u64::MAX.to_string(),
+            });
+            if wall {
+                want["send_wall_ns"] = "1700000000123456789".into();
+            }
+            assert_eq!(super::header_json(&h, wall), want);
         }
     }
 

@@ -141,7 +141,7 @@ fn with_writer<T>(
 
 /// A topic the writer was told of, by [`NewTopic::id`].
 struct Known {
-    topic: Arc<str>,
+    topic: String,
     type_name: &'static str,
     /// Its raw channel in the file; `None` for a topic served live only.
     channel: Option<u16>,
@@ -288,7 +288,7 @@ impl Writer {
             live.advertise_raw(&new.topic, &new.descriptor, !self.lockstep)?;
         }
         self.topics[new.id] = Some(Known {
-            topic: new.topic.as_str().into(),
+            topic: new.topic,
             type_name: new.type_name,
             channel,
             viewer,
@@ -412,7 +412,7 @@ impl Writer {
             .topics
             .iter()
             .zip(stats)
-            .filter_map(|(known, s)| Some((known.as_ref()?.topic.to_string(), s?)))
+            .filter_map(|(known, s)| Some((known.as_ref()?.topic.clone(), s?)))
             .collect())
     }
 }
