@@ -60,8 +60,13 @@ impl GroupEnd {
             return Ok(false);
         }
         self.last_look = Instant::now();
+        Self::has_ended(&self.group)
+    }
+
+    /// Whether `group` has ended now: no process of it but this one is alive.
+    pub fn has_ended(group: &str) -> Result<bool> {
         let me = std::process::id() as i32;
-        Ok(!live_nodes(&self.group)?.iter().any(|n| n.pid != me))
+        Ok(!live_nodes(group)?.iter().any(|n| n.pid != me))
     }
 }
 
@@ -74,12 +79,26 @@ pub fn follow(
     mut each: impl FnMut(&caravan::Header, serde_json::Value) -> bool,
 ) -> Result<()> {
     let (config, node) = iox(group)?;
-    let info = list_topics(&config, true)?
-        .into_iter()
-        .find(|t| t.name == topic)
-        .ok_or_else(|| bad(format!("group '{group}' has no topic '{topic}'")))?;
-    let tap = open_tap(&node, topic, &info.type_name)?;
-    let listener = open_listener(&node, topic)?;
+    let opened = (|| -> Result<_> {
+        let info = list_topics(&config, true)?
+            .into_iter()
+            .find(|t| t.name == topic)
+            .ok_or_else(|| bad(format!("group '{group}' has no topic '{topic}'")))?;
+        Ok((
+            open_tap(&node, topic, &info.type_name)?,
+            open_listener(&node, topic)?,
+        ))
+    })();
+    let (tap, listener) = match opened {
+        Ok(opened) => opened,
+        // A group that ends while we join it takes its topics with it: that is its end, not
+        // a topic we were wrong about.
+        Err(_) if GroupEnd::has_ended(group)? => {
+            eprintln!("caravan: group '{group}' has ended");
+            return Ok(());
+        }
+        Err(e) => return Err(e),
+    };
     let waitset = WaitSetBuilder::new()
         .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
         .create::<ipc::Service>()
