@@ -109,9 +109,17 @@ impl Executor<'_> {
     where
         F: FnMut(&mut Step) -> Result<(), Error>,
     {
+        // Messages are stamped by the step's CPU time under a slowdown in lockstep.
+        let stamped_by_cpu = self.shared.lockstep
+            && self
+                .shared
+                .net
+                .as_ref()
+                .is_some_and(|n| n.slowdown.is_some());
+        let cpu_started = (stats.cpu_due() || stamped_by_cpu).then(crate::stats::thread_cpu_ns);
         let started = Instant::now();
-        let cpu_started = crate::stats::thread_cpu_ns();
-        self.shared.step_cpu_started_ns.set(Some(cpu_started));
+        self.shared.in_step.set(true);
+        self.shared.step_cpu_started_ns.set(cpu_started);
         let arrivals = &self.shared.arrivals;
         arrivals.set(arrivals.get() + 1);
         // Subscribers note what they still hold while the step reads them.
@@ -119,11 +127,12 @@ impl Executor<'_> {
         let stepped = step(state);
         // Outside a step (a final status, a message published between steps) nothing is
         // computing: its messages carry the step's time.
+        self.shared.in_step.set(false);
         self.shared.step_cpu_started_ns.set(None);
         stepped?;
         let compute = crate::StepCompute {
             wall_ns: started.elapsed().as_nanos() as u64,
-            cpu_ns: crate::stats::thread_cpu_ns().saturating_sub(cpu_started),
+            cpu_ns: cpu_started.map(|c| crate::stats::thread_cpu_ns().saturating_sub(c)),
         };
         stats.record(start_ns, due_ns, compute);
         state.index += 1;

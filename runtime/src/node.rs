@@ -105,6 +105,7 @@ impl Node {
                 .as_ref()
                 .and_then(|n| NodeNet::new(n, &identity.name, &identity.host)),
             next_arrival_ns: Cell::new(u64::MAX),
+            in_step: Cell::new(false),
             step_cpu_started_ns: Cell::new(None),
             arrivals: Cell::new(0),
             ports: RefCell::new(Default::default()),

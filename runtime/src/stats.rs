@@ -3,6 +3,13 @@
 //! Compute is measured twice: wall-clock time inside the step (what deadlines are about) and
 //! the stepping thread's CPU time (what a host's CPU slowdown scales: on the emulating
 //! machine a step also waits for a core, which a robot's own computer would not).
+//!
+//! The wall clock is read at every step. The thread's CPU clock is a system call (no vDSO
+//! serves it), two per step: for a node whose steps take microseconds that is a tenth of
+//! its CPU. So it is read at every one of the first [`CPU_ALWAYS`] steps and then at one
+//! step in [`CPU_ONE_IN`], picked at random ([`CpuSampling`]); the CPU mean is the mean of
+//! the steps read. A node with a CPU slowdown reads it at every step (its messages are
+//! stamped by it).
 
 use caravan_schemas::NodeStatus;
 use hdrhistogram::Histogram;
@@ -17,7 +24,48 @@ pub struct StepStats {
     compute: Histogram<u64>,
     compute_sum_ns: u128,
     cpu_sum_ns: u128,
+    /// Steps whose CPU time was read (`cpu_sum_ns` is theirs).
+    cpu_steps: u64,
+    cpu_sampling: CpuSampling,
     last_start_ns: Option<u64>,
+}
+
+/// Steps whose CPU clock is read before sampling starts: a short run's mean stays exact.
+pub const CPU_ALWAYS: u64 = 64;
+/// After [`CPU_ALWAYS`] steps, one step in this many has its CPU clock read.
+pub const CPU_ONE_IN: u64 = 8;
+
+/// Picks the steps whose CPU clock is read: the first [`CPU_ALWAYS`], then one in
+/// [`CPU_ONE_IN`] at random, so that a node whose work repeats every few steps is not read
+/// at the same phase each time. Seeded alike in every node: which steps are read is the same
+/// on a rerun.
+#[derive(Debug, Clone)]
+pub struct CpuSampling {
+    steps: u64,
+    /// xorshift64 state, never 0.
+    state: u64,
+}
+
+impl Default for CpuSampling {
+    fn default() -> Self {
+        Self {
+            steps: 0,
+            state: 0x9E37_79B9_7F4A_7C15,
+        }
+    }
+}
+
+impl CpuSampling {
+    /// Whether the next step's CPU clock is read.
+    pub fn next_due(&mut self) -> bool {
+        self.steps += 1;
+        let mut x = self.state;
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        self.state = x;
+        self.steps <= CPU_ALWAYS || x.is_multiple_of(CPU_ONE_IN)
+    }
 }
 
 impl StepStats {
@@ -33,8 +81,15 @@ impl StepStats {
             compute: histogram(),
             compute_sum_ns: 0,
             cpu_sum_ns: 0,
+            cpu_steps: 0,
+            cpu_sampling: CpuSampling::default(),
             last_start_ns: None,
         }
+    }
+
+    /// Whether the next step's CPU clock is to be read ([`CpuSampling`]); ask once per step.
+    pub fn cpu_due(&mut self) -> bool {
+        self.cpu_sampling.next_due()
     }
 
     /// Records one step that started at `start_ns` (on a monotonic clock), was due at `due_ns`
@@ -44,7 +99,10 @@ impl StepStats {
         self.steps += 1;
         self.compute.saturating_record(compute_ns.max(1));
         self.compute_sum_ns += compute_ns as u128;
-        self.cpu_sum_ns += compute.cpu_ns as u128;
+        if let Some(cpu_ns) = compute.cpu_ns {
+            self.cpu_sum_ns += cpu_ns as u128;
+            self.cpu_steps += 1;
+        }
         if self.period_ns > 0 {
             if let Some(last) = self.last_start_ns {
                 let actual = start_ns.saturating_sub(last);
@@ -74,7 +132,7 @@ impl StepStats {
             compute_mean_ns: (self.compute_sum_ns / u128::from(self.steps.max(1))) as u64,
             compute_p99_ns: pick(&self.compute, |h| h.value_at_quantile(0.99)),
             compute_max_ns: pick(&self.compute, |h| h.max()),
-            compute_cpu_mean_ns: (self.cpu_sum_ns / u128::from(self.steps.max(1))) as u64,
+            compute_cpu_mean_ns: (self.cpu_sum_ns / u128::from(self.cpu_steps.max(1))) as u64,
             ..NodeStatus::default()
         }
     }
@@ -85,8 +143,9 @@ impl StepStats {
 pub struct StepCompute {
     /// Wall-clock time, including any wait for a core.
     pub wall_ns: u64,
-    /// CPU time of the stepping thread.
-    pub cpu_ns: u64,
+    /// CPU time of the stepping thread; `None` for a step whose CPU clock was not read
+    /// ([`StepStats::cpu_due`]).
+    pub cpu_ns: Option<u64>,
 }
 
 /// The calling thread's CPU time, ns (0 where the clock cannot be read).
@@ -131,7 +190,7 @@ mod tests {
         let mut s = StepStats::new(Some(Duration::from_millis(10)));
         let took = |ms: u64| StepCompute {
             wall_ns: ms * 1_000_000,
-            cpu_ns: ms * 500_000,
+            cpu_ns: Some(ms * 500_000),
         };
         s.record(0, 0, took(1)); // on time
         s.record(10_500_000, 10_000_000, took(1)); // 0.5 ms late: jitter, no miss
@@ -143,6 +202,49 @@ mod tests {
         assert!(sum.jitter_max_ns >= 14_000_000);
         assert_eq!(sum.compute_mean_ns, 3_750_000);
         assert_eq!(sum.compute_cpu_mean_ns, 1_875_000);
+    }
+
+    #[test]
+    fn the_cpu_mean_is_over_the_steps_read() {
+        let mut s = StepStats::new(None);
+        let step = |cpu_ns| StepCompute {
+            wall_ns: 1_000,
+            cpu_ns,
+        };
+        s.record(0, 0, step(Some(3_000)));
+        s.record(0, 0, step(None));
+        s.record(0, 0, step(Some(1_000)));
+        s.record(0, 0, step(None));
+        let sum = s.summary();
+        assert_eq!(sum.steps, 4);
+        assert_eq!(sum.compute_cpu_mean_ns, 2_000);
+        assert_eq!(StepStats::new(None).summary().compute_cpu_mean_ns, 0);
+    }
+
+    #[test]
+    fn every_early_step_is_read_then_one_in_eight_at_no_fixed_phase() {
+        let mut sampling = CpuSampling::default();
+        let due: Vec<bool> = (0..80_064).map(|_| sampling.next_due()).collect();
+        assert!(due[..CPU_ALWAYS as usize].iter().all(|&d| d));
+        let later = &due[CPU_ALWAYS as usize..];
+        let read = later.iter().filter(|&&d| d).count();
+        // 10,000 expected; a binomial's standard deviation here is under 100.
+        assert!(
+            (9_500..=10_500).contains(&read),
+            "{read} of {}",
+            later.len()
+        );
+        // Each phase of a node whose work repeats every 10 steps is read about as often.
+        for phase in 0..10 {
+            let at_phase = later.iter().skip(phase).step_by(10).filter(|&&d| d).count();
+            assert!(
+                (850..=1_150).contains(&at_phase),
+                "phase {phase}: {at_phase}"
+            );
+        }
+        // A rerun reads the same steps.
+        let mut again = CpuSampling::default();
+        assert!(due.iter().all(|&d| again.next_due() == d));
     }
 
     #[test]

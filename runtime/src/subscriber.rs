@@ -172,7 +172,7 @@ impl<T: Message> Subscriber<T> {
     /// loop of `receive` would otherwise look once more per message.
     fn fill(&self, pending: &mut VecDeque<Sample<ipc::Service, T, Header>>) -> Result<(), Error> {
         // Realtime messages come in while a step runs, and a step sees what came.
-        let in_step = self.shared.lockstep && self.shared.step_cpu_started_ns.get().is_some();
+        let in_step = self.shared.lockstep && self.shared.in_step.get();
         let arrivals = self.shared.arrivals.get();
         if in_step && self.empty_at.get() == Some(arrivals) {
             return Ok(());

@@ -37,8 +37,11 @@ pub(crate) struct Shared {
     /// Earliest time a message held by a subscriber becomes visible (simulated ns in
     /// lockstep, wall-clock ns in realtime); `u64::MAX` when none is held.
     pub next_arrival_ns: Cell<u64>,
+    /// Whether a step is running (outside one: a node's set-up, its last status).
+    pub in_step: Cell<bool>,
     /// The stepping thread's CPU time when the current step started, ns, for compute
-    /// budgets.
+    /// budgets; `None` outside a step or when this step's CPU clock is not read (always read
+    /// with a CPU slowdown in lockstep, see `stats.rs`).
     pub step_cpu_started_ns: Cell<Option<u64>>,
     /// Counts what may put a message a step can see into a subscriber's port: a step's start
     /// and each message the node sends (it may read its own topic). In lockstep every message
@@ -111,9 +114,9 @@ impl Shared {
         if self.lockstep {
             // Outside a step (a node's set-up, its last status) nothing is ahead of anyone: the
             // message marks no step, and is no burst.
-            let bit = match self.step_cpu_started_ns.get() {
-                Some(_) => 1u32.checked_shl(self.step_of_grant.get()).unwrap_or(0),
-                None => 0,
+            let bit = match self.in_step.get() {
+                true => 1u32.checked_shl(self.step_of_grant.get()).unwrap_or(0),
+                false => 0,
             };
             let mut list = self.published.borrow_mut();
             match list.iter_mut().find(|(t, _)| *t == topic_hash) {

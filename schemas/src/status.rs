@@ -35,6 +35,7 @@ pub struct NodeStatus {
     /// Resident memory of the node's process, KiB (Linux's /proc/self/statm; 0 elsewhere).
     pub rss_kib: u64,
     /// CPU time the stepping thread spent inside the step function, mean, ns: what a host's
-    /// `cpu_slowdown` scales.
+    /// `cpu_slowdown` scales. The mean of the steps whose CPU clock was read: every step
+    /// under a slowdown, else the first 64 and then one in 8 at random.
     pub compute_cpu_mean_ns: u64,
 }
