@@ -11,7 +11,8 @@ every process of its tree from /proc twice a second, and prints one JSON line:
 - `cpu_ms_per_tick`: CPU of the launcher and every process of the group (report plugins,
   which run after the simulation, left out);
 - `compute_ms_per_tick`: the nodes' CPU inside their step functions (the report's
-  `compute_cpu_mean_ms` × `steps`, summed over nodes); `physics_ms_per_tick` the physics
+  `compute_cpu_mean_ms` × `steps`, summed over nodes; that mean is of the steps whose CPU
+  clock a node read, one in eight after its first 64); `physics_ms_per_tick` the physics
   process's share of it;
 - `overhead`: the first over the second (1 = nothing but the nodes' work);
 - `launcher_ms_per_tick` by thread name (`recording write`: JSON, views, compression;
