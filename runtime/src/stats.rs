@@ -7,9 +7,10 @@
 //! The wall clock is read at every step. The thread's CPU clock is a system call (no vDSO
 //! serves it), two per step: for a node whose steps take microseconds that is a tenth of
 //! its CPU. So it is read at every one of the first [`CPU_ALWAYS`] steps and then at one
-//! step in [`CPU_ONE_IN`], picked at random ([`CpuSampling`]); the CPU mean is the mean of
-//! the steps read. A node with a CPU slowdown reads it at every step (its messages are
-//! stamped by it).
+//! step in [`CPU_ONE_IN`], picked at random ([`CpuSampling`]); the CPU mean weighs the first
+//! steps and the later ones by their numbers of steps. A node with a CPU slowdown in lockstep
+//! reads it at every step (its messages are stamped by it). Python nodes read it at every
+//! step.
 
 use caravan_schemas::NodeStatus;
 use hdrhistogram::Histogram;
@@ -23,11 +24,30 @@ pub struct StepStats {
     jitter: Histogram<u64>,
     compute: Histogram<u64>,
     compute_sum_ns: u128,
-    cpu_sum_ns: u128,
-    /// Steps whose CPU time was read (`cpu_sum_ns` is theirs).
-    cpu_steps: u64,
+    /// CPU time of the first [`CPU_ALWAYS`] steps, then of the later ones: each part's steps
+    /// are read at a rate of their own, so the mean weighs each part by its steps.
+    cpu_early: CpuPart,
+    cpu_later: CpuPart,
     cpu_sampling: CpuSampling,
     last_start_ns: Option<u64>,
+}
+
+/// The CPU time of a run of steps, some of them read.
+#[derive(Debug, Clone, Copy, Default)]
+struct CpuPart {
+    steps: u64,
+    read: u64,
+    sum_ns: u128,
+}
+
+impl CpuPart {
+    fn record(&mut self, cpu_ns: Option<u64>) {
+        self.steps += 1;
+        if let Some(ns) = cpu_ns {
+            self.read += 1;
+            self.sum_ns += ns as u128;
+        }
+    }
 }
 
 /// Steps whose CPU clock is read before sampling starts: a short run's mean stays exact.
@@ -80,14 +100,15 @@ impl StepStats {
             jitter: histogram(),
             compute: histogram(),
             compute_sum_ns: 0,
-            cpu_sum_ns: 0,
-            cpu_steps: 0,
+            cpu_early: CpuPart::default(),
+            cpu_later: CpuPart::default(),
             cpu_sampling: CpuSampling::default(),
             last_start_ns: None,
         }
     }
 
-    /// Whether the next step's CPU clock is to be read ([`CpuSampling`]); ask once per step.
+    /// Whether the next step's CPU clock is to be read (the first 64 steps, then one in 8 at
+    /// random); ask once per step.
     pub fn cpu_due(&mut self) -> bool {
         self.cpu_sampling.next_due()
     }
@@ -99,9 +120,10 @@ impl StepStats {
         self.steps += 1;
         self.compute.saturating_record(compute_ns.max(1));
         self.compute_sum_ns += compute_ns as u128;
-        if let Some(cpu_ns) = compute.cpu_ns {
-            self.cpu_sum_ns += cpu_ns as u128;
-            self.cpu_steps += 1;
+        if self.steps <= CPU_ALWAYS {
+            self.cpu_early.record(compute.cpu_ns);
+        } else {
+            self.cpu_later.record(compute.cpu_ns);
         }
         if self.period_ns > 0 {
             if let Some(last) = self.last_start_ns {
@@ -115,6 +137,19 @@ impl StepStats {
             }
         }
         self.last_start_ns = Some(start_ns);
+    }
+
+    /// The mean CPU time per step: each part's steps read stand for all its steps (a part
+    /// none of whose steps was read is left out).
+    fn cpu_mean_ns(&self) -> u64 {
+        let (mut total, mut steps) = (0u128, 0u128);
+        for part in [self.cpu_early, self.cpu_later] {
+            if part.read > 0 {
+                total += part.sum_ns * u128::from(part.steps) / u128::from(part.read);
+                steps += u128::from(part.steps);
+            }
+        }
+        (total / steps.max(1)) as u64
     }
 
     /// The statistics as a `NodeStatus` (identity, missed messages and time left for the
@@ -132,7 +167,7 @@ impl StepStats {
             compute_mean_ns: (self.compute_sum_ns / u128::from(self.steps.max(1))) as u64,
             compute_p99_ns: pick(&self.compute, |h| h.value_at_quantile(0.99)),
             compute_max_ns: pick(&self.compute, |h| h.max()),
-            compute_cpu_mean_ns: (self.cpu_sum_ns / u128::from(self.cpu_steps.max(1))) as u64,
+            compute_cpu_mean_ns: self.cpu_mean_ns(),
             ..NodeStatus::default()
         }
     }
@@ -205,20 +240,30 @@ mod tests {
     }
 
     #[test]
-    fn the_cpu_mean_is_over_the_steps_read() {
+    fn the_cpu_mean_weighs_the_early_steps_and_the_sampled_ones_by_their_steps() {
         let mut s = StepStats::new(None);
         let step = |cpu_ns| StepCompute {
             wall_ns: 1_000,
             cpu_ns,
         };
-        s.record(0, 0, step(Some(3_000)));
-        s.record(0, 0, step(None));
-        s.record(0, 0, step(Some(1_000)));
-        s.record(0, 0, step(None));
+        // 64 early steps of 3 µs, all read; 64 later ones of 1 µs, one in 8 read.
+        for _ in 0..CPU_ALWAYS {
+            s.record(0, 0, step(Some(3_000)));
+        }
+        for k in 0..64 {
+            s.record(0, 0, step((k % 8 == 0).then_some(1_000)));
+        }
         let sum = s.summary();
-        assert_eq!(sum.steps, 4);
+        assert_eq!(sum.steps, 128);
+        // The true mean; a mean over the steps read would say (64 × 3 + 8 × 1) / 72 µs.
         assert_eq!(sum.compute_cpu_mean_ns, 2_000);
         assert_eq!(StepStats::new(None).summary().compute_cpu_mean_ns, 0);
+        // Later steps none of which was read: the early ones stand for the run.
+        let mut s = StepStats::new(None);
+        for k in 0..70u64 {
+            s.record(0, 0, step((k < CPU_ALWAYS).then_some(3_000)));
+        }
+        assert_eq!(s.summary().compute_cpu_mean_ns, 3_000);
     }
 
     #[test]

@@ -114,9 +114,10 @@ impl Shared {
         if self.lockstep {
             // Outside a step (a node's set-up, its last status) nothing is ahead of anyone: the
             // message marks no step, and is no burst.
-            let bit = match self.in_step.get() {
-                true => 1u32.checked_shl(self.step_of_grant.get()).unwrap_or(0),
-                false => 0,
+            let bit = if self.in_step.get() {
+                1u32.checked_shl(self.step_of_grant.get()).unwrap_or(0)
+            } else {
+                0
             };
             let mut list = self.published.borrow_mut();
             match list.iter_mut().find(|(t, _)| *t == topic_hash) {

@@ -35,7 +35,8 @@ pub struct NodeStatus {
     /// Resident memory of the node's process, KiB (Linux's /proc/self/statm; 0 elsewhere).
     pub rss_kib: u64,
     /// CPU time the stepping thread spent inside the step function, mean, ns: what a host's
-    /// `cpu_slowdown` scales. The mean of the steps whose CPU clock was read: every step
-    /// under a slowdown, else the first 64 and then one in 8 at random.
+    /// `cpu_slowdown` scales. From the steps whose CPU clock was read: every step under a
+    /// slowdown in lockstep (and every step of a Python node), else each of the first 64 and
+    /// then one in 8 at random, the later ones standing for all the later steps.
     pub compute_cpu_mean_ns: u64,
 }

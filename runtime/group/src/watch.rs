@@ -60,13 +60,18 @@ impl GroupEnd {
             return Ok(false);
         }
         self.last_look = Instant::now();
-        Self::has_ended(&self.group)
+        let me = std::process::id() as i32;
+        Ok(!live_nodes(&self.group)?.iter().any(|n| n.pid != me))
     }
 
-    /// Whether `group` has ended now: no process of it but this one is alive.
-    pub fn has_ended(group: &str) -> Result<bool> {
+    /// Whether every node of `group` has exited: no named node (the launcher's own, the
+    /// scheduler's and the recorder's, and watchers like this one, have no name) but this
+    /// process's is alive. The launcher may still be finishing its recording.
+    pub fn nodes_gone(group: &str) -> Result<bool> {
         let me = std::process::id() as i32;
-        Ok(!live_nodes(group)?.iter().any(|n| n.pid != me))
+        Ok(!live_nodes(group)?
+            .iter()
+            .any(|n| n.pid != me && !n.name.is_empty()))
     }
 }
 
@@ -92,8 +97,9 @@ pub fn follow(
     let (tap, listener) = match opened {
         Ok(opened) => opened,
         // A group that ends while we join it takes its topics with it: that is its end, not
-        // a topic we were wrong about.
-        Err(_) if GroupEnd::has_ended(group)? => {
+        // a topic we were wrong about. (Its launcher may live on a while to finish the
+        // recording, so its nodes are what is looked at.)
+        Err(_) if GroupEnd::nodes_gone(group).unwrap_or(false) => {
             eprintln!("caravan: group '{group}' has ended");
             return Ok(());
         }

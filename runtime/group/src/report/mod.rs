@@ -15,8 +15,9 @@
 //! - `nodes[]`: `{name, host, required, restarts, exit_status, period_ms (null when stepped by
 //!   messages), steps, rate_hz, deadline_misses, jitter_p50_ms, jitter_p99_ms, jitter_max_ms,
 //!   compute_mean_ms, compute_p99_ms, compute_max_ms (wall-clock time in the step),
-//!   compute_cpu_mean_ms (the stepping thread's CPU time in the step: every one of the first
-//!   64 steps, then one in 8 at random, `caravan::stats`), messages_missed, cpu_s
+//!   compute_cpu_mean_ms (the stepping thread's CPU time in the step, read at each of the
+//!   first 64 steps and then at one in 8 at random, or at every step under a CPU slowdown in
+//!   lockstep), messages_missed, cpu_s
 //!   (CPU time of the process, all runs), max_rss_mib (peak resident memory), container (only
 //!   for a node run in a container: its name; cpu_s and max_rss_mib are then the container's)}`
 //! - `topics[]`: `{name, type, messages, gaps, latency_us: {p50, p90, p99, max}}`; latency is
