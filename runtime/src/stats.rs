@@ -51,17 +51,15 @@ impl CpuPart {
 }
 
 /// Steps whose CPU clock is read before sampling starts: a short run's mean stays exact.
-pub const CPU_ALWAYS: u64 = 64;
+pub(crate) const CPU_ALWAYS: u64 = 64;
 /// After [`CPU_ALWAYS`] steps, one step in this many has its CPU clock read.
-pub const CPU_ONE_IN: u64 = 8;
+pub(crate) const CPU_ONE_IN: u64 = 8;
 
-/// Picks the steps whose CPU clock is read: the first [`CPU_ALWAYS`], then one in
-/// [`CPU_ONE_IN`] at random, so that a node whose work repeats every few steps is not read
-/// at the same phase each time. Seeded alike in every node: which steps are read is the same
-/// on a rerun.
+/// Picks one step in [`CPU_ONE_IN`] at random, so that a node whose work repeats every few
+/// steps is not read at the same phase each time. Seeded alike in every node: which steps
+/// are read is the same on a rerun.
 #[derive(Debug, Clone)]
-pub struct CpuSampling {
-    steps: u64,
+pub(crate) struct CpuSampling {
     /// xorshift64 state, never 0.
     state: u64,
 }
@@ -69,22 +67,20 @@ pub struct CpuSampling {
 impl Default for CpuSampling {
     fn default() -> Self {
         Self {
-            steps: 0,
             state: 0x9E37_79B9_7F4A_7C15,
         }
     }
 }
 
 impl CpuSampling {
-    /// Whether the next step's CPU clock is read.
-    pub fn next_due(&mut self) -> bool {
-        self.steps += 1;
+    /// Whether the next step is picked.
+    pub(crate) fn next_picked(&mut self) -> bool {
         let mut x = self.state;
         x ^= x << 13;
         x ^= x >> 7;
         x ^= x << 17;
         self.state = x;
-        self.steps <= CPU_ALWAYS || x.is_multiple_of(CPU_ONE_IN)
+        x.is_multiple_of(CPU_ONE_IN)
     }
 }
 
@@ -110,7 +106,10 @@ impl StepStats {
     /// Whether the next step's CPU clock is to be read (the first 64 steps, then one in 8 at
     /// random); ask once per step.
     pub fn cpu_due(&mut self) -> bool {
-        self.cpu_sampling.next_due()
+        // Drawn at every step, so that which later steps are read does not depend on how
+        // the early ones went.
+        let picked = self.cpu_sampling.next_picked();
+        self.steps < CPU_ALWAYS || picked
     }
 
     /// Records one step that started at `start_ns` (on a monotonic clock), was due at `due_ns`
@@ -268,8 +267,14 @@ mod tests {
 
     #[test]
     fn every_early_step_is_read_then_one_in_eight_at_no_fixed_phase() {
-        let mut sampling = CpuSampling::default();
-        let due: Vec<bool> = (0..80_064).map(|_| sampling.next_due()).collect();
+        let mut stats = StepStats::new(None);
+        let due: Vec<bool> = (0..80_064)
+            .map(|_| {
+                let due = stats.cpu_due();
+                stats.record(0, 0, StepCompute::default());
+                due
+            })
+            .collect();
         assert!(due[..CPU_ALWAYS as usize].iter().all(|&d| d));
         let later = &due[CPU_ALWAYS as usize..];
         let read = later.iter().filter(|&&d| d).count();
@@ -288,8 +293,12 @@ mod tests {
             );
         }
         // A rerun reads the same steps.
-        let mut again = CpuSampling::default();
-        assert!(due.iter().all(|&d| again.next_due() == d));
+        let mut again = StepStats::new(None);
+        assert!(due.iter().all(|&d| {
+            let same = again.cpu_due() == d;
+            again.record(0, 0, StepCompute::default());
+            same
+        }));
     }
 
     #[test]
