@@ -109,13 +109,7 @@ impl Executor<'_> {
     where
         F: FnMut(&mut Step) -> Result<(), Error>,
     {
-        // Messages are stamped by the step's CPU time under a slowdown in lockstep.
-        let stamped_by_cpu = self.shared.lockstep
-            && self
-                .shared
-                .net
-                .as_ref()
-                .is_some_and(|n| n.slowdown.is_some());
+        let stamped_by_cpu = self.shared.stamping_slowdown().is_some();
         let cpu_started = (stats.cpu_due() || stamped_by_cpu).then(crate::stats::thread_cpu_ns);
         let started = Instant::now();
         self.shared.in_step.set(true);

@@ -161,9 +161,11 @@ impl<T: Message> Publisher<T> {
     /// its own computer.
     fn stamp_ns(&self) -> u64 {
         let now = self.shared.now_ns.get();
-        let slowdown = self.shared.net.as_ref().and_then(|n| n.slowdown);
-        match (slowdown, self.shared.step_cpu_started_ns.get()) {
-            (Some(factor), Some(started)) if self.shared.lockstep => {
+        match (
+            self.shared.stamping_slowdown(),
+            self.shared.step_cpu_started_ns.get(),
+        ) {
+            (Some(factor), Some(started)) => {
                 let cpu = crate::stats::thread_cpu_ns().saturating_sub(started);
                 let compute = (cpu as f64 * factor) as u64;
                 let tick = self.shared.tick_ns.get().max(1);

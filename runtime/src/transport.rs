@@ -106,6 +106,16 @@ fn is_status(topic_hash: u64) -> bool {
 }
 
 impl Shared {
+    /// The host's CPU slowdown when it stamps this node's messages (lockstep only): each
+    /// message is then later by the step's CPU time so far times it, so every step's CPU
+    /// clock is read (`stats.rs`).
+    pub fn stamping_slowdown(&self) -> Option<f64> {
+        self.net
+            .as_ref()
+            .and_then(|n| n.slowdown)
+            .filter(|_| self.lockstep)
+    }
+
     /// After a message on the topic hashed `topic_hash` was sent: in lockstep the scheduler
     /// learns of it with the step's report (and wakes the topic's triggered nodes); in
     /// realtime `notifier` wakes them.
