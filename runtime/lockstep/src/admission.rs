@@ -78,6 +78,7 @@ impl Scheduler {
     }
 
     fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
+        self.reshaped();
         let name = hello.node.as_str().to_string();
         let hash = proto::name_hash(&name);
         if let Some(&i) = self.by_hash.get(&hash) {

@@ -42,7 +42,10 @@ impl Scheduler {
             let Some(report) = pending.read_report(slot, now_ns, &mut topics) else {
                 continue;
             };
-            self.members[i].slot_grants = true;
+            if !self.members[i].slot_grants {
+                self.members[i].slot_grants = true;
+                self.reshaped();
+            }
             self.stats.slot_reports += 1;
             taken = self.take_report(i, &report);
             if taken.is_err() {
@@ -108,6 +111,11 @@ impl Scheduler {
         // A grant of several periods up to this time or later was decided on its declaration.
         let batching = (self.members.iter())
             .any(|m| m.batch.start() < m.batch.end() && *m.batch.end() >= granted_ns);
+        let first_step = self.members[i].steps == 0;
+        let late_topic = report.undeclared != 0 && self.members[i].footprint.declared;
+        if first_step || late_topic {
+            self.reshaped();
+        }
         let member = &mut self.members[i];
         member.last_step = member.granted_at.elapsed();
         member.steps += 1;

@@ -60,6 +60,9 @@ pub struct Scheduler {
     longest_grant: std::rc::Rc<std::cell::Cell<u64>>,
     /// Times not being stepped yet → nodes that step then within a grant of an earlier time.
     pub(crate) ahead: BTreeMap<u64, Vec<usize>>,
+    /// Each node's room for a batch, looking at its inputs' publishers and not; 0 until
+    /// worked out (`batch.rs`, `Self::reshaped`).
+    pub(crate) rooms: std::cell::RefCell<Vec<[u64; 2]>>,
 }
 
 impl Scheduler {
@@ -107,6 +110,7 @@ impl Scheduler {
             batch_end: None,
             longest_grant: Default::default(),
             ahead: BTreeMap::new(),
+            rooms: Default::default(),
         })
     }
 
@@ -143,7 +147,11 @@ impl Scheduler {
     /// overlapping node publishes only to these, so that a topic new to the recorder gets
     /// its tap while no later time runs.
     pub fn know_topics(&mut self, topics: impl IntoIterator<Item = u64>) {
+        let known = self.known_topics.len();
         self.known_topics.extend(topics);
+        if self.known_topics.len() > known {
+            self.reshaped();
+        }
     }
 
     /// Time of the next event, if any node is due at all: the oldest time being stepped, or
@@ -421,6 +429,7 @@ impl Scheduler {
     fn mark_dead(&mut self, dead: &[String]) {
         for name in dead {
             if let Some(&i) = self.by_hash.get(&proto::name_hash(name)) {
+                self.reshaped();
                 self.members[i].active = false;
                 self.members[i].overlapped = false;
                 // A batch it had not reported: none of its steps counts.
