@@ -91,7 +91,11 @@ impl Scheduler {
     /// publisher due as often as it leaves room only if it batches too). Kept until
     /// [`Self::reshaped`]: it reads only what changes there, and is asked at every grant.
     fn room(&self, i: usize, writers: bool) -> u64 {
-        let known = self.rooms.borrow().get(i).map_or(0, |r| r[writers as usize]);
+        let known = self
+            .rooms
+            .borrow()
+            .get(i)
+            .map_or(0, |r| r[writers as usize]);
         if known > 0 {
             // Every test's schedule checks that nothing it reads changed unannounced.
             debug_assert_eq!(known, self.fresh_room(i, writers), "room of node {i}");
