@@ -78,12 +78,12 @@ impl Scheduler {
     }
 
     fn admit(&mut self, hello: &Hello) -> Result<(), Error> {
-        self.reshaped();
         let name = hello.node.as_str().to_string();
         let hash = proto::name_hash(&name);
         if let Some(&i) = self.by_hash.get(&hash) {
             // A restarted process rejoins at the next tick.
             if !self.members[i].active {
+                self.forget_rooms();
                 let footprint = self.footprint(hello);
                 let quiet = self.holds_count(hello);
                 let slot = self.slot(hello, hash);
@@ -140,6 +140,7 @@ impl Scheduler {
         for topic in hello.triggers.as_slice() {
             self.subscribers.entry(*topic).or_default().push(index);
         }
+        self.forget_rooms();
         if self.members[index].steps_on_joining {
             // A node joining mid-run steps at the latest time being stepped.
             let at = self.flights.back().map_or(self.now_ns, |f| f.now_ns);

@@ -69,7 +69,7 @@ impl Scheduler {
     /// end), when none of its inputs can change meanwhile (see `batch.rs`).
     pub fn batch_until(&mut self, end_ns: u64) {
         self.batch_end = Some(end_ns);
-        self.reshaped();
+        self.forget_rooms();
     }
 
     /// The most periods node `i` could take on one grant, whatever the time: 1 if it cannot
@@ -83,13 +83,13 @@ impl Scheduler {
     /// Forgets every node's room: what it reads changed (a node joined, died, stepped for the
     /// first time, reported into its slot, burst or opened a topic late; the recorder learned
     /// topics; batching was turned on).
-    pub(crate) fn reshaped(&mut self) {
+    pub(crate) fn forget_rooms(&mut self) {
         self.rooms.get_mut().clear();
     }
 
     /// [`Self::batch_room`], looking at the publishers of its inputs if `writers` (a
     /// publisher due as often as it leaves room only if it batches too). Kept until
-    /// [`Self::reshaped`]: it reads only what changes there, and is asked at every grant.
+    /// [`Self::forget_rooms`]: it reads only what changes there, and is asked at every grant.
     fn room(&self, i: usize, writers: bool) -> u64 {
         let known = self
             .rooms
@@ -97,14 +97,19 @@ impl Scheduler {
             .get(i)
             .map_or(0, |r| r[writers as usize]);
         if known > 0 {
-            // Every test's schedule checks that nothing it reads changed unannounced.
-            debug_assert_eq!(known, self.fresh_room(i, writers), "room of node {i}");
+            // In debug builds every test's schedule checks that nothing it reads changed
+            // without `forget_rooms`.
+            debug_assert_eq!(
+                known,
+                self.fresh_room(i, writers),
+                "room of node {i} (writers: {writers})"
+            );
             return known;
         }
         let room = self.fresh_room(i, writers);
         let mut rooms = self.rooms.borrow_mut();
         if rooms.len() <= i {
-            rooms.resize(self.members.len().max(i + 1), [0; 2]);
+            rooms.resize(self.members.len(), [0; 2]);
         }
         rooms[i][writers as usize] = room;
         room
@@ -338,9 +343,9 @@ impl Scheduler {
         steps: Option<&[(u64, u32)]>,
     ) -> Result<(), Error> {
         let batch = self.members[i].batch.clone();
-        if report.flags & Done::BURST != 0 {
+        if report.flags & Done::BURST != 0 && !self.members[i].bursty {
             self.members[i].bursty = true;
-            self.reshaped();
+            self.forget_rooms();
             tracing::debug!(
                 "node '{}' sent one topic two messages in its step at {} ns: it is granted \
                  one period at a time from now on",

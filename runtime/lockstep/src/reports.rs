@@ -44,7 +44,7 @@ impl Scheduler {
             };
             if !self.members[i].slot_grants {
                 self.members[i].slot_grants = true;
-                self.reshaped();
+                self.forget_rooms();
             }
             self.stats.slot_reports += 1;
             taken = self.take_report(i, &report);
@@ -111,10 +111,10 @@ impl Scheduler {
         // A grant of several periods up to this time or later was decided on its declaration.
         let batching = (self.members.iter())
             .any(|m| m.batch.start() < m.batch.end() && *m.batch.end() >= granted_ns);
-        let first_step = self.members[i].steps == 0;
+        // A first step and a topic opened after joining change what a batch's room reads.
         let late_topic = report.undeclared != 0 && self.members[i].footprint.declared;
-        if first_step || late_topic {
-            self.reshaped();
+        if self.members[i].steps == 0 || late_topic {
+            self.forget_rooms();
         }
         let member = &mut self.members[i];
         member.last_step = member.granted_at.elapsed();
@@ -123,7 +123,7 @@ impl Scheduler {
         for k in 0..member.batch_times.len() {
             member.stepped_at(member.batch_times[k]);
         }
-        if report.undeclared != 0 && member.footprint.declared {
+        if late_topic {
             member.footprint.declared = false;
             if member.overlapped || batching {
                 return Err(Error::Lockstep(format!(

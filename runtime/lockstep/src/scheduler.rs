@@ -61,7 +61,7 @@ pub struct Scheduler {
     /// Times not being stepped yet → nodes that step then within a grant of an earlier time.
     pub(crate) ahead: BTreeMap<u64, Vec<usize>>,
     /// Each node's room for a batch, looking at its inputs' publishers and not; 0 until
-    /// worked out (`batch.rs`, `Self::reshaped`).
+    /// worked out (`batch.rs`, `Self::forget_rooms`).
     pub(crate) rooms: std::cell::RefCell<Vec<[u64; 2]>>,
 }
 
@@ -150,7 +150,7 @@ impl Scheduler {
         let known = self.known_topics.len();
         self.known_topics.extend(topics);
         if self.known_topics.len() > known {
-            self.reshaped();
+            self.forget_rooms();
         }
     }
 
@@ -429,7 +429,7 @@ impl Scheduler {
     fn mark_dead(&mut self, dead: &[String]) {
         for name in dead {
             if let Some(&i) = self.by_hash.get(&proto::name_hash(name)) {
-                self.reshaped();
+                self.forget_rooms();
                 self.members[i].active = false;
                 self.members[i].overlapped = false;
                 // A batch it had not reported: none of its steps counts.
