@@ -76,9 +76,30 @@ fn assert_foxglove_scene(run: &ConvoyRun) {
     );
 
     let mut frames = std::collections::BTreeSet::new();
-    for m in recording::messages(&bytes, "tf") {
-        for t in FrameTransforms::decode(m.as_slice()).unwrap().transforms {
+    // One `tf` message per time, holding every transform placed then: at a time the physics
+    // published, every robot's true pose.
+    let mut last_ns = None;
+    for (_, topic, log_ns, m) in recording::all_messages(&bytes) {
+        if topic != "tf" {
+            continue;
+        }
+        assert!(last_ns < Some(log_ns), "two tf messages at {log_ns} ns");
+        last_ns = Some(log_ns);
+        let transforms = FrameTransforms::decode(m.as_slice()).unwrap().transforms;
+        let true_poses = (transforms.iter())
+            .filter(|t| t.child_frame_id.ends_with("/base_link_true"))
+            .count();
+        assert!(
+            [0, 5].contains(&true_poses),
+            "{true_poses} true poses at {log_ns} ns"
+        );
+        for t in transforms {
             assert_eq!(t.parent_frame_id, "map");
+            let stamp = t.timestamp.unwrap();
+            assert_eq!(
+                stamp.sec() as u64 * 1_000_000_000 + stamp.nsec() as u64,
+                log_ns
+            );
             frames.insert(t.child_frame_id);
         }
     }

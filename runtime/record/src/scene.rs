@@ -5,9 +5,10 @@
 //! Frames: `map` is the world; `robot_<i>/base_link` is robot i where its own estimate puts it
 //! (`robot/<i>/pose`), `robot_<i>/base_link_true` where it is (`robot/<i>/pose_true`), and
 //! `robot_<i>/<link>` each link of an articulated robot (`robot/<i>/link_states`). Transforms
-//! go to one `tf` channel, as in ROS; every other view is on `foxglove/<raw topic>`. A scan is
-//! drawn in its robot's `base_link`; the world's solids (`scene`, from the physics) are a
-//! `foxglove.SceneUpdate` on `foxglove/scene`.
+//! go to one `tf` channel, as in ROS, one message per time holding every transform placed
+//! then (the writer gathers them: [`Viewer::encode`]'s `frames`, [`put_frames`]); every other
+//! view is on `foxglove/<raw topic>`. A scan is drawn in its robot's `base_link`; the world's
+//! solids (`scene`, from the physics) are a `foxglove.SceneUpdate` on `foxglove/scene`.
 //!
 //! Views depend only on the raw message, so a lockstep recording stays byte-identical. They are
 //! read from the message's bytes ([`caravan_schemas::reader`]), not from its JSON: a 1 MiB map
@@ -37,6 +38,22 @@ pub struct SceneSchema {
 
 /// A view's topic and schema.
 pub type ViewTopic = (String, fn() -> SceneSchema);
+
+/// The `tf` channel's topic and schema.
+pub fn tf_view() -> ViewTopic {
+    (TF_TOPIC.to_string(), schema_of::<FrameTransforms>)
+}
+
+/// Encodes `frames` into `out` as one `tf` message, over what it held, and empties `frames`
+/// (keeping its room).
+pub fn put_frames(frames: &mut Vec<FrameTransform>, out: &mut Vec<u8>) {
+    let message = FrameTransforms {
+        transforms: std::mem::take(frames),
+    };
+    put(&message, out);
+    *frames = message.transforms;
+    frames.clear();
+}
 
 /// One Foxglove message derived from a recorded one.
 #[cfg(test)]
@@ -137,18 +154,20 @@ enum Kind {
 
 /// The Foxglove views of one raw topic, worked out when the topic is discovered: their topics,
 /// and what a message needs besides its bytes (frames, the robot). A message then costs no name
-/// formatting, and its views are encoded into buffers kept between messages; a pose's two
-/// views (most of a recording's) are kept whole and only their numbers refilled.
+/// formatting, and its views are encoded into buffers kept between messages; a pose's view
+/// (most of a recording's) is kept whole and only its numbers refilled.
 pub struct Viewer {
     kind: Kind,
-    /// The views' topics and schemas, in the order [`Viewer::encode`] fills its buffers.
+    /// The views' topics and schemas, in the order [`Viewer::encode`] fills its buffers (`tf`
+    /// not among them: see [`Viewer::places_frames`]).
     topics: Vec<ViewTopic>,
     /// A scan's frame (its robot's `base_link`, else `map`).
     frame: String,
     robot: Option<usize>,
-    /// A pose's view in the map and its transform (when its topic places a frame).
+    /// A pose's view in the map.
     pose: PoseInFrame,
-    tf: Option<FrameTransforms>,
+    /// The frame a pose places (its robot's `base_link` or `base_link_true`), if it does.
+    tf_child: Option<String>,
 }
 
 impl Viewer {
@@ -168,26 +187,18 @@ impl Viewer {
             _ => return None,
         };
         let own = format!("foxglove/{topic}");
-        let tf = || {
-            (
-                TF_TOPIC.to_string(),
-                schema_of::<FrameTransforms> as fn() -> _,
-            )
-        };
         let (topics, tf_child) = match kind {
             Kind::Pose2D | Kind::Odometry | Kind::Goal => {
                 let child = match kind {
                     Kind::Pose2D => caravan_schemas::topics::pose_frame(topic),
                     _ => None,
                 };
-                let mut topics = vec![(own, schema_of::<PoseInFrame> as fn() -> _)];
-                topics.extend(child.is_some().then(tf));
-                (topics, child)
+                (vec![(own, schema_of::<PoseInFrame> as fn() -> _)], child)
             }
             Kind::Path => (vec![(own, schema_of::<PosesInFrame> as fn() -> _)], None),
             Kind::Scan => (vec![(own, schema_of::<LaserScan> as fn() -> _)], None),
             Kind::Grid => (vec![(own, schema_of::<Grid> as fn() -> _)], None),
-            Kind::Links => (vec![tf()], None),
+            Kind::Links => (Vec::new(), None),
             Kind::Scene => (vec![(own, schema_of::<SceneUpdate> as fn() -> _)], None),
         };
         Some(Viewer {
@@ -203,9 +214,7 @@ impl Viewer {
                 frame_id: MAP_FRAME.into(),
                 pose: None,
             },
-            tf: tf_child.map(|child| FrameTransforms {
-                transforms: vec![transform(timestamp(0), child, pose_2d(None))],
-            }),
+            tf_child,
         })
     }
 
@@ -214,15 +223,22 @@ impl Viewer {
         &self.topics
     }
 
+    /// Whether its messages place frames on the `tf` channel ([`tf_view`]).
+    pub fn places_frames(&self) -> bool {
+        self.tf_child.is_some() || matches!(self.kind, Kind::Links)
+    }
+
     /// Encodes the views of one message (its bytes, laid out as `descriptor` says) into
-    /// `out[i]` for the view `topics()[i]`: false, with nothing encoded, for bytes of the wrong
-    /// length.
+    /// `out[i]` for the view `topics()[i]`, and appends the transforms it places to `frames`
+    /// (one `tf` message per time holds them all): false, with nothing encoded, for bytes of
+    /// the wrong length.
     pub fn encode(
         &mut self,
         descriptor: &Descriptor,
         bytes: &[u8],
         stamp_ns: u64,
         out: &mut Vec<Vec<u8>>,
+        frames: &mut Vec<FrameTransform>,
     ) -> bool {
         let Ok(json) = descriptor.fields(bytes) else {
             return false;
@@ -241,12 +257,8 @@ impl Viewer {
             Kind::Pose2D => {
                 let pose = pose_2d(Some(*json));
                 in_map(pose, &mut out[0]);
-                if let Some(tf) = &mut self.tf {
-                    let t = &mut tf.transforms[0];
-                    t.timestamp = Some(stamp);
-                    t.translation = pose.position;
-                    t.rotation = pose.orientation;
-                    put(&*tf, &mut out[1]);
+                if let Some(child) = &self.tf_child {
+                    frames.push(transform(stamp, child.clone(), pose));
                 }
             }
             Kind::Odometry => in_map(pose_3d(json.get("pose")), &mut out[0]),
@@ -284,15 +296,10 @@ impl Viewer {
             Kind::Grid => put(&grid(json, stamp), &mut out[0]),
             Kind::Links => {
                 let i = self.robot.unwrap_or(0);
-                let transforms = json
-                    .structs("links")
-                    .into_iter()
-                    .map(|l| {
-                        let name = l.text("name").unwrap_or("");
-                        transform(stamp, robot_frame(i, name), pose_3d(l.get("pose")))
-                    })
-                    .collect();
-                put(&FrameTransforms { transforms }, &mut out[0]);
+                frames.extend(json.structs("links").into_iter().map(|l| {
+                    let name = l.text("name").unwrap_or("");
+                    transform(stamp, robot_frame(i, name), pose_3d(l.get("pose")))
+                }));
             }
             Kind::Scene => put(&scene_update(json, stamp), &mut out[0]),
         }

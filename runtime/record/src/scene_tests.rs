@@ -9,20 +9,30 @@ pub fn views(topic: &str, descriptor: &Descriptor, bytes: &[u8], stamp_ns: u64) 
     let Some(mut viewer) = Viewer::new(topic, descriptor) else {
         return Vec::new();
     };
-    let mut out = Vec::new();
-    if !viewer.encode(descriptor, bytes, stamp_ns, &mut out) {
+    let (mut out, mut frames) = (Vec::new(), Vec::new());
+    if !viewer.encode(descriptor, bytes, stamp_ns, &mut out, &mut frames) {
         return Vec::new();
     }
-    let topics = viewer.topics().to_vec();
-    topics
-        .into_iter()
+    let mut views: Vec<View> = (viewer.topics().iter().cloned())
         .zip(out)
         .map(|((topic, schema), bytes)| View {
             topic,
             schema,
             bytes,
         })
-        .collect()
+        .collect();
+    // The `tf` message of a time holding only this message.
+    if viewer.places_frames() {
+        let (topic, schema) = tf_view();
+        let mut bytes = Vec::new();
+        put_frames(&mut frames, &mut bytes);
+        views.push(View {
+            topic,
+            schema,
+            bytes,
+        });
+    }
+    views
 }
 
 /// The views of the message of `type_name` whose JSON view is `json` (the rest default).
@@ -155,38 +165,43 @@ fn bytes_of(d: &Descriptor, json: &serde_json::Value) -> Box<[u8]> {
 
 #[test]
 fn a_viewer_fills_one_buffer_per_announced_view_and_no_other() {
-    // One set of buffers across topics of two, one and no views, as the writer keeps it;
-    // before each message every buffer holds bytes no view encodes to.
+    // One set of buffers across topics of one and no views, as the writer keeps it; before
+    // each message every buffer holds bytes no view encodes to. The transforms a message
+    // places go to the time's `tf` message, not to a buffer of its own.
     let mut out: Vec<Vec<u8>> = vec![Vec::new(); 3];
     let unwritten = [0xEE; 3];
-    for (topic, type_name, sample, count) in [
+    for (topic, type_name, sample, count, placed) in [
         (
             "robot/1/pose",
             "caravan::Pose2D",
             json!({"x": 1.0, "theta": 0.5}),
-            2,
+            1,
+            1,
         ),
-        ("goal", "caravan::Goal", json!({"pose": {"x": 3.0}}), 1),
+        ("goal", "caravan::Goal", json!({"pose": {"x": 3.0}}), 1, 0),
         (
             "robot/0/link_states",
             "caravan::LinkStates",
-            json!({"links": [{"name": "a", "pose": {}}]}),
-            1,
+            json!({"links": [{"name": "a", "pose": {}}, {"name": "b", "pose": {}}]}),
+            0,
+            2,
         ),
         (
             "robot/2/pose_true",
             "caravan::Pose2D",
             json!({"y": -1.0}),
-            2,
+            1,
+            1,
         ),
-        ("estimate", "caravan::Pose2D", json!({}), 1),
+        ("estimate", "caravan::Pose2D", json!({}), 1, 0),
         (
             "robot/0/wheel_setpoint",
             "caravan::WheelSetpoint",
             json!({}),
             0,
+            0,
         ),
-        ("links", "caravan::LinkStates", json!({}), 0),
+        ("links", "caravan::LinkStates", json!({}), 0, 0),
     ] {
         let d = caravan_schemas::catalog::descriptor(type_name).unwrap();
         let Some(mut viewer) = Viewer::new(topic, d) else {
@@ -194,11 +209,14 @@ fn a_viewer_fills_one_buffer_per_announced_view_and_no_other() {
             continue;
         };
         assert_eq!(viewer.topics().len(), count, "{topic}");
+        assert_eq!(viewer.places_frames(), placed > 0, "{topic}");
         for b in &mut out {
             b.clear();
             b.extend(unwritten);
         }
-        assert!(viewer.encode(d, &bytes_of(d, &sample), 7, &mut out));
+        let mut frames = Vec::new();
+        assert!(viewer.encode(d, &bytes_of(d, &sample), 7, &mut out, &mut frames));
+        assert_eq!(frames.len(), placed, "{topic}");
         for (i, (view, _)) in viewer.topics().iter().enumerate() {
             assert_ne!(out[i], unwritten, "{topic}: {view} not encoded");
         }
@@ -210,14 +228,17 @@ fn a_viewer_fills_one_buffer_per_announced_view_and_no_other() {
 fn a_refilled_pose_encodes_as_a_fresh_one_and_a_wrong_length_as_nothing() {
     let d = caravan_schemas::catalog::descriptor("caravan::Pose2D").unwrap();
     let mut kept = Viewer::new("robot/3/pose", d).unwrap();
-    let mut out = Vec::new();
+    let (mut out, mut frames) = (Vec::new(), Vec::new());
     let first = bytes_of(d, &json!({"x": 5.0, "y": 6.0, "theta": 1.0}));
-    assert!(kept.encode(d, &first, 10, &mut out));
+    assert!(kept.encode(d, &first, 10, &mut out, &mut frames));
+    frames.clear();
     let second = bytes_of(d, &json!({"x": -2.0, "theta": -0.5}));
-    assert!(kept.encode(d, &second, 20, &mut out));
-    let mut fresh = Vec::new();
+    assert!(kept.encode(d, &second, 20, &mut out, &mut frames));
+    let (mut fresh, mut fresh_frames) = (Vec::new(), Vec::new());
     let mut new = Viewer::new("robot/3/pose", d).unwrap();
-    assert!(new.encode(d, &second, 20, &mut fresh));
-    assert_eq!(out, fresh);
-    assert!(!kept.encode(d, &second[1..], 30, &mut out));
+    assert!(new.encode(d, &second, 20, &mut fresh, &mut fresh_frames));
+    assert_eq!((out.clone(), frames), (fresh, fresh_frames));
+    let mut none = Vec::new();
+    assert!(!kept.encode(d, &second[1..], 30, &mut out, &mut none));
+    assert!(none.is_empty());
 }

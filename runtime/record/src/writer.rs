@@ -14,6 +14,7 @@ use caravan::tap::Tapped;
 use caravan_report::TopicCounter;
 use caravan_schemas::descriptor::Descriptor;
 use crossbeam::channel::{Receiver, Sender};
+use foxglove::messages::FrameTransform;
 use hdrhistogram::Histogram;
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -175,6 +176,16 @@ struct Writer {
     /// The views of the message being written, by [`scene::Viewer::topics`], kept between
     /// messages as `text` is.
     views: Vec<Vec<u8>>,
+    /// The transforms the views of the time being written placed, for the file and for the
+    /// live view: one `tf` message per time holds them ([`Self::write_frames`]).
+    frames: Vec<FrameTransform>,
+    live_frames: Vec<FrameTransform>,
+    /// The time those transforms were placed at.
+    frames_ns: u64,
+    /// The transforms of the message being written, and the `tf` message's bytes, kept
+    /// between messages as `text` is.
+    placed: Vec<FrameTransform>,
+    tf: Vec<u8>,
 }
 
 impl Writer {
@@ -223,6 +234,11 @@ impl Writer {
             text: Vec::new(),
             header: Vec::new(),
             views: Vec::new(),
+            frames: Vec::new(),
+            live_frames: Vec::new(),
+            frames_ns: 0,
+            placed: Vec::new(),
+            tf: Vec::new(),
         })
     }
 
@@ -248,8 +264,16 @@ impl Writer {
                     (h.stamp_ns, d.rank, h.source_id, h.seq)
                 });
                 for drained in messages {
+                    // The batch is in time order: a time's transforms are all in before the
+                    // first message of the next.
+                    let stamp_ns = drained.message.header.stamp_ns;
+                    if stamp_ns != self.frames_ns {
+                        self.write_frames()?;
+                        self.frames_ns = stamp_ns;
+                    }
                     self.write(drained, now_wall)?;
                 }
+                self.write_frames()?;
             }
             Command::LiveStatus {
                 topic,
@@ -282,6 +306,15 @@ impl Writer {
             }
             if let Some(live) = &mut self.live {
                 live.advertise_view(view, schema())?;
+            }
+        }
+        if viewer.as_ref().is_some_and(scene::Viewer::places_frames) {
+            let (tf, schema) = scene::tf_view();
+            if new.recorded {
+                self.scene_channel(&tf, schema)?;
+            }
+            if let Some(live) = &mut self.live {
+                live.advertise_view(&tf, schema())?;
             }
         }
         if let Some(live) = &mut self.live {
@@ -349,6 +382,9 @@ impl Writer {
             text,
             header,
             views,
+            frames,
+            live_frames,
+            placed,
             ..
         } = self;
         let known = topics
@@ -360,10 +396,12 @@ impl Writer {
         // Views and record are read straight from the message's bytes; the record's text is
         // what `serde_json::to_vec` of its JSON view gave (`Descriptor::write_json_text`).
         let viewed = match &mut known.viewer {
-            Some(viewer) => match viewer.encode(&msg.descriptor, &msg.bytes, stamp_ns, views) {
-                true => viewer.topics(),
-                false => &[],
-            },
+            Some(viewer) => {
+                match viewer.encode(&msg.descriptor, &msg.bytes, stamp_ns, views, placed) {
+                    true => viewer.topics(),
+                    false => &[],
+                }
+            }
             None => &[],
         };
         let views = &views[..viewed.len()];
@@ -378,7 +416,12 @@ impl Writer {
             for ((topic, _), bytes) in viewed.iter().zip(views) {
                 live.log(topic, stamp_ns, bytes);
             }
+            live_frames.extend(placed.iter().cloned());
         }
+        if known.channel.is_some() {
+            frames.append(placed);
+        }
+        placed.clear();
         // Discovery gave every recorded topic its channel; the others are served live only.
         let Some(channel) = known.channel else {
             return Ok(());
@@ -395,6 +438,26 @@ impl Writer {
             .latency
             .saturating_record(now_wall.saturating_sub(msg.header.send_wall_ns).max(1));
         Ok(())
+    }
+
+    /// Writes the transforms placed at [`Self::frames_ns`] as one `tf` message, to the file
+    /// and to the live view.
+    fn write_frames(&mut self) -> Result<()> {
+        let (tf, stamp_ns) = (scene::TF_TOPIC, self.frames_ns);
+        if let Some(live) = self.live.as_mut().filter(|_| !self.live_frames.is_empty()) {
+            scene::put_frames(&mut self.live_frames, &mut self.tf);
+            live.log(tf, stamp_ns, &self.tf);
+        }
+        if self.frames.is_empty() {
+            return Ok(());
+        }
+        let channel = *self
+            .channels
+            .get(tf)
+            .ok_or_else(|| anyhow!("transforms of a topic without a `tf` channel"))?;
+        scene::put_frames(&mut self.frames, &mut self.tf);
+        let (writer, path, sequences) = (&mut self.writer, &self.path, &mut self.sequences);
+        write_message(writer, path, sequences, channel, stamp_ns, &self.tf)
     }
 
     /// Writes the summary and flushes the file.
